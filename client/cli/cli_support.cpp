@@ -1,0 +1,103 @@
+#include "cli_support.h"
+
+#include <google/protobuf/util/json_util.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <mutex>
+
+#include "gridshell/errors.h"
+#include "gridshell/example_surfaces.h"
+
+namespace gridshell::cli {
+
+InputMesh load_input(const std::string& name) {
+  InputMesh input;
+  input.name = name;
+  const std::string prefix = "example:";
+  if (name.rfind(prefix, 0) == 0) {
+    ExampleSurface example = make_example(name.substr(prefix.size()));
+    input.mesh = std::move(example.mesh);
+    input.example_corners = example.corners;
+    input.report.format = "example";
+    input.report.file_vertices = input.mesh.vertex_count();
+    input.report.file_faces = input.mesh.face_count();
+    input.report.vertex_of_file_vertex.resize(input.mesh.vertex_count());
+    for (int v = 0; v < input.mesh.vertex_count(); ++v) input.report.vertex_of_file_vertex[v] = v;
+    return input;
+  }
+  input.mesh = load_mesh(name, &input.report);
+  for (const std::string& warning : input.report.warnings) std::cerr << warning << "\n";
+  return input;
+}
+
+int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& field) {
+  const auto& map = input.report.vertex_of_file_vertex;
+  if (file_vertex < 0 || file_vertex >= static_cast<int>(map.size()))
+    throw InvalidInput(field + ": vertex index " + std::to_string(file_vertex) +
+                       " is out of range (" + input.name + " has " +
+                       std::to_string(map.size()) + " vertices, numbered from 0)");
+  if (map[file_vertex] < 0)
+    throw InvalidInput(field + ": vertex " + std::to_string(file_vertex) + " of " + input.name +
+                       " was removed as an isolated vertex");
+  return map[file_vertex];
+}
+
+namespace {
+std::mutex progress_mutex;
+bool progress_line_open = false;
+}  // namespace
+
+Progress make_progress(bool quiet) {
+  if (quiet) return Progress(nullptr, cancel_flag());
+  const bool tty = isatty(STDERR_FILENO);
+  auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  auto last_stage = std::make_shared<std::string>();
+  return Progress([tty, last, last_stage](std::string_view stage, double fraction) {
+    std::lock_guard lock(progress_mutex);
+    const auto now = std::chrono::steady_clock::now();
+    const bool new_stage = *last_stage != stage;
+    if (tty) {
+      if (!new_stage && now - *last < std::chrono::milliseconds(100)) return;
+      std::fprintf(stderr, "\r\033[K%.*s %3.0f%%", static_cast<int>(stage.size()), stage.data(),
+                   100 * std::clamp(fraction, 0.0, 1.0));
+      std::fflush(stderr);
+      progress_line_open = true;
+    } else {
+      if (!new_stage && now - *last < std::chrono::seconds(5)) return;
+      std::fprintf(stderr, "progress: %.*s %.0f%%\n", static_cast<int>(stage.size()),
+                   stage.data(), 100 * std::clamp(fraction, 0.0, 1.0));
+    }
+    *last = now;
+    *last_stage = std::string(stage);
+  }, cancel_flag());
+}
+
+void finish_progress() {
+  std::lock_guard lock(progress_mutex);
+  if (progress_line_open) std::fprintf(stderr, "\r\033[K");
+  progress_line_open = false;
+}
+
+std::string to_json(const google::protobuf::Message& message, bool pretty) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.add_whitespace = pretty;
+  options.always_print_primitive_fields = true;
+  std::string json;
+  const auto status = google::protobuf::util::MessageToJsonString(message, &json, options);
+  if (!status.ok()) throw std::runtime_error("JSON conversion failed: " + status.ToString());
+  return json;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+}  // namespace gridshell::cli

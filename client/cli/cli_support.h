@@ -1,0 +1,45 @@
+// Shared pieces of the gridshell CLI: input meshes, progress line, JSON output.
+#pragma once
+
+#include <google/protobuf/message.h>
+
+#include <array>
+#include <optional>
+#include <string>
+
+#include "gridshell/mesh.h"
+#include "gridshell/mesh_io.h"
+#include "gridshell/progress.h"
+
+namespace gridshell::cli {
+
+/// A mesh named on the command line: a file path (OBJ/OFF/PLY/STL) or `example:NAME`.
+struct InputMesh {
+  std::string name;  ///< as given
+  TriangleMesh mesh;
+  LoadReport report;
+  std::optional<std::array<int, 4>> example_corners;  ///< suggested corners of a built-in example
+};
+
+/// Loads the mesh, printing the load report's warnings on stderr. Throws InvalidInput.
+InputMesh load_input(const std::string& name);
+
+/// Maps a file-order vertex index to the loaded mesh (InvalidInput if removed or out of range).
+int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& field);
+
+/// Set by SIGINT/SIGTERM (defined in main.cpp); every computation polls it through Progress.
+const std::atomic<bool>* cancel_flag();
+
+/// A progress line on stderr ("\r stage  42%") when stderr is a terminal, plain lines every
+/// few seconds otherwise; `quiet` silences it.
+Progress make_progress(bool quiet);
+/// Ends the progress line.
+void finish_progress();
+
+/// Protobuf message as JSON with the proto field names (snake_case), pretty-printed.
+std::string to_json(const google::protobuf::Message& message, bool pretty = true);
+
+/// Median of a list of numbers.
+double median(std::vector<double> values);
+
+}  // namespace gridshell::cli

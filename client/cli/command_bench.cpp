@@ -1,0 +1,193 @@
+// `gridshell bench geodesic`: fast engine vs CGAL vs heat method, side by side in one run, on a
+// paper-like surface at several resolutions. Writes a table into docs/benchmarks.md.
+//
+// Benchmarks, not tests: timings are medians over several sources measured in the same run,
+// and the headline numbers are ratios, which survive a noisy shared machine better.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "gridshell/errors.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/geodesic.h"
+#include "gridshell/mesh_io.h"
+
+namespace gridshell::cli {
+namespace {
+
+struct BenchArguments {
+  std::string what;
+  std::vector<int> sizes{1000, 4000, 16000, 64000};
+  std::string surface = "waves-bump";
+  int sources = 5;
+  int cgal_sources = 3;
+  int cgal_max_vertices = 70000;
+  std::string out;
+  bool no_write = false;
+};
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+std::string cpu_name() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown CPU";
+}
+
+std::string today() {
+  const std::time_t now = std::time(nullptr);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::gmtime(&now));
+  return buffer;
+}
+
+// Replaces the text between the section's markers (or appends the section).
+void write_section(const std::string& path, const std::string& name, const std::string& body) {
+  const std::string begin = "<!-- bench " + name + " begin -->";
+  const std::string end = "<!-- bench " + name + " end -->";
+  std::string text;
+  if (std::filesystem::exists(path)) {
+    std::ifstream in(path);
+    std::ostringstream all;
+    all << in.rdbuf();
+    text = all.str();
+  } else {
+    text = "# Benchmarks\n\nWritten by `gridshell bench`; do not edit the marked sections by hand.\n";
+  }
+  const std::string section = begin + "\n" + body + end;
+  const auto b = text.find(begin), e = text.find(end);
+  if (b != std::string::npos && e != std::string::npos && e > b)
+    text.replace(b, e + end.size() - b, section);
+  else
+    text += "\n" + section + "\n";
+  write_file_atomically(path, text);
+}
+
+int bench_geodesic(const BenchArguments& args) {
+  std::ostringstream table;
+  table << "## Geodesic engines: fast (ours, exact) vs CGAL Surface_mesh_shortest_path (exact) vs "
+           "CGAL heat method (approximate)\n\n"
+        << "Measured " << today() << " on " << cpu_name() << ", "
+        << std::thread::hardware_concurrency() << " hardware threads, single-threaded solves. "
+        << "Surface `" << args.surface << "` at several resolutions; sources spread over the "
+        << "vertex list; each engine solves the same sources in the same run. Times are medians "
+        << "per source in ms; *setup* is the per-mesh precomputation (for heat: the "
+           "factorizations). Diffs are the max over all vertices and sources compared.\n\n"
+        << "| vertices | fast ms | CGAL ms | heat ms | fast setup ms | heat setup ms | CGAL / "
+           "fast | heat / fast | max rel diff fast vs CGAL | max rel diff heat vs fast |\n"
+        << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  std::vector<std::pair<int, double>> growth;
+  const int base = make_example(args.surface).mesh.vertex_count();
+  for (int target : args.sizes) {
+    const double scale = std::sqrt(static_cast<double>(target) / base);
+    const ExampleSurface example = make_example(args.surface, scale);
+    const TriangleMesh& mesh = example.mesh;
+    const int n = mesh.vertex_count();
+    std::cerr << "bench geodesic: " << n << " vertices\n";
+    auto start = std::chrono::steady_clock::now();
+    const GeodesicSolver fast(mesh, GeodesicOptions{GeodesicMethod::Fast});
+    const double fast_setup = ms_since(start);
+    start = std::chrono::steady_clock::now();
+    const GeodesicSolver heat(mesh, GeodesicOptions{GeodesicMethod::Heat});
+    const double heat_setup = ms_since(start);
+    const bool run_cgal = n <= args.cgal_max_vertices && args.cgal_sources > 0;
+    std::optional<GeodesicSolver> cgal;
+    if (run_cgal) cgal.emplace(mesh, GeodesicOptions{GeodesicMethod::Cgal});
+    std::vector<double> fast_ms, cgal_ms, heat_ms;
+    double rel_cgal = 0, rel_heat = 0;
+    const double floor = 1e-12 * bounding_box_size(mesh).norm();
+    for (int k = 0; k < args.sources; ++k) {
+      const int v = static_cast<int>((k + 0.5) * n / args.sources);
+      const SurfacePoint source = SurfacePoint::at_vertex(mesh, v);
+      start = std::chrono::steady_clock::now();
+      const std::vector<double> d_fast = fast.distances(source);
+      fast_ms.push_back(ms_since(start));
+      start = std::chrono::steady_clock::now();
+      const std::vector<double> d_heat = heat.distances(source);
+      heat_ms.push_back(ms_since(start));
+      for (int u = 0; u < n; ++u)
+        rel_heat = std::max(rel_heat, std::abs(d_heat[u] - d_fast[u]) / std::max(d_fast[u], floor));
+      if (run_cgal && k < args.cgal_sources) {
+        start = std::chrono::steady_clock::now();
+        const std::vector<double> d_cgal = cgal->distances(source);
+        cgal_ms.push_back(ms_since(start));
+        for (int u = 0; u < n; ++u)
+          rel_cgal =
+              std::max(rel_cgal, std::abs(d_fast[u] - d_cgal[u]) / std::max(d_cgal[u], floor));
+      }
+    }
+    const double f = median(fast_ms), h = median(heat_ms);
+    growth.push_back({n, f});
+    char row[512];
+    if (run_cgal) {
+      const double c = median(cgal_ms);
+      std::snprintf(row, sizeof row,
+                    "| %d | %.3f | %.1f | %.3f | %.1f | %.1f | %.1f | %.2f | %.1e | %.1e |\n", n, f,
+                    c, h, fast_setup, heat_setup, c / f, h / f, rel_cgal, rel_heat);
+    } else {
+      std::snprintf(row, sizeof row,
+                    "| %d | %.3f | (skipped) | %.3f | %.1f | %.1f | – | %.2f | – | %.1e |\n", n, f,
+                    h, fast_setup, heat_setup, h / f, rel_heat);
+    }
+    table << row;
+    std::cerr << row;
+  }
+  if (growth.size() >= 2) {
+    const auto& [n0, t0] = growth.front();
+    const auto& [n1, t1] = growth.back();
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "\nCost growth of the fast engine per source from %d to %d vertices: "
+                  "t ~ n^%.2f (%.3f ms -> %.3f ms).\n",
+                  n0, n1, std::log(t1 / t0) / std::log(static_cast<double>(n1) / n0), t0, t1);
+    table << line;
+  }
+  table << "\nCommand: `gridshell bench geodesic --sources " << args.sources << " --cgal-sources "
+        << args.cgal_sources << "`\n";
+  std::cout << table.str();
+  if (!args.no_write) {
+    write_section(args.out, "geodesic", table.str());
+    std::cerr << "wrote " << args.out << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command add_bench_command(CLI::App& app) {
+  auto args = std::make_shared<BenchArguments>();
+  args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
+  CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
+  sub->add_option("WHAT", args->what, "geodesic")->required()->check(CLI::IsMember({"geodesic"}));
+  sub->add_option("--sizes", args->sizes, "target vertex counts")->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--surface", args->surface, "example surface")->capture_default_str();
+  sub->add_option("--sources", args->sources, "sources per size")->capture_default_str();
+  sub->add_option("--cgal-sources", args->cgal_sources, "sources also solved by CGAL")
+      ->capture_default_str();
+  sub->add_option("--cgal-max-vertices", args->cgal_max_vertices, "skip CGAL above this size")
+      ->capture_default_str();
+  sub->add_option("--out", args->out, "markdown file to update")->capture_default_str();
+  sub->add_flag("--no-write", args->no_write, "print only");
+  return [args] {
+    if (args->sources < 1) throw InvalidInput("--sources: must be at least 1");
+    for (int s : args->sizes)
+      if (s < 100 || s > 2000000) throw InvalidInput("--sizes: each size must be 100..2000000");
+    return bench_geodesic(*args);
+  };
+}
+
+}  // namespace gridshell::cli

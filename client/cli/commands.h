@@ -1,0 +1,18 @@
+// Subcommands of the gridshell CLI; each registers itself on the CLI11 app and returns the
+// function that runs it (exit code).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace gridshell::cli {
+
+using Command = std::function<int()>;
+
+Command add_patch_command(CLI::App& app);
+Command add_geodesic_command(CLI::App& app);
+Command add_examples_command(CLI::App& app);
+Command add_bench_command(CLI::App& app);
+
+}  // namespace gridshell::cli

@@ -1,0 +1,74 @@
+// gridshell — command-line front end. Runs the kernel in-process.
+//
+// Exit codes (docs/decisions.md): 0 success, 1 internal error, 2 invalid input, 3 infeasible
+// design, 130 cancelled (Ctrl-C). Errors are one line on stderr starting with "error:".
+#include <csignal>
+#include <iostream>
+#include <map>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "gridshell/errors.h"
+
+namespace {
+std::atomic<bool> interrupted{false};
+void on_interrupt(int) { interrupted = true; }
+}  // namespace
+
+namespace gridshell::cli {
+const std::atomic<bool>* cancel_flag() { return &interrupted; }
+}  // namespace gridshell::cli
+
+int main(int argc, char** argv) {
+  using namespace gridshell;
+  CLI::App app{"gridshell: design and simulate elastic geodesic gridshells"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "gridshell 0.1.0");
+  std::map<CLI::App*, cli::Command> commands;
+  auto add = [&](cli::Command (*adder)(CLI::App&)) {
+    const size_t before = app.get_subcommands({}).size();
+    cli::Command command = adder(app);
+    commands[app.get_subcommands({})[before]] = std::move(command);
+  };
+  add(cli::add_patch_command);
+  add(cli::add_geodesic_command);
+  add(cli::add_examples_command);
+  add(cli::add_bench_command);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "error: " << e.what() << "\n(run 'gridshell --help' for usage)\n";
+    return 2;
+  }
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  try {
+    for (CLI::App* sub : app.get_subcommands())
+      if (commands.count(sub)) return commands[sub]();
+    std::cerr << "error: no command given\n";
+    return 2;
+  } catch (const InvalidInput& e) {
+    cli::finish_progress();
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const Infeasible& e) {
+    cli::finish_progress();
+    std::cerr << "error: infeasible: " << e.what() << "\n";
+    return 3;
+  } catch (const Cancelled&) {
+    cli::finish_progress();
+    std::cerr << "error: cancelled\n";
+    return 130;
+  } catch (const std::exception& e) {
+    cli::finish_progress();
+    std::cerr << "error: internal: " << e.what() << "\n";
+    return 1;
+  }
+}

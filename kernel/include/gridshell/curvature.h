@@ -1,0 +1,21 @@
+// gridshell — discrete curvature of a triangle mesh.
+#pragma once
+
+#include <vector>
+
+#include "gridshell/mesh.h"
+
+namespace gridshell {
+
+/// #V discrete Gaussian curvature: angle defect (2*pi - sum of incident angles) divided by the
+/// barycentric vertex area (a third of the incident triangle areas). Boundary vertices get 0
+/// (their defect is geodesic curvature of the boundary, not Gaussian curvature).
+std::vector<double> gaussian_curvature(const TriangleMesh& mesh);
+
+/// #V sum of incident triangle angles at each vertex, radians.
+std::vector<double> vertex_angle_sums(const TriangleMesh& mesh);
+
+/// #V barycentric vertex areas.
+std::vector<double> vertex_areas(const TriangleMesh& mesh);
+
+}  // namespace gridshell

@@ -1,0 +1,107 @@
+// gridshell — exact polyhedral geodesic distances and shortest paths on a triangle mesh.
+//
+// Paper Sections 3.3 and 4.2 need many single-source exact distance fields per design. The
+// default engine (`GeodesicMethod::Fast`) is our own exact window-propagation algorithm
+// (kernel/src/geodesic_fast.cpp); CGAL's Surface_mesh_shortest_path (Xin-Wang) is kept as the
+// oracle (`Cgal`) and CGAL's heat method (`Heat`, approximate) for comparison.
+//
+// Usage: build one GeodesicSolver per mesh (precomputes connectivity and per-face geometry),
+// then call `solve` for as many sources as needed, from as many threads as wanted.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gridshell/mesh.h"
+#include "gridshell/progress.h"
+
+namespace gridshell {
+
+/// A point on the surface: a face and barycentric weights of the face's three vertices
+/// (non-negative, summing to 1). A point on an edge has the weight of the opposite vertex
+/// exactly 0.0; a vertex has its own weight exactly 1.0 and the others exactly 0.0.
+struct SurfacePoint {
+  int face = -1;
+  Vec3 barycentric = Vec3::Zero();
+
+  /// The point at vertex `vertex` (in any face incident to it). Throws InvalidInput for an
+  /// out-of-range or isolated vertex.
+  static SurfacePoint at_vertex(const TriangleMesh& mesh, int vertex);
+  /// The point (1-t)*a + t*b on the edge between vertices a and b. Throws InvalidInput if ab is
+  /// not an edge of the mesh or t is outside [0,1].
+  static SurfacePoint on_edge(const TriangleMesh& mesh, int a, int b, double t);
+  /// 3D position of the point.
+  Vec3 position(const TriangleMesh& mesh) const;
+  /// The vertex index if the point is exactly at a vertex, otherwise -1.
+  int vertex(const TriangleMesh& mesh) const;
+};
+
+enum class GeodesicMethod {
+  Fast,  ///< exact, our own window propagation (default)
+  Cgal,  ///< exact, CGAL Surface_mesh_shortest_path (oracle; slow)
+  Heat,  ///< approximate, CGAL Heat_method_3 (intrinsic Delaunay); distances only, no paths
+};
+
+/// "fast" | "cgal" | "heat"; throws InvalidInput naming the value otherwise.
+GeodesicMethod parse_geodesic_method(const std::string& name);
+std::string to_string(GeodesicMethod method);
+
+struct GeodesicOptions {
+  GeodesicMethod method = GeodesicMethod::Fast;  // default: our exact engine
+};
+
+/// Result of one single-source solve. Holds whatever the method needs to answer distance and
+/// path queries to arbitrary surface points afterwards (windows for the exact methods).
+class DistanceField {
+ public:
+  class Impl;
+  explicit DistanceField(std::shared_ptr<const Impl> impl);
+  ~DistanceField();
+  DistanceField(DistanceField&&) noexcept;
+  DistanceField& operator=(DistanceField&&) noexcept;
+
+  const SurfacePoint& source() const;
+  /// #V exact geodesic distances from the source to every vertex (+inf for vertices in another
+  /// connected component).
+  const std::vector<double>& vertex_distances() const;
+  /// Exact geodesic distance from the source to an arbitrary surface point.
+  double distance_to(const SurfacePoint& target) const;
+  /// Exact shortest path from the source to `target` as a polyline of surface points, source
+  /// first, target last; interior points lie on edges or at vertices (saddle / boundary vertices
+  /// the path turns around). Throws InvalidInput for the heat method.
+  std::vector<SurfacePoint> path_to(const SurfacePoint& target) const;
+
+ private:
+  std::shared_ptr<const Impl> impl_;
+};
+
+class GeodesicSolver {
+ public:
+  /// Precomputes what every solve on `mesh` shares. The mesh is copied. Throws InvalidInput for
+  /// a mesh with non-manifold edges or invalid face indices.
+  explicit GeodesicSolver(const TriangleMesh& mesh, GeodesicOptions options = {});
+  ~GeodesicSolver();
+  GeodesicSolver(GeodesicSolver&&) noexcept;
+  GeodesicSolver& operator=(GeodesicSolver&&) noexcept;
+
+  const TriangleMesh& mesh() const;
+  GeodesicMethod method() const;
+
+  /// Single-source distance field. Thread-safe (const); cancellable through `progress`.
+  DistanceField solve(const SurfacePoint& source, const Progress& progress = {}) const;
+  /// Shorthand: distances from `source` to all vertices.
+  std::vector<double> distances(const SurfacePoint& source, const Progress& progress = {}) const;
+  /// Shorthand: exact shortest path between two surface points (see DistanceField::path_to).
+  std::vector<SurfacePoint> shortest_path(const SurfacePoint& from, const SurfacePoint& to) const;
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Length of a polyline of surface points.
+double path_length(const TriangleMesh& mesh, const std::vector<SurfacePoint>& path);
+
+}  // namespace gridshell

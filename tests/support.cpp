@@ -1,0 +1,94 @@
+#include "support.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+namespace gridshell::testing {
+namespace fs = std::filesystem;
+
+namespace {
+struct TempRoot {
+  fs::path root;
+  TempRoot() {
+    std::string pattern = (fs::temp_directory_path() / "gridshell-test-XXXXXX").string();
+    root = mkdtemp(pattern.data());
+  }
+  ~TempRoot() {
+    std::error_code ignored;
+    fs::remove_all(root, ignored);
+  }
+};
+TempRoot& temp_root() {
+  static TempRoot root;
+  return root;
+}
+}  // namespace
+
+std::vector<std::string> shared_mesh_paths() {
+  const fs::path dir = fs::path(GRIDSHELL_SHARED_DIR) / "meshes";
+  return {(dir / "enneper2.obj").string(), (dir / "knet1.obj").string(),
+          (dir / "pillow_1.obj").string()};
+}
+
+std::string temp_dir() {
+  static std::mutex mutex;
+  static int counter = 0;
+  std::lock_guard lock(mutex);
+  fs::path dir = temp_root().root / std::to_string(counter++);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+std::string write_text(const std::string& dir, const std::string& name, const std::string& contents) {
+  const std::string path = (fs::path(dir) / name).string();
+  std::ofstream(path, std::ios::binary) << contents;
+  return path;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+TriangleMesh grid_mesh(int nu, int nv, const std::function<Vec3(double u, double v)>& map) {
+  TriangleMesh mesh;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i <= nu; ++i) mesh.vertices.push_back(map(double(i) / nu, double(j) / nv));
+  auto id = [nu](int i, int j) { return j * (nu + 1) + i; };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      if ((i + j) % 2 == 0) {
+        mesh.faces.push_back({a, b, c});
+        mesh.faces.push_back({a, c, d});
+      } else {
+        mesh.faces.push_back({a, b, d});
+        mesh.faces.push_back({b, c, d});
+      }
+    }
+  return mesh;
+}
+
+CommandResult run_cli(const std::string& arguments) {
+  const std::string dir = temp_dir();
+  const std::string out_path = dir + "/stdout", err_path = dir + "/stderr";
+  const std::string command = std::string("'") + GRIDSHELL_CLI + "' " + arguments + " >'" + out_path +
+                              "' 2>'" + err_path + "' </dev/null";
+  const int status = std::system(command.c_str());
+  CommandResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = read_text(out_path);
+  result.err = read_text(err_path);
+  return result;
+}
+
+}  // namespace gridshell::testing

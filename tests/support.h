@@ -1,0 +1,37 @@
+// Shared helpers for the GoogleTest suite.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "gridshell/mesh.h"
+
+namespace gridshell::testing {
+
+/// Paths of the real freeform meshes in ../shared/meshes (enneper2, knet1, pillow_1).
+std::vector<std::string> shared_mesh_paths();
+
+/// A fresh empty temporary folder, removed at process exit.
+std::string temp_dir();
+
+/// Writes `contents` to `dir/name` and returns the path.
+std::string write_text(const std::string& dir, const std::string& name, const std::string& contents);
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string out;  ///< standard output
+  std::string err;  ///< standard error
+};
+
+/// Runs the gridshell CLI with the given argument string (shell-quoted by the caller).
+CommandResult run_cli(const std::string& arguments);
+
+/// A (nu+1) x (nv+1) grid over (u,v) in [0,1]^2 mapped by `map`, triangulated with alternating
+/// diagonals, faces counter-clockwise in (u,v). Vertex (i,j) has index j*(nu+1)+i.
+TriangleMesh grid_mesh(int nu, int nv, const std::function<Vec3(double u, double v)>& map);
+
+/// Reads a whole file.
+std::string read_text(const std::string& path);
+
+}  // namespace gridshell::testing

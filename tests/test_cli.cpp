@@ -1,0 +1,109 @@
+// End-to-end tests of the gridshell command: files written, JSON fields, exit codes, errors.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "gridshell/example_surfaces.h"
+#include "gridshell/mesh_io.h"
+#include "support.h"
+
+namespace gridshell {
+namespace {
+
+using nlohmann::json;
+using testing::run_cli;
+
+TEST(CliPatch, WritesPatchObjAndJsonWithAllFields) {
+  const std::string out = testing::temp_dir() + "/out";
+  const auto result = run_cli("patch example:sphere --quiet --out '" + out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json report = json::parse(testing::read_text(out + "/patch.json"));
+  for (const char* key : {"vertex_count", "corner_angles", "boundary_lengths",
+                          "gaussian_curvature_max", "injectivity_bound", "eta_before", "eta_after",
+                          "smoothing_iterations", "seconds"})
+    EXPECT_TRUE(report.contains(key)) << key;
+  ASSERT_EQ(report["corner_angles"].size(), 4u);
+  ASSERT_EQ(report["boundary_lengths"].size(), 4u);
+  for (const auto& angle : report["corner_angles"]) {
+    EXPECT_GT(angle.get<double>(), 0.0);
+    EXPECT_LT(angle.get<double>(), 3.14159265);
+  }
+  EXPECT_LE(report["eta_after"].get<double>(), 1.0015);
+  const TriangleMesh patch = load_mesh(out + "/patch.obj");
+  EXPECT_EQ(patch.vertex_count(), report["vertex_count"].get<int>());
+  EXPECT_NE(result.out.find("gap factor"), std::string::npos);
+}
+
+TEST(CliPatch, MissingFileIsInvalidInput) {
+  const auto result = run_cli("patch /nonexistent/surface.obj --out " + testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.err.rfind("error:", 0), 0u) << result.err;
+  EXPECT_NE(result.err.find("surface.obj"), std::string::npos) << result.err;
+}
+
+TEST(CliPatch, BadCornersAreInvalidInput) {
+  for (const char* corners : {"1,2,3", "0,1,2,999999", "0,0,0;1,1,1"}) {
+    const auto result = run_cli(std::string("patch example:plane --quiet --corners '") + corners +
+                                "' --out " + testing::temp_dir());
+    EXPECT_EQ(result.exit_code, 2) << corners;
+    EXPECT_NE(result.err.find("--corners"), std::string::npos) << result.err;
+  }
+}
+
+TEST(CliPatch, CrossingBoundaryIsInfeasible) {
+  // Corners of the plane example in bow-tie order: c0, c2, c1, c3.
+  const ExampleSurface plane = make_example("plane");
+  const auto& c = plane.corners;
+  const std::string corners = std::to_string(c[0]) + "," + std::to_string(c[2]) + "," +
+                              std::to_string(c[1]) + "," + std::to_string(c[3]);
+  const auto result = run_cli("patch example:plane --quiet --corners " + corners + " --out " +
+                              testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 3) << result.err;
+  EXPECT_EQ(result.err.rfind("error:", 0), 0u) << result.err;
+}
+
+TEST(CliGeodesic, JsonComparesWithCgal) {
+  const auto result =
+      run_cli("geodesic example:double-vault --source 5 --compare cgal --repeat 3 --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json report = json::parse(result.out);
+  for (const char* key : {"vertices", "method", "ms_per_source", "reference",
+                          "reference_ms_per_source", "max_abs_diff", "max_rel_diff"})
+    EXPECT_TRUE(report.contains(key)) << key;
+  EXPECT_EQ(report["method"], "fast");
+  EXPECT_EQ(report["reference"], "cgal");
+  EXPECT_LE(report["max_rel_diff"].get<double>(), 1e-9);
+}
+
+TEST(CliGeodesic, BadSourceAndMethodAreInvalidInput) {
+  auto result = run_cli("geodesic example:plane --source 99999999");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--source"), std::string::npos) << result.err;
+  result = run_cli("geodesic example:plane --source 0 --method fastest");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("fastest"), std::string::npos) << result.err;
+}
+
+TEST(CliExamples, ListsAndWritesEveryExample) {
+  const auto list = run_cli("examples list");
+  ASSERT_EQ(list.exit_code, 0) << list.err;
+  for (const std::string& name : example_names())
+    EXPECT_NE(list.out.find(name), std::string::npos) << name;
+  const std::string file = testing::temp_dir() + "/hypar.obj";
+  const auto write = run_cli("examples write hypar '" + file + "'");
+  ASSERT_EQ(write.exit_code, 0) << write.err;
+  EXPECT_EQ(load_mesh(file).vertex_count(), make_example("hypar").mesh.vertex_count());
+  EXPECT_EQ(run_cli("examples write no-such-surface x.obj").exit_code, 2);
+}
+
+TEST(Cli, UnknownCommandsAndOptionsAreInvalidInput) {
+  EXPECT_EQ(run_cli("frobnicate").exit_code, 2);
+  const auto result = run_cli("patch example:plane --out x --no-such-option");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.err.rfind("error:", 0), 0u) << result.err;
+}
+
+}  // namespace
+}  // namespace gridshell
