@@ -46,7 +46,8 @@ std::string temp_dir() {
   return dir.string();
 }
 
-std::string write_text(const std::string& dir, const std::string& name, const std::string& contents) {
+std::string write_text(const std::string& dir, const std::string& name,
+                       const std::string& contents) {
   const std::string path = (fs::path(dir) / name).string();
   std::ofstream(path, std::ios::binary) << contents;
   return path;
@@ -81,8 +82,8 @@ TriangleMesh grid_mesh(int nu, int nv, const std::function<Vec3(double u, double
 CommandResult run_cli(const std::string& arguments) {
   const std::string dir = temp_dir();
   const std::string out_path = dir + "/stdout", err_path = dir + "/stderr";
-  const std::string command = std::string("'") + GRIDSHELL_CLI + "' " + arguments + " >'" + out_path +
-                              "' 2>'" + err_path + "' </dev/null";
+  const std::string command = std::string("'") + GRIDSHELL_CLI + "' " + arguments + " >'" +
+                              out_path + "' 2>'" + err_path + "' </dev/null";
   const int status = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);

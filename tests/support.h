@@ -16,7 +16,8 @@ std::vector<std::string> shared_mesh_paths();
 std::string temp_dir();
 
 /// Writes `contents` to `dir/name` and returns the path.
-std::string write_text(const std::string& dir, const std::string& name, const std::string& contents);
+std::string write_text(const std::string& dir, const std::string& name,
+                       const std::string& contents);
 
 struct CommandResult {
   int exit_code = -1;

@@ -1,9 +1,8 @@
 // End-to-end tests of the gridshell command: files written, JSON fields, exit codes, errors.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "gridshell/example_surfaces.h"
 #include "gridshell/mesh_io.h"
@@ -20,9 +19,9 @@ TEST(CliPatch, WritesPatchObjAndJsonWithAllFields) {
   const auto result = run_cli("patch example:sphere --quiet --out '" + out + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const json report = json::parse(testing::read_text(out + "/patch.json"));
-  for (const char* key : {"vertex_count", "corner_angles", "boundary_lengths",
-                          "gaussian_curvature_max", "injectivity_bound", "eta_before", "eta_after",
-                          "smoothing_iterations", "seconds"})
+  for (const char* key :
+       {"vertex_count", "corner_angles", "boundary_lengths", "gaussian_curvature_max",
+        "injectivity_bound", "eta_before", "eta_after", "smoothing_iterations", "seconds"})
     EXPECT_TRUE(report.contains(key)) << key;
   ASSERT_EQ(report["corner_angles"].size(), 4u);
   ASSERT_EQ(report["boundary_lengths"].size(), 4u);
@@ -58,8 +57,8 @@ TEST(CliPatch, CrossingBoundaryIsInfeasible) {
   const auto& c = plane.corners;
   const std::string corners = std::to_string(c[0]) + "," + std::to_string(c[2]) + "," +
                               std::to_string(c[1]) + "," + std::to_string(c[3]);
-  const auto result = run_cli("patch example:plane --quiet --corners " + corners + " --out " +
-                              testing::temp_dir());
+  const auto result =
+      run_cli("patch example:plane --quiet --corners " + corners + " --out " + testing::temp_dir());
   EXPECT_EQ(result.exit_code, 3) << result.err;
   EXPECT_EQ(result.err.rfind("error:", 0), 0u) << result.err;
 }

@@ -1,11 +1,10 @@
 // Discrete Gaussian curvature, injectivity bound, gap factor eta and smoothing (paper 3.3).
-#include "gridshell/coverability.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
+#include "gridshell/coverability.h"
 #include "gridshell/curvature.h"
 #include "gridshell/errors.h"
 #include "gridshell/mesh_topology.h"
@@ -17,9 +16,10 @@ namespace {
 using testing::grid_mesh;
 
 Patch whole_grid_patch(const TriangleMesh& mesh, int n) {
-  const std::array<SurfacePoint, 4> corners{
-      SurfacePoint::at_vertex(mesh, 0), SurfacePoint::at_vertex(mesh, n),
-      SurfacePoint::at_vertex(mesh, (n + 1) * (n + 1) - 1), SurfacePoint::at_vertex(mesh, n * (n + 1))};
+  const std::array<SurfacePoint, 4> corners{SurfacePoint::at_vertex(mesh, 0),
+                                            SurfacePoint::at_vertex(mesh, n),
+                                            SurfacePoint::at_vertex(mesh, (n + 1) * (n + 1) - 1),
+                                            SurfacePoint::at_vertex(mesh, n * (n + 1))};
   return cut_patch(mesh, corners);
 }
 
@@ -44,7 +44,8 @@ TEST(GaussianCurvature, SphereIsOneOverRSquared) {
 }
 
 TEST(GaussianCurvature, DevelopableSurfacesAreFlat) {
-  const TriangleMesh plane = grid_mesh(12, 9, [](double u, double v) { return Vec3(5 * u, 3 * v + u * u, 0); });
+  const TriangleMesh plane =
+      grid_mesh(12, 9, [](double u, double v) { return Vec3(5 * u, 3 * v + u * u, 0); });
   const TriangleMesh cylinder = grid_mesh(16, 8, [](double u, double v) {
     return Vec3(3 * std::cos(2 * u), 3 * std::sin(2 * u), 4 * v);
   });
@@ -54,7 +55,7 @@ TEST(GaussianCurvature, DevelopableSurfacesAreFlat) {
 
 TEST(GaussianCurvature, SaddleIsNegative) {
   const TriangleMesh hypar = grid_mesh(16, 16, [](double u, double v) {
-    return Vec3(u - 0.5, v - 0.5, (u - 0.5) * (v - 0.5));
+    return Vec3(u - 0.5, v - 0.5, (u - 0.5) * (u - 0.5) - (v - 0.5) * (v - 0.5));
   });
   const MeshTopology topology = build_topology(hypar);
   const std::vector<double> k = gaussian_curvature(hypar);
@@ -64,7 +65,8 @@ TEST(GaussianCurvature, SaddleIsNegative) {
 
 TEST(Coverability, FlatPatchHasNoGapAndInfiniteInjectivityBound) {
   const int n = 16;
-  const TriangleMesh mesh = grid_mesh(n, n, [](double u, double v) { return Vec3(10 * u, 6 * v, 0); });
+  const TriangleMesh mesh =
+      grid_mesh(n, n, [](double u, double v) { return Vec3(10 * u, 6 * v, 0); });
   const Patch patch = whole_grid_patch(mesh, n);
   const CoverabilityReport report = analyze_coverability(patch);
   EXPECT_TRUE(report.injectivity_ok);
@@ -119,9 +121,8 @@ TEST(Coverability, SmoothingCapIsInfeasible) {
 }
 
 TEST(LaplacianSmoothing, KeepsAPlaneFlatAndFixedVerticesFixed) {
-  TriangleMesh mesh = grid_mesh(10, 10, [](double u, double v) {
-    return Vec3(10 * u + 0.3 * std::sin(9 * v), 10 * v, 0);
-  });
+  TriangleMesh mesh = grid_mesh(
+      10, 10, [](double u, double v) { return Vec3(10 * u + 0.3 * std::sin(9 * v), 10 * v, 0); });
   const MeshTopology topology = build_topology(mesh);
   std::vector<char> fixed(topology.is_boundary_vertex.begin(), topology.is_boundary_vertex.end());
   const std::vector<Vec3> before = mesh.vertices;

@@ -1,6 +1,4 @@
 // Target patch: corner parsing, cutting along boundary geodesics, grid criterion (iv).
-#include "gridshell/patch.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,6 +7,7 @@
 #include "gridshell/errors.h"
 #include "gridshell/geodesic.h"
 #include "gridshell/mesh_topology.h"
+#include "gridshell/patch.h"
 #include "support.h"
 
 namespace gridshell {
@@ -21,7 +20,8 @@ TriangleMesh flat_square(int n = 24) {
   return grid_mesh(n, n, [n](double u, double v) {
     const bool interior = u > 0 && u < 1 && v > 0 && v < 1;
     const double jitter = interior ? 0.3 / n : 0.0;
-    return Vec3(10 * u + jitter * std::sin(37 * u + 11 * v), 10 * v + jitter * std::cos(19 * u - 7 * v), 0);
+    return Vec3(10 * u + jitter * std::sin(37 * u + 11 * v),
+                10 * v + jitter * std::cos(19 * u - 7 * v), 0);
   });
 }
 
@@ -55,9 +55,9 @@ TEST(ParseCorners, AcceptsTheThreeForms) {
 }
 
 TEST(ParseCorners, RejectsMalformedInputNamingTheField) {
-  for (const char* bad : {"1,2,3", "1,2,3,4,5", "a,1,2,3", "-1,2,3,4", "1,2,2,3", "1.5,2,3,4",
-                          "0,0,0;1,1,1;2,2,2", "0,0;1,1,1;2,2,2;3,3,3", "0,0,x;1,1,1;2,2,2;3,3,3",
-                          "0,0,nan;1,1,1;2,2,2;3,3,3", ""}) {
+  for (const char* bad :
+       {"1,2,3", "1,2,3,4,5", "a,1,2,3", "-1,2,3,4", "1,2,2,3", "1.5,2,3,4", "0,0,0;1,1,1;2,2,2",
+        "0,0;1,1,1;2,2,2;3,3,3", "0,0,x;1,1,1;2,2,2;3,3,3", "0,0,nan;1,1,1;2,2,2;3,3,3", ""}) {
     try {
       parse_corners(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -126,7 +126,8 @@ TEST(CutPatch, CornersOnTheBoundaryOfAConvexMeshKeepEverything) {
   EXPECT_NEAR(surface_area(patch.mesh), 100.0, 1e-9);
   for (double l : side_lengths(patch)) EXPECT_NEAR(l, 10.0, 1e-12);
   for (double a : corner_angles(patch)) EXPECT_NEAR(a, std::numbers::pi / 2, 1e-12);
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(patch.input_vertex[patch.corners[i]], corners[i].vertex(mesh));
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(patch.input_vertex[patch.corners[i]], corners[i].vertex(mesh));
 }
 
 TEST(CutPatch, CurvedSurfaceSidesAreShortestGeodesics) {
@@ -136,7 +137,8 @@ TEST(CutPatch, CurvedSurfaceSidesAreShortestGeodesics) {
   // Corners: points of the analytic surface, snapped to the mesh.
   std::array<SurfacePoint, 4> corners;
   for (int i = 0; i < 4; ++i) {
-    const double z = 2.5 * std::exp(-((q[i].x() - 5) * (q[i].x() - 5) + (q[i].y() - 5) * (q[i].y() - 5)) / 8);
+    const double z =
+        2.5 * std::exp(-((q[i].x() - 5) * (q[i].x() - 5) + (q[i].y() - 5) * (q[i].y() - 5)) / 8);
     corners[i] = closest_surface_point(mesh, Vec3(q[i].x(), q[i].y(), z));
   }
   const Patch patch = cut_patch(mesh, corners);
@@ -183,9 +185,9 @@ TEST(CutPatch, ReflexCornerIsInfeasible) {
 TEST(CutPatch, CoincidentCornersAreInvalid) {
   const TriangleMesh mesh = flat_square(8);
   const SurfacePoint a = SurfacePoint::at_vertex(mesh, 10);
-  EXPECT_THROW(cut_patch(mesh, {a, SurfacePoint::at_vertex(mesh, 12), a,
-                                SurfacePoint::at_vertex(mesh, 30)}),
-               InvalidInput);
+  EXPECT_THROW(
+      cut_patch(mesh, {a, SurfacePoint::at_vertex(mesh, 12), a, SurfacePoint::at_vertex(mesh, 30)}),
+      InvalidInput);
 }
 
 }  // namespace

@@ -38,8 +38,8 @@ int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& fiel
   const auto& map = input.report.vertex_of_file_vertex;
   if (file_vertex < 0 || file_vertex >= static_cast<int>(map.size()))
     throw InvalidInput(field + ": vertex index " + std::to_string(file_vertex) +
-                       " is out of range (" + input.name + " has " +
-                       std::to_string(map.size()) + " vertices, numbered from 0)");
+                       " is out of range (" + input.name + " has " + std::to_string(map.size()) +
+                       " vertices, numbered from 0)");
   if (map[file_vertex] < 0)
     throw InvalidInput(field + ": vertex " + std::to_string(file_vertex) + " of " + input.name +
                        " was removed as an isolated vertex");
@@ -54,26 +54,29 @@ bool progress_line_open = false;
 Progress make_progress(bool quiet) {
   if (quiet) return Progress(nullptr, cancel_flag());
   const bool tty = isatty(STDERR_FILENO);
-  auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  auto last =
+      std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
   auto last_stage = std::make_shared<std::string>();
-  return Progress([tty, last, last_stage](std::string_view stage, double fraction) {
-    std::lock_guard lock(progress_mutex);
-    const auto now = std::chrono::steady_clock::now();
-    const bool new_stage = *last_stage != stage;
-    if (tty) {
-      if (!new_stage && now - *last < std::chrono::milliseconds(100)) return;
-      std::fprintf(stderr, "\r\033[K%.*s %3.0f%%", static_cast<int>(stage.size()), stage.data(),
-                   100 * std::clamp(fraction, 0.0, 1.0));
-      std::fflush(stderr);
-      progress_line_open = true;
-    } else {
-      if (!new_stage && now - *last < std::chrono::seconds(5)) return;
-      std::fprintf(stderr, "progress: %.*s %.0f%%\n", static_cast<int>(stage.size()),
-                   stage.data(), 100 * std::clamp(fraction, 0.0, 1.0));
-    }
-    *last = now;
-    *last_stage = std::string(stage);
-  }, cancel_flag());
+  return Progress(
+      [tty, last, last_stage](std::string_view stage, double fraction) {
+        std::lock_guard lock(progress_mutex);
+        const auto now = std::chrono::steady_clock::now();
+        const bool new_stage = *last_stage != stage;
+        if (tty) {
+          if (!new_stage && now - *last < std::chrono::milliseconds(100)) return;
+          std::fprintf(stderr, "\r\033[K%.*s %3.0f%%", static_cast<int>(stage.size()), stage.data(),
+                       100 * std::clamp(fraction, 0.0, 1.0));
+          std::fflush(stderr);
+          progress_line_open = true;
+        } else {
+          if (now - *last < std::chrono::seconds(2)) return;  // logs: a line every 2 s at most
+          std::fprintf(stderr, "progress: %.*s %.0f%%\n", static_cast<int>(stage.size()),
+                       stage.data(), 100 * std::clamp(fraction, 0.0, 1.0));
+        }
+        *last = now;
+        *last_stage = std::string(stage);
+      },
+      cancel_flag());
 }
 
 void finish_progress() {

@@ -65,7 +65,8 @@ void write_section(const std::string& path, const std::string& name, const std::
     all << in.rdbuf();
     text = all.str();
   } else {
-    text = "# Benchmarks\n\nWritten by `gridshell bench`; do not edit the marked sections by hand.\n";
+    text =
+        "# Benchmarks\n\nWritten by `gridshell bench`; do not edit the marked sections by hand.\n";
   }
   const std::string section = begin + "\n" + body + end;
   const auto b = text.find(begin), e = text.find(end);
@@ -172,7 +173,8 @@ Command add_bench_command(CLI::App& app) {
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
   sub->add_option("WHAT", args->what, "geodesic")->required()->check(CLI::IsMember({"geodesic"}));
-  sub->add_option("--sizes", args->sizes, "target vertex counts")->delimiter(',')
+  sub->add_option("--sizes", args->sizes, "target vertex counts")
+      ->delimiter(',')
       ->capture_default_str();
   sub->add_option("--surface", args->surface, "example surface")->capture_default_str();
   sub->add_option("--sources", args->sources, "sources per size")->capture_default_str();

@@ -98,12 +98,13 @@ int run_geodesic(const GeodesicArguments& args) {
     std::cout << to_json(report, false) << "\n";
   } else {
     std::printf("%s: %d vertices, source %d, %s: %.3f ms per source (median of %d)\n",
-                args.mesh.c_str(), input.mesh.vertex_count(), args.source,
-                report.method().c_str(), main.ms, args.repeat);
+                args.mesh.c_str(), input.mesh.vertex_count(), args.source, report.method().c_str(),
+                main.ms, args.repeat);
     if (!args.compare.empty())
-      std::printf("reference %s: %.3f ms per source (%.1fx), max abs diff %.3g, max rel diff %.3g\n",
-                  report.reference().c_str(), report.reference_ms_per_source(), report.speedup(),
-                  report.max_abs_diff(), report.max_rel_diff());
+      std::printf(
+          "reference %s: %.3f ms per source (%.1fx), max abs diff %.3g, max rel diff %.3g\n",
+          report.reference().c_str(), report.reference_ms_per_source(), report.speedup(),
+          report.max_abs_diff(), report.max_rel_diff());
   }
   return 0;
 }

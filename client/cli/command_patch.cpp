@@ -123,8 +123,8 @@ int run_patch(const PatchArguments& args) {
               cov.gaussian_curvature_max, cov.injectivity_bound, cov.longest_member_distance,
               cov.injectivity_ok ? "ok" : "exceeds bound");
   std::printf("  gap factor eta  %.6f -> %.6f after %d smoothing iterations (eta_max %.4f)\n",
-              result.smoothing.eta_before, result.smoothing.eta_after,
-              result.smoothing.iterations, args.eta_max);
+              result.smoothing.eta_before, result.smoothing.eta_after, result.smoothing.iterations,
+              args.eta_max);
   std::printf("  time            %.3f s\n", seconds);
   std::printf("  wrote           %s, %s\n", (out / "patch.obj").c_str(),
               (out / "patch.json").c_str());
@@ -143,8 +143,7 @@ Command add_patch_command(CLI::App& app) {
                   "i,j,k,l (vertex indices, file order from 0) | \"x,y,z;x,y,z;x,y,z;x,y,z\" | "
                   "auto (default: the example's corners, or auto)");
   sub->add_option("--out", args->out, "output folder")->required();
-  sub->add_option("--method", args->method, "geodesic engine: fast | cgal")
-      ->capture_default_str();
+  sub->add_option("--method", args->method, "geodesic engine: fast | cgal")->capture_default_str();
   sub->add_option("--eta-max", args->eta_max, "gap factor threshold")->capture_default_str();
   sub->add_option("--max-smoothing-iterations", args->max_iterations, "smoothing cap")
       ->capture_default_str();

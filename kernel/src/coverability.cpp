@@ -3,7 +3,6 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -90,7 +89,8 @@ CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOp
       progress.report("coverability: member lengths", 0.1 + 0.8 * done++ / (2.0 * samples));
       const int v = from[static_cast<size_t>(std::lround(i * (from.size() - 1.0) / (samples - 1)))];
       const std::vector<double> d = solver.distances(SurfacePoint::at_vertex(patch.mesh, v));
-      for (int q : to) report.longest_member_distance = std::max(report.longest_member_distance, d[q]);
+      for (int q : to)
+        report.longest_member_distance = std::max(report.longest_member_distance, d[q]);
     }
   }
   report.injectivity_ok = report.longest_member_distance < report.injectivity_bound;

@@ -26,9 +26,39 @@ std::vector<double> vertex_areas(const TriangleMesh& mesh) {
   std::vector<double> areas(mesh.vertex_count(), 0.0);
   for (const Face& f : mesh.faces) {
     const Vec3& a = mesh.vertices[f[0]];
-    const double third =
-        (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm() / 6.0;
+    const double third = (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm() / 6.0;
     for (int v : f) areas[v] += third;
+  }
+  return areas;
+}
+
+std::vector<double> mixed_voronoi_areas(const TriangleMesh& mesh) {
+  std::vector<double> areas(mesh.vertex_count(), 0.0);
+  for (const Face& f : mesh.faces) {
+    const Vec3 p[3] = {mesh.vertices[f[0]], mesh.vertices[f[1]], mesh.vertices[f[2]]};
+    const double area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
+    if (area <= 0) continue;
+    double cot[3];
+    bool obtuse = false;
+    int obtuse_at = -1;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 u = p[(i + 1) % 3] - p[i], v = p[(i + 2) % 3] - p[i];
+      cot[i] = u.dot(v) / u.cross(v).norm();
+      if (u.dot(v) < 0) {
+        obtuse = true;
+        obtuse_at = i;
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (obtuse) {
+        areas[f[i]] += i == obtuse_at ? area / 2 : area / 4;
+      } else {
+        // Voronoi region: (|e_ij|^2 cot(angle opposite e_ij) + |e_ik|^2 cot(opposite e_ik)) / 8.
+        const int j = (i + 1) % 3, k = (i + 2) % 3;
+        areas[f[i]] +=
+            ((p[j] - p[i]).squaredNorm() * cot[k] + (p[k] - p[i]).squaredNorm() * cot[j]) / 8;
+      }
+    }
   }
   return areas;
 }
@@ -36,7 +66,7 @@ std::vector<double> vertex_areas(const TriangleMesh& mesh) {
 std::vector<double> gaussian_curvature(const TriangleMesh& mesh) {
   const MeshTopology topology = build_topology(mesh);
   const std::vector<double> sums = vertex_angle_sums(mesh);
-  const std::vector<double> areas = vertex_areas(mesh);
+  const std::vector<double> areas = mixed_voronoi_areas(mesh);
   std::vector<double> k(mesh.vertex_count(), 0.0);
   for (int v = 0; v < mesh.vertex_count(); ++v)
     if (!topology.is_boundary_vertex[v] && areas[v] > 0)

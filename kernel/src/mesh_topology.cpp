@@ -20,7 +20,8 @@ std::uint64_t edge_key(int a, int b) {
 std::string TopologyProblem::message() const {
   std::ostringstream out;
   switch (kind) {
-    case Kind::None: return "no problem";
+    case Kind::None:
+      return "no problem";
     case Kind::InvalidIndex:
       out << "face " << element << " has an invalid or repeated vertex index";
       break;

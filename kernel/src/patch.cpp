@@ -225,9 +225,9 @@ std::vector<std::array<int, 3>> triangulate_convex(const std::vector<Vec2>& poin
       }
       if (!valid) continue;
       // Quality: smallest angle sine proxy = area / (longest edge squared).
-      const double l = std::max({(points[p] - points[c]).squaredNorm(),
-                                 (points[c] - points[q]).squaredNorm(),
-                                 (points[q] - points[p]).squaredNorm()});
+      const double l =
+          std::max({(points[p] - points[c]).squaredNorm(), (points[c] - points[q]).squaredNorm(),
+                    (points[q] - points[p]).squaredNorm()});
       const double quality = area / l;
       if (quality > best_quality) {
         best_quality = quality;
@@ -277,8 +277,10 @@ CornerSpec parse_corners(const std::string& text) {
   }
   const auto parts = split(t, ',');
   if (parts.size() != 4)
-    throw InvalidInput("--corners: expected 4 vertex indices 'i,j,k,l', 4 points "
-                       "'x,y,z;x,y,z;x,y,z;x,y,z' or 'auto', got '" + text + "'");
+    throw InvalidInput(
+        "--corners: expected 4 vertex indices 'i,j,k,l', 4 points "
+        "'x,y,z;x,y,z;x,y,z;x,y,z' or 'auto', got '" +
+        text + "'");
   spec.kind = CornerSpec::Kind::Vertices;
   for (int i = 0; i < 4; ++i) {
     const std::string p = trim(parts[i]);
@@ -305,11 +307,10 @@ std::array<int, 4> auto_corners(const TriangleMesh& mesh) {
   const MeshTopology topology = build_topology(mesh);
   if (topology.boundary_loops.empty())
     throw InvalidInput("--corners auto: the mesh has no boundary");
-  const std::vector<int>& loop = *std::max_element(
-      topology.boundary_loops.begin(), topology.boundary_loops.end(),
-      [](const auto& a, const auto& b) { return a.size() < b.size(); });
-  if (loop.size() < 4)
-    throw InvalidInput("--corners auto: the boundary has fewer than 4 vertices");
+  const std::vector<int>& loop =
+      *std::max_element(topology.boundary_loops.begin(), topology.boundary_loops.end(),
+                        [](const auto& a, const auto& b) { return a.size() < b.size(); });
+  if (loop.size() < 4) throw InvalidInput("--corners auto: the boundary has fewer than 4 vertices");
   const std::vector<double> sums = vertex_angle_sums(mesh);
   std::vector<int> order(loop.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
@@ -326,10 +327,10 @@ SurfacePoint closest_surface_point(const TriangleMesh& mesh, const Vec3& point) 
   double best_distance = std::numeric_limits<double>::infinity();
   for (int f = 0; f < mesh.face_count(); ++f) {
     const Face& t = mesh.faces[f];
-    const Vec3 w = closest_on_triangle(point, mesh.vertices[t[0]], mesh.vertices[t[1]],
-                                       mesh.vertices[t[2]]);
-    const Vec3 q = w[0] * mesh.vertices[t[0]] + w[1] * mesh.vertices[t[1]] +
-                   w[2] * mesh.vertices[t[2]];
+    const Vec3 w =
+        closest_on_triangle(point, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+    const Vec3 q =
+        w[0] * mesh.vertices[t[0]] + w[1] * mesh.vertices[t[1]] + w[2] * mesh.vertices[t[2]];
     const double d = (q - point).squaredNorm();
     if (d < best_distance) {
       best_distance = d;
@@ -540,8 +541,8 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
       for (int f : cut_topology.vertex_faces[a]) {
         const Face& t = mesh.faces[f];
         for (int i = 0; i < 3; ++i) {
-          const bool match = left ? (t[i] == a && t[(i + 1) % 3] == b)
-                                  : (t[i] == b && t[(i + 1) % 3] == a);
+          const bool match =
+              left ? (t[i] == a && t[(i + 1) % 3] == b) : (t[i] == b && t[(i + 1) % 3] == a);
           if (match && !in[f]) {
             in[f] = 1;
             queue.push(f);
@@ -578,8 +579,7 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   };
   for (int f = 0; f < mesh.face_count(); ++f)
     if (left[f] && right[f])
-      throw Infeasible(
-          "the four boundary geodesics do not enclose a region (grid criterion iv)");
+      throw Infeasible("the four boundary geodesics do not enclose a region (grid criterion iv)");
   bool use_left = true;
   if (count(left) == 0) {
     use_left = false;
@@ -643,9 +643,9 @@ std::array<double, 4> side_lengths(const Patch& patch) {
   std::array<double, 4> lengths{};
   for (int i = 0; i < 4; ++i)
     for (size_t k = 0; k + 1 < patch.sides[i].size(); ++k)
-      lengths[i] += (patch.mesh.vertices[patch.sides[i][k + 1]] -
-                     patch.mesh.vertices[patch.sides[i][k]])
-                        .norm();
+      lengths[i] +=
+          (patch.mesh.vertices[patch.sides[i][k + 1]] - patch.mesh.vertices[patch.sides[i][k]])
+              .norm();
   return lengths;
 }
 

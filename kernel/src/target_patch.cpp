@@ -31,7 +31,8 @@ TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& spec,
       break;
     case CornerSpec::Kind::Auto: {
       const auto corners = auto_corners(mesh);
-      for (int i = 0; i < 4; ++i) result.input_corners[i] = SurfacePoint::at_vertex(mesh, corners[i]);
+      for (int i = 0; i < 4; ++i)
+        result.input_corners[i] = SurfacePoint::at_vertex(mesh, corners[i]);
       break;
     }
   }
@@ -44,7 +45,10 @@ TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& spec,
   result.stage_seconds["coverability"] = seconds_since(start);
 
   start = std::chrono::steady_clock::now();
-  if (options.smooth) {
+  // Paper 3.3: a patch whose longest member is shorter than the injectivity bound pi/sqrt(Kmax)
+  // is covered by shortest geodesics as it is; only otherwise is the gap measured by eta and
+  // smoothed away.
+  if (options.smooth && !result.coverability.injectivity_ok) {
     result.smoothing = smooth_until_coverable(result.patch, options.coverability, progress);
   } else {
     result.smoothing.eta_before = result.smoothing.eta_after = result.coverability.gap.eta;

@@ -14,7 +14,8 @@ struct ExampleSurface {
   std::string name;         ///< e.g. "double-vault"
   std::string description;  ///< one line
   TriangleMesh mesh;        ///< disk-like triangle mesh, one boundary loop, ccw faces (normal up)
-  std::array<int, 4> corners;  ///< suggested patch corners (vertex indices), consecutive along the boundary
+  std::array<int, 4>
+      corners;  ///< suggested patch corners (vertex indices), consecutive along the boundary
 };
 
 /// Names of all built-in examples, paper models first: torus-wide, waves-bump, sphere,

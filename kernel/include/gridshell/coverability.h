@@ -26,18 +26,18 @@ struct CoverabilityOptions {
 
 /// The gap factor (paper 3.3) for one curvature peak.
 struct GapFactor {
-  double eta = 1.0;        ///< (d(p1,pmax) + d(pmax,q1)) / d(p1,q1) >= 1
-  int peak = -1;           ///< p_max: vertex of maximal Gaussian curvature
-  int p1 = -1;             ///< boundary vertex closest (geodesically) to the peak
-  int q1 = -1;             ///< vertex on the opposite side minimizing d(p1,pmax)+d(pmax,q)-d(p1,q)
+  double eta = 1.0;  ///< (d(p1,pmax) + d(pmax,q1)) / d(p1,q1) >= 1
+  int peak = -1;     ///< p_max: vertex of maximal Gaussian curvature
+  int p1 = -1;       ///< boundary vertex closest (geodesically) to the peak
+  int q1 = -1;       ///< vertex on the opposite side minimizing d(p1,pmax)+d(pmax,q)-d(p1,q)
 };
 
 struct CoverabilityReport {
   double gaussian_curvature_max = 0;  ///< max over interior vertices (discrete, angle defect/area)
   int gaussian_curvature_max_vertex = -1;
-  double injectivity_bound = 0;       ///< pi/sqrt(Kmax), +inf when Kmax <= 0
-  double longest_member_distance = 0; ///< max geodesic distance between opposite sides (sampled)
-  bool injectivity_ok = true;         ///< longest_member_distance < injectivity_bound
+  double injectivity_bound = 0;        ///< pi/sqrt(Kmax), +inf when Kmax <= 0
+  double longest_member_distance = 0;  ///< max geodesic distance between opposite sides (sampled)
+  bool injectivity_ok = true;          ///< longest_member_distance < injectivity_bound
   GapFactor gap;
 };
 

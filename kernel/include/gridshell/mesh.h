@@ -2,7 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
-
+#include <Eigen/Geometry>  // cross products
 #include <array>
 #include <vector>
 

@@ -25,7 +25,13 @@ struct MeshTopology {
 
 /// Problems `check_manifold` can find, with the offending element.
 struct TopologyProblem {
-  enum class Kind { None, InvalidIndex, NonManifoldEdge, NonManifoldVertex, InconsistentOrientation };
+  enum class Kind {
+    None,
+    InvalidIndex,
+    NonManifoldEdge,
+    NonManifoldVertex,
+    InconsistentOrientation
+  };
   Kind kind = Kind::None;
   int element = -1;  ///< face (InvalidIndex, InconsistentOrientation) or vertex index
   int other = -1;    ///< second vertex of a non-manifold edge

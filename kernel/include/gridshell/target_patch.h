@@ -12,18 +12,18 @@
 namespace gridshell {
 
 struct TargetPatchOptions {
-  PatchCutOptions cut;                // boundary geodesics and cutting
-  CoverabilityOptions coverability;   // eta_max, smoothing cap and step
-  bool smooth = true;                 // run smoothing when eta > eta_max
+  PatchCutOptions cut;               // boundary geodesics and cutting
+  CoverabilityOptions coverability;  // eta_max, smoothing cap and step
+  bool smooth = true;                // run smoothing when eta > eta_max
 };
 
 struct TargetPatch {
-  Patch patch;                              ///< trimmed (and smoothed) patch
+  Patch patch;                                ///< trimmed (and smoothed) patch
   std::array<SurfacePoint, 4> input_corners;  ///< corners on the input mesh, in the user's order
-  std::array<double, 4> corner_angles{};    ///< inner angles at patch.corners (after smoothing)
-  std::array<double, 4> boundary_lengths{}; ///< lengths of patch.sides
+  std::array<double, 4> corner_angles{};      ///< inner angles at patch.corners (after smoothing)
+  std::array<double, 4> boundary_lengths{};   ///< lengths of patch.sides
   double area = 0;
-  CoverabilityReport coverability;          ///< before smoothing
+  CoverabilityReport coverability;  ///< before smoothing
   SmoothingResult smoothing;
   std::map<std::string, double> stage_seconds;  ///< "cut", "coverability", "smoothing"
 };
