@@ -857,6 +857,35 @@ TEST(MeshIoReject, TwoBoundaryLoopsOnlyWithSingleBoundaryRequired) {
   EXPECT_TRUE(report.warnings.empty());
 }
 
+TEST(MeshIoReject, DiskWithASeparateClosedPiece) {
+  // A square (two triangles) plus a tetrahedron far away: one boundary loop, two pieces.
+  const std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n"
+      "v 5 5 5\nv 6 5 5\nv 5 6 5\nv 5 5 6\nf 5 7 6\nf 5 6 8\nf 6 7 8\nf 7 5 8\n";
+  expect_contains(reject("pieces.obj", obj), {"pieces.obj", "2 separate pieces"});
+}
+
+TEST(MeshIoReject, OneBoundaryLoopWithAHandle) {
+  // A 6 x 6 torus with one face removed: one boundary loop, genus 1.
+  const int n = 6;
+  std::string obj;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / n;
+      obj += "v " + std::to_string((3 + std::cos(v)) * std::cos(u)) + " " +
+             std::to_string((3 + std::cos(v)) * std::sin(u)) + " " + std::to_string(std::sin(v)) +
+             "\n";
+    }
+  auto id = [n](int i, int j) { return std::to_string((j % n) * n + (i % n) + 1); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      obj += "f " + id(i, j) + " " + id(i + 1, j) + " " + id(i + 1, j + 1) + "\n";
+      if (i + j > 0) obj += "f " + id(i, j) + " " + id(i + 1, j + 1) + " " + id(i, j + 1) + "\n";
+    }
+  expect_contains(reject("handle.obj", obj),
+                  {"handle.obj", "not a topological disk", "Euler characteristic -1"});
+}
+
 // ---------------------------------------------------------------------------------------------
 // Writing.
 

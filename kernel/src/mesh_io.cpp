@@ -1103,6 +1103,37 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
       fail(path + ": the surface has " + std::to_string(loops) +
            " boundary loops; a gridshell target must be a disk-like patch with exactly one "
            "(holes or separate pieces are not supported)");
+    // One boundary loop is not enough for a disk: a disk plus a separate closed piece, or a
+    // surface with handles, also have one. Count pieces, then check the Euler characteristic.
+    std::vector<int> piece(mesh.face_count(), -1);
+    int pieces = 0;
+    for (int seed = 0; seed < mesh.face_count(); ++seed) {
+      if (piece[seed] >= 0) continue;
+      std::vector<int> stack{seed};
+      piece[seed] = pieces;
+      while (!stack.empty()) {
+        const int f = stack.back();
+        stack.pop_back();
+        for (int g : topology.face_neighbors[f])
+          if (g >= 0 && piece[g] < 0) {
+            piece[g] = pieces;
+            stack.push_back(g);
+          }
+      }
+      ++pieces;
+    }
+    if (pieces > 1)
+      fail(path + ": the surface consists of " + std::to_string(pieces) +
+           " separate pieces; a gridshell target must be one disk-like patch");
+    long long edges = 0;
+    for (const auto& neighbors : topology.face_neighbors)
+      for (int g : neighbors) edges += g < 0 ? 2 : 1;  // interior edges are seen twice
+    edges /= 2;
+    const long long euler = static_cast<long long>(mesh.vertex_count()) - edges + mesh.face_count();
+    if (euler != 1)
+      fail(path + ": the surface is not a topological disk (Euler characteristic " +
+           std::to_string(euler) + ", " + std::to_string((1 - euler) / 2) +
+           " handle(s)); a gridshell target must be a disk-like patch");
   }
 
   // Warnings, one line per repair kind.
