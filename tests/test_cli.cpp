@@ -33,6 +33,18 @@ TEST(CliPatch, WritesPatchObjAndJsonWithAllFields) {
   const TriangleMesh patch = load_mesh(out + "/patch.obj");
   EXPECT_EQ(patch.vertex_count(), report["vertex_count"].get<int>());
   EXPECT_NE(result.out.find("gap factor"), std::string::npos);
+  // The sides are chains of patch.obj vertices joining consecutive corners.
+  ASSERT_EQ(report["sides"].size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    const auto& side = report["sides"][i]["vertices"];
+    EXPECT_EQ(side.front(), report["corners"][i]["patch_vertex"]);
+    EXPECT_EQ(side.back(), report["corners"][(i + 1) % 4]["patch_vertex"]);
+    double length = 0;
+    for (size_t k = 0; k + 1 < side.size(); ++k)
+      length +=
+          (patch.vertices[side[k + 1].get<int>()] - patch.vertices[side[k].get<int>()]).norm();
+    EXPECT_NEAR(length, report["boundary_lengths"][i].get<double>(), 1e-6 * length);
+  }
 }
 
 TEST(CliPatch, MissingFileIsInvalidInput) {

@@ -5,9 +5,12 @@
 #include <numbers>
 
 #include "gridshell/errors.h"
+#include "gridshell/example_surfaces.h"
 #include "gridshell/geodesic.h"
+#include "gridshell/mesh_io.h"
 #include "gridshell/mesh_topology.h"
 #include "gridshell/patch.h"
+#include "gridshell/target_patch.h"
 #include "support.h"
 
 namespace gridshell {
@@ -188,6 +191,78 @@ TEST(CutPatch, CoincidentCornersAreInvalid) {
   EXPECT_THROW(
       cut_patch(mesh, {a, SurfacePoint::at_vertex(mesh, 12), a, SurfacePoint::at_vertex(mesh, 30)}),
       InvalidInput);
+}
+
+// Invariants of a cut on a real surface: the boundary is exactly the four sides, each side is
+// as long as the exact geodesic distance between its corners on the input, vertices kept from
+// the input have not moved, and the patch is part of the input's area.
+void expect_consistent_cut(const TriangleMesh& input, const std::array<int, 4>& corner_vertices,
+                           const std::string& name) {
+  SCOPED_TRACE(name);
+  std::array<SurfacePoint, 4> corners;
+  for (int i = 0; i < 4; ++i) corners[i] = SurfacePoint::at_vertex(input, corner_vertices[i]);
+  const Patch patch = cut_patch(input, corners);
+  const MeshTopology topology = build_topology(patch.mesh);
+  ASSERT_EQ(topology.boundary_loops.size(), 1u);
+  size_t side_vertices = 0;
+  for (const auto& side : patch.sides) side_vertices += side.size() - 1;
+  EXPECT_EQ(topology.boundary_loops[0].size(), side_vertices);
+  const GeodesicSolver solver(input);
+  const auto lengths = side_lengths(patch);
+  for (int i = 0; i < 4; ++i) {
+    const double exact = solver.solve(corners[i]).vertex_distances()[corner_vertices[(i + 1) % 4]];
+    EXPECT_NEAR(lengths[i], exact, 1e-9 * exact) << "side " << i;
+    EXPECT_EQ(patch.input_vertex[patch.corners[i]],
+              corner_vertices[patch.corners_reversed ? (4 - i) % 4 : i]);
+  }
+  for (int v = 0; v < patch.mesh.vertex_count(); ++v)
+    if (patch.input_vertex[v] >= 0)
+      EXPECT_EQ(patch.mesh.vertices[v], input.vertices[patch.input_vertex[v]]);
+  EXPECT_LE(surface_area(patch.mesh), surface_area(input) * (1 + 1e-12));
+  EXPECT_GT(surface_area(patch.mesh), 0.0);
+  const auto angles = corner_angles(patch);
+  for (double a : angles) EXPECT_LT(a, std::numbers::pi);
+}
+
+TEST(CutPatch, ConsistentOnEveryExampleSurface) {
+  for (const std::string& name : example_names()) {
+    const ExampleSurface example = make_example(name);
+    expect_consistent_cut(example.mesh, example.corners, name);
+  }
+}
+
+TEST(CutPatch, ConsistentOnTheSharedMeshesWithAutoCorners) {
+  for (const std::string& path : testing::shared_mesh_paths()) {
+    const TriangleMesh mesh = load_mesh(path);
+    expect_consistent_cut(mesh, auto_corners(mesh), path);
+  }
+}
+
+TEST(TargetPatch, PointCornersInsideFacesBecomeVertices) {
+  const ExampleSurface sphere = make_example("sphere");
+  CornerSpec spec;
+  spec.kind = CornerSpec::Kind::Points;
+  // Points above the surface near the middle of four faces: snapped to the closest surface point.
+  for (int i = 0; i < 4; ++i) {
+    const Face& f = sphere.mesh.faces[(i + 1) * sphere.mesh.face_count() / 5];
+    spec.points[i] =
+        (sphere.mesh.vertices[f[0]] + sphere.mesh.vertices[f[1]] + sphere.mesh.vertices[f[2]]) / 3;
+  }
+  // Order them counter-clockwise around their centroid (seen from above).
+  Vec3 center = Vec3::Zero();
+  for (const Vec3& p : spec.points) center += p / 4;
+  std::sort(spec.points.begin(), spec.points.end(), [&](const Vec3& a, const Vec3& b) {
+    return std::atan2(a.y() - center.y(), a.x() - center.x()) <
+           std::atan2(b.y() - center.y(), b.x() - center.x());
+  });
+  const TargetPatch result = make_target_patch(sphere.mesh, spec);
+  for (int i = 0; i < 4; ++i) {
+    const Vec3& corner = result.patch.mesh.vertices[result.patch.corners[i]];
+    EXPECT_LT((corner - result.input_corners[i].position(sphere.mesh)).norm(), 1e-9);
+    EXPECT_EQ(result.patch.input_vertex[result.patch.corners[i]], -1);  // a new vertex
+    EXPECT_LT(result.corner_angles[i], std::numbers::pi);
+  }
+  EXPECT_EQ(result.smoothing.iterations, 0);
 }
 
 }  // namespace

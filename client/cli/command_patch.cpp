@@ -103,6 +103,11 @@ int run_patch(const PatchArguments& args) {
     report.add_warnings("corners were given clockwise; the patch uses them counter-clockwise");
   if (!cov.injectivity_ok)
     report.add_warnings("longest member distance exceeds the injectivity bound pi/sqrt(Kmax)");
+  for (int i = 0; i < 4; ++i) {
+    v1::Side* side = report.add_sides();
+    for (int v : result.patch.sides[i]) side->add_vertices(v);
+    side->set_length(result.boundary_lengths[i]);
+  }
   for (const auto& [stage, s] : result.stage_seconds) (*report.mutable_stage_seconds())[stage] = s;
 
   const std::filesystem::path out(args.out);
