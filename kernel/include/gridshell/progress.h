@@ -21,6 +21,10 @@ class Progress {
   explicit Progress(Callback callback, const std::atomic<bool>* cancel = nullptr)
       : callback_(std::move(callback)), cancel_(cancel) {}
 
+  /// A copy that keeps the cancellation flag but reports nowhere: for work split across threads
+  /// or nested inside a stage that reports its own progress.
+  Progress checker() const { return Progress(nullptr, cancel_); }
+
   bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
   void check() const {
     if (cancelled()) throw Cancelled();
