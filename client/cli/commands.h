@@ -11,6 +11,7 @@ using Command = std::function<int()>;
 
 Command add_patch_command(CLI::App& app);
 Command add_geodesic_command(CLI::App& app);
+Command add_design_command(CLI::App& app);
 Command add_examples_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
 

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
     commands[app.get_subcommands({})[before]] = std::move(command);
   };
   add(cli::add_patch_command);
+  add(cli::add_design_command);
   add(cli::add_geodesic_command);
   add(cli::add_examples_command);
   add(cli::add_bench_command);

@@ -1,0 +1,46 @@
+// gridshell — anchors (paper Section 4.6): connections pinned to the target surface so the
+// elastic grid deploys into the target and not into one of its isometric deformations.
+// Anchors are only on the boundary: the four corners, plus the boundary crossings nearest to
+// points of locally extreme curvature of the boundary geodesics (small extrema filtered out).
+#pragma once
+
+#include <vector>
+
+#include "gridshell/grid.h"
+#include "gridshell/patch.h"
+
+namespace gridshell {
+
+struct AnchorOptions {
+  /// Curvature extrema smaller than this fraction of the largest boundary curvature are ignored.
+  double min_relative_curvature = 0.25;
+  /// Extrema closer than this fraction of the side length to a corner or another extremum are
+  /// merged (the larger one wins).
+  double min_separation = 0.1;
+  /// Arc-length window, as a fraction of the side length, over which boundary curvature is
+  /// measured (the sides are polylines with uneven vertices from the cut).
+  double curvature_window = 0.04;
+};
+
+struct Anchor {
+  int g = 0, h = 0;     ///< the crossing (member indices) it pins
+  bool corner = false;  ///< one of the four patch corners
+  int side = -1;        ///< boundary side 0..3 it lies on (for a corner: the side it starts)
+  Vec3 position = Vec3::Zero();
+  Vec3 normal = Vec3::Zero();     ///< unit surface normal of the target at the anchor
+  double boundary_curvature = 0;  ///< curvature of the boundary geodesic there (0 for corners)
+};
+
+/// Curvature (1/length) of a boundary polyline sampled at `samples` points uniformly in arc
+/// length, measured over the window of AnchorOptions::curvature_window.
+std::vector<double> boundary_curvature(const std::vector<Vec3>& polyline, int samples,
+                                       double window_fraction);
+
+/// Corners first (c0..c3), then curvature anchors by side and arc length. Deterministic.
+std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
+                                  const AnchorOptions& options = {});
+
+/// Area-weighted unit vertex normals of a mesh.
+std::vector<Vec3> vertex_normals(const TriangleMesh& mesh);
+
+}  // namespace gridshell

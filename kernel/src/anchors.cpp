@@ -1,0 +1,151 @@
+#include "gridshell/anchors.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gridshell {
+namespace {
+
+// Point at arc length s along a polyline.
+Vec3 at_arc_length(const std::vector<Vec3>& polyline, const std::vector<double>& cumulative,
+                   double s) {
+  const auto it = std::upper_bound(cumulative.begin(), cumulative.end(), s);
+  const size_t k = std::clamp<size_t>(it - cumulative.begin(), 1, polyline.size() - 1);
+  const double l = cumulative[k] - cumulative[k - 1];
+  const double w = l > 0 ? std::clamp((s - cumulative[k - 1]) / l, 0.0, 1.0) : 0.0;
+  return polyline[k - 1] + w * (polyline[k] - polyline[k - 1]);
+}
+
+std::vector<double> cumulative_lengths(const std::vector<Vec3>& polyline) {
+  std::vector<double> cumulative{0.0};
+  for (size_t k = 1; k < polyline.size(); ++k)
+    cumulative.push_back(cumulative.back() + (polyline[k] - polyline[k - 1]).norm());
+  return cumulative;
+}
+
+}  // namespace
+
+std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) {
+  std::vector<Vec3> normals(mesh.vertex_count(), Vec3::Zero());
+  for (const Face& f : mesh.faces) {
+    const Vec3 n = (mesh.vertices[f[1]] - mesh.vertices[f[0]])
+                       .cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);  // |n| = 2 area
+    for (int v : f) normals[v] += n;
+  }
+  for (Vec3& n : normals)
+    if (n.norm() > 0) n.normalize();
+  return normals;
+}
+
+std::vector<double> boundary_curvature(const std::vector<Vec3>& polyline, int samples,
+                                       double window_fraction) {
+  const std::vector<double> cumulative = cumulative_lengths(polyline);
+  const double length = cumulative.back();
+  std::vector<double> curvature(samples, 0.0);
+  if (length <= 0 || samples < 3) return curvature;
+  const double h = std::max(window_fraction * length, 1e-12) / 2;
+  for (int i = 0; i < samples; ++i) {
+    const double s = length * i / (samples - 1);
+    if (s - h < 0 || s + h > length) continue;  // the window must fit on the side
+    // Curvature of the circle through three points h apart in arc length: 2 sin(angle)/chord.
+    const Vec3 a = at_arc_length(polyline, cumulative, s - h);
+    const Vec3 b = at_arc_length(polyline, cumulative, s);
+    const Vec3 c = at_arc_length(polyline, cumulative, s + h);
+    const double ab = (b - a).norm(), bc = (c - b).norm(), ca = (a - c).norm();
+    const double area2 = (b - a).cross(c - a).norm();
+    if (ab > 0 && bc > 0 && ca > 0) curvature[i] = 2 * area2 / (ab * bc * ca);
+  }
+  return curvature;
+}
+
+std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
+                                  const AnchorOptions& options) {
+  const TriangleMesh& mesh = patch.mesh;
+  const std::vector<Vec3> normals = vertex_normals(mesh);
+  const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
+  auto normal_near = [&](const Vec3& p, int side) {
+    // The closest vertex of that side carries the normal (boundary crossings lie on the side).
+    int best = patch.sides[side].front();
+    for (int v : patch.sides[side])
+      if ((mesh.vertices[v] - p).squaredNorm() < (mesh.vertices[best] - p).squaredNorm()) best = v;
+    return normals[best];
+  };
+  std::vector<Anchor> anchors;
+  // Corners: c0 = g0 x h0, c1 = g_last x h0, c2 = g_last x h_last, c3 = g0 x h_last.
+  const std::array<std::array<int, 2>, 4> corner_crossings{
+      {{0, 0}, {ng - 1, 0}, {ng - 1, nh - 1}, {0, nh - 1}}};
+  for (int i = 0; i < 4; ++i) {
+    Anchor a;
+    a.g = corner_crossings[i][0], a.h = corner_crossings[i][1];
+    a.corner = true;
+    a.side = i;
+    a.position = mesh.vertices[patch.corners[i]];
+    a.normal = normals[patch.corners[i]];
+    anchors.push_back(a);
+  }
+  // Boundary crossings of each side, by arc length along the side (c_i -> c_{i+1}).
+  for (int side = 0; side < 4; ++side) {
+    std::vector<Vec3> polyline;
+    for (int v : patch.sides[side]) polyline.push_back(mesh.vertices[v]);
+    const int samples = 201;
+    const std::vector<double> kappa =
+        boundary_curvature(polyline, samples, options.curvature_window);
+    const double kmax = *std::max_element(kappa.begin(), kappa.end());
+    if (kmax <= 0) continue;
+    // Local maxima above the threshold, strongest first, kept apart from corners and each other.
+    std::vector<int> peaks;
+    for (int i = 1; i + 1 < samples; ++i)
+      if (kappa[i] >= kappa[i - 1] && kappa[i] > kappa[i + 1] &&
+          kappa[i] >= options.min_relative_curvature * kmax)
+        peaks.push_back(i);
+    std::stable_sort(peaks.begin(), peaks.end(), [&](int a, int b) { return kappa[a] > kappa[b]; });
+    std::vector<double> kept;  // arc-length fractions
+    for (int i : peaks) {
+      const double t = static_cast<double>(i) / (samples - 1);
+      if (t < options.min_separation || t > 1 - options.min_separation) continue;
+      bool close = false;
+      for (double k : kept) close |= std::abs(k - t) < options.min_separation;
+      if (!close) kept.push_back(t);
+    }
+    std::sort(kept.begin(), kept.end());
+    // Inner boundary crossings on this side with their fraction along c_side -> c_side+1.
+    struct Candidate {
+      int g, h;
+      double t;
+      Vec3 p;
+    };
+    std::vector<Candidate> candidates;
+    for (const Crossing& x : grid.crossings) {
+      if (!x.on_boundary) continue;
+      const bool g_boundary = x.g == 0 || x.g == ng - 1, h_boundary = x.h == 0 || x.h == nh - 1;
+      if (g_boundary && h_boundary) continue;  // corners
+      double t = -1;
+      // side 0 = h0 reversed (c1 -> c0); side 1 = g_last (c1 -> c2); side 2 = h_last (c2 -> c3);
+      // side 3 = g0 reversed (c0 -> c3).
+      if (side == 0 && x.h == 0) t = 1 - x.s_h / grid.h.front().length;
+      if (side == 1 && x.g == ng - 1) t = x.s_g / grid.g.back().length;
+      if (side == 2 && x.h == nh - 1) t = x.s_h / grid.h.back().length;
+      if (side == 3 && x.g == 0) t = 1 - x.s_g / grid.g.front().length;
+      if (t >= 0) candidates.push_back({x.g, x.h, t, x.surface_point});
+    }
+    for (double t : kept) {
+      const Candidate* best = nullptr;
+      for (const Candidate& c : candidates)
+        if (!best || std::abs(c.t - t) < std::abs(best->t - t)) best = &c;
+      if (!best) continue;
+      bool duplicate = false;
+      for (const Anchor& a : anchors) duplicate |= a.g == best->g && a.h == best->h;
+      if (duplicate) continue;
+      Anchor a;
+      a.g = best->g, a.h = best->h;
+      a.side = side;
+      a.position = best->p;
+      a.normal = normal_near(best->p, side);
+      a.boundary_curvature = kappa[static_cast<int>(std::lround(t * (samples - 1)))];
+      anchors.push_back(a);
+    }
+  }
+  return anchors;
+}
+
+}  // namespace gridshell

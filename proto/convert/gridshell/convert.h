@@ -1,0 +1,20 @@
+// gridshell — conversions between kernel values and the proto messages of proto/gridshell/v1.
+// The one place where the CLI (and later the daemon) turn results into files and replies.
+#pragma once
+
+#include <string>
+
+#include "gridshell/design.h"
+#include "gridshell/v1/design.pb.h"
+
+namespace gridshell {
+
+/// The deterministic design file (no timings).
+v1::Design to_proto(const Design& design, const v1::DesignOptions& options,
+                    const std::string& input_name);
+
+/// Timings and summary numbers of a design run.
+v1::DesignReport to_report(const Design& design, const std::string& input_name, int mesh_vertices,
+                           double seconds);
+
+}  // namespace gridshell
