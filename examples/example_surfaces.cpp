@@ -272,14 +272,26 @@ ExampleSurface cone(double scale) {
   constexpr double k = 0.5, theta0 = 1.0, t0 = 60.0, t1 = 118.8;
   const double alpha = std::atan(k);
   const double ca = std::cos(alpha), sa = std::sin(alpha);
-  return analytic("cone",
-                  "Cone: part of a flaring cone with a level crown, apex outside, developable", 45,
-                  33, scale, [=](double u, double v) {
-                    const double theta = -theta0 + 2 * theta0 * u;
-                    const double t = t0 + (t1 - t0) * v;
-                    const double x = k * t * std::sin(theta), y = t, z = k * t * std::cos(theta);
-                    return Vec3(x, y * ca + z * sa, -y * sa + z * ca);
-                  });
+  ExampleSurface example =
+      analytic("cone", "Cone: part of a flaring cone with a level crown, apex outside, developable",
+               45, 33, scale, [=](double u, double v) {
+                 const double theta = -theta0 + 2 * theta0 * u;
+                 const double t = t0 + (t1 - t0) * v;
+                 const double x = k * t * std::sin(theta), y = t, z = k * t * std::cos(theta);
+                 return Vec3(x, y * ca + z * sa, -y * sa + z * ca);
+               });
+  // Developed, the cone is an annulus sector (half angle theta0 sin(alpha) at the apex). The
+  // inner arc t = t0 is concave, so the straight line between corners on it would leave the
+  // patch and the boundary geodesic would hug the arc instead. The near corners are therefore
+  // moved out along the rulings to the first row t with t cos(theta0 sin(alpha)) > t0, where
+  // the chord between them clears the inner arc.
+  const int nu = scaled_samples(45, scale), nv = scaled_samples(33, scale);
+  const double t_min = t0 / std::cos(theta0 * sa);
+  int row = static_cast<int>(std::ceil((t_min - t0) / (t1 - t0) * (nv - 1)));
+  while (t0 + (t1 - t0) * row / (nv - 1.0) <= t_min) ++row;
+  example.corners[0] = row * nu;
+  example.corners[1] = row * nu + nu - 1;
+  return example;
 }
 
 /// Hyperbolic paraboloid (saddle, K < 0 everywhere):
