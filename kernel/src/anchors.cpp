@@ -16,6 +16,16 @@ Vec3 at_arc_length(const std::vector<Vec3>& polyline, const std::vector<double>&
   return polyline[k - 1] + w * (polyline[k] - polyline[k - 1]);
 }
 
+// Topographic prominence of the local maximum at i: its height above the higher of the two
+// lowest points separating it from a higher value on either side (or from the ends).
+double prominence(const std::vector<double>& values, int i) {
+  double left = values[i], right = values[i];
+  for (int k = i - 1; k >= 0 && values[k] <= values[i]; --k) left = std::min(left, values[k]);
+  for (size_t k = i + 1; k < values.size() && values[k] <= values[i]; ++k)
+    right = std::min(right, values[k]);
+  return values[i] - std::max(left, right);
+}
+
 std::vector<double> cumulative_lengths(const std::vector<Vec3>& polyline) {
   std::vector<double> cumulative{0.0};
   for (size_t k = 1; k < polyline.size(); ++k)
@@ -43,7 +53,12 @@ std::vector<double> boundary_curvature(const std::vector<Vec3>& polyline, int sa
   const double length = cumulative.back();
   std::vector<double> curvature(samples, 0.0);
   if (length <= 0 || samples < 3) return curvature;
-  const double h = std::max(window_fraction * length, 1e-12) / 2;
+  // The sides are polylines: curvature sits at their vertices. The three points must straddle
+  // several vertices or the estimate oscillates with the sampling phase.
+  double longest = 0;
+  for (size_t k = 1; k < cumulative.size(); ++k)
+    longest = std::max(longest, cumulative[k] - cumulative[k - 1]);
+  const double h = std::max({window_fraction * length / 2, 2 * longest, 1e-12});
   for (int i = 0; i < samples; ++i) {
     const double s = length * i / (samples - 1);
     if (s - h < 0 || s + h > length) continue;  // the window must fit on the side
@@ -83,20 +98,29 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
     a.normal = normals[patch.corners[i]];
     anchors.push_back(a);
   }
-  // Boundary crossings of each side, by arc length along the side (c_i -> c_{i+1}).
+  // Boundary curvature of all four sides; small extrema are filtered relative to the largest
+  // curvature on any side, and a side must bend by at least min_turning over the window.
+  const int samples = 201;
+  std::array<std::vector<double>, 4> curvatures;
+  std::array<double, 4> lengths{};
+  double kmax = 0;
   for (int side = 0; side < 4; ++side) {
     std::vector<Vec3> polyline;
     for (int v : patch.sides[side]) polyline.push_back(mesh.vertices[v]);
-    const int samples = 201;
-    const std::vector<double> kappa =
-        boundary_curvature(polyline, samples, options.curvature_window);
-    const double kmax = *std::max_element(kappa.begin(), kappa.end());
-    if (kmax <= 0) continue;
+    curvatures[side] = boundary_curvature(polyline, samples, options.curvature_window);
+    lengths[side] = cumulative_lengths(polyline).back();
+    kmax = std::max(kmax, *std::max_element(curvatures[side].begin(), curvatures[side].end()));
+  }
+  for (int side = 0; side < 4; ++side) {
+    const std::vector<double>& kappa = curvatures[side];
+    const double threshold =
+        std::max(options.min_relative_curvature * kmax,
+                 options.min_turning / (options.curvature_window * lengths[side]));
     // Local maxima above the threshold, strongest first, kept apart from corners and each other.
     std::vector<int> peaks;
     for (int i = 1; i + 1 < samples; ++i)
-      if (kappa[i] >= kappa[i - 1] && kappa[i] > kappa[i + 1] &&
-          kappa[i] >= options.min_relative_curvature * kmax)
+      if (kappa[i] >= kappa[i - 1] && kappa[i] > kappa[i + 1] && kappa[i] >= threshold &&
+          prominence(kappa, i) >= options.min_relative_prominence * kmax)
         peaks.push_back(i);
     std::stable_sort(peaks.begin(), peaks.end(), [&](int a, int b) { return kappa[a] > kappa[b]; });
     std::vector<double> kept;  // arc-length fractions

@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <map>
 #include <mutex>
@@ -28,8 +30,13 @@ int zero_count(const SurfacePoint& p) {
 }
 
 // Faces that contain a surface point (1 inside a face, 2 on an interior edge, the fan at a vertex).
+// Weights below 1e-10 count as zero: a path running along a line of edges (regular grids on
+// developable surfaces) passes vertices with weights of 1e-15 instead of exact zeros, and its
+// segments would otherwise belong to no common face.
 std::vector<int> faces_containing(const TriangleMesh& mesh, const MeshTopology& topology,
-                                  const SurfacePoint& p) {
+                                  SurfacePoint p) {
+  for (int i = 0; i < 3; ++i)
+    if (p.barycentric[i] < 1e-10) p.barycentric[i] = 0.0;
   const int zeros = zero_count(p);
   if (zeros >= 2) {
     for (int i = 0; i < 3; ++i)
@@ -313,6 +320,38 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
     }
   }
   std::map<std::pair<int, int>, std::vector<std::array<double, 2>>> found;  // (g,h) -> (s_g, s_h)
+  // Paths through a common vertex cross there, but their segments around it may lie in
+  // different faces of the fan: match vertex path points directly.
+  auto vertex_of = [&](SurfacePoint p) {
+    for (int i = 0; i < 3; ++i)
+      if (p.barycentric[i] < 1e-10) p.barycentric[i] = 0.0;
+    if (zero_count(p) < 2) return -1;
+    for (int i = 0; i < 3; ++i)
+      if (p.barycentric[i] != 0.0) return mesh.faces[p.face][i];
+    return -1;
+  };
+  std::unordered_map<int, std::vector<std::pair<int, double>>> h_vertices;  // vertex -> (h, s_h)
+  for (int j = 1; j + 1 < nh; ++j) {
+    const Member& h = grid.h[j];
+    double s = 0;
+    for (size_t k = 0; k < h.surface_path.size(); ++k) {
+      if (k > 0) s += (h.surface[k] - h.surface[k - 1]).norm();
+      const int v = vertex_of(h.surface_path[k]);
+      if (v >= 0) h_vertices[v].push_back({j, s});
+    }
+  }
+  for (int i = 1; i + 1 < ng; ++i) {
+    const Member& g = grid.g[i];
+    double s = 0;
+    for (size_t k = 0; k < g.surface_path.size(); ++k) {
+      if (k > 0) s += (g.surface[k] - g.surface[k - 1]).norm();
+      const int v = vertex_of(g.surface_path[k]);
+      if (v < 0) continue;
+      auto it = h_vertices.find(v);
+      if (it == h_vertices.end()) continue;
+      for (const auto& [j, s_h] : it->second) found[{i, j}].push_back({s, s_h});
+    }
+  }
   std::unordered_map<int, FaceFrame> frames;
   for (int i = 1; i + 1 < ng; ++i) {
     const Member& g = grid.g[i];
@@ -354,6 +393,17 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
             std::abs(hit[1] - distinct.back()[1]) > merge)
           distinct.push_back(hit);
       if (distinct.size() != 1) {
+        if (std::getenv("GRIDSHELL_DEBUG_GRID")) {
+          for (const Member* m : {&g, &h}) {
+            std::fprintf(stderr, "member %d:\n", m->index);
+            for (size_t k = 0; k < m->surface_path.size(); ++k) {
+              const SurfacePoint& p = m->surface_path[k];
+              std::fprintf(stderr, "  f%d (%.17g %.17g %.17g) zeros %d  %g %g %g\n", p.face,
+                           p.barycentric[0], p.barycentric[1], p.barycentric[2], zero_count(p),
+                           m->surface[k].x(), m->surface[k].y(), m->surface[k].z());
+            }
+          }
+        }
         std::ostringstream msg;
         msg << "members g" << i << " and h" << j << " cross " << distinct.size()
             << " times on the surface instead of once (criterion iii)";

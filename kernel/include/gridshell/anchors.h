@@ -14,6 +14,12 @@ namespace gridshell {
 struct AnchorOptions {
   /// Curvature extrema smaller than this fraction of the largest boundary curvature are ignored.
   double min_relative_curvature = 0.25;
+  /// A curvature maximum must stand out from its surroundings by this fraction of the largest
+  /// boundary curvature (topographic prominence), so a broad crown gives one anchor, not three.
+  double min_relative_prominence = 0.1;
+  /// Ignore curvature that turns the side by less than this angle (radians) over one window:
+  /// straight or nearly straight sides get no anchors from rounding noise.
+  double min_turning = 0.02;
   /// Extrema closer than this fraction of the side length to a corner or another extremum are
   /// merged (the larger one wins).
   double min_separation = 0.1;
