@@ -139,13 +139,15 @@ ExampleSurface paper_model(const char* name, const char* description, const Pape
 // ---------------------------------------------------------------------------------------------
 
 /// Torus Wide (Table 1: 100 x 61.9 x 27.2, |M_V| 2122). The upper half of a torus tube, a wide
-/// strip over the top of the ring: with major radius R = 2.25, tube radius r = 1,
-///   theta in [-0.58, 0.58] (around the ring, u), phi in [pi - 0.1, 0.1] (across the tube, v),
+/// strip over the top of the ring: with major radius R = 4, tube radius r = 1,
+///   theta in [-0.42, 0.42] (around the ring, u), phi in [pi - 0.1, 0.1] (across the tube, v),
 ///   rho = R + r cos(phi),  S = (rho sin(theta), rho cos(theta), r sin(phi)).
-/// The outer half of the strip has K > 0, the inner half K < 0. Natural proportions are close to
-/// the table (width : depth : height = 100 : 61.7 : 25.3); the final scale stretches z by ~7%.
+/// The outer half of the strip has K > 0, the inner half K < 0. R = 4 rather than a tighter ring:
+/// with R = 2.25 the inner side was 2.6 times shorter than the outer one and no planar angle
+/// made both cladding functions valid (the planar corner angles at c2, c3 could not reach the
+/// surface ones); with R = 4 the design is feasible. Scaled per axis to the table's box.
 ExampleSurface torus_wide(double scale) {
-  constexpr double R = 2.25, r = 1.0, theta0 = 0.58, phi0 = 0.1;
+  constexpr double R = 4.0, r = 1.0, theta0 = 0.42, phi0 = 0.1;
   return paper_model(
       "torus-wide",
       "Torus Wide: a wide strip over the top of a torus tube (K>0 outside, K<0 inside)",

@@ -22,8 +22,8 @@ struct DesignArguments {
   std::string alpha = "min";
   int members_u = 0;
   int members_v = 0;
-  double lamella_width = 1.0;
-  double lamella_thickness = 0.1;
+  double lamella_width = 0;      // 0 = 1% of the longest patch side
+  double lamella_thickness = 0;  // 0 = width / 10
   int resolution = 100;
   std::string method = "fast";
   double eta_max = 1.0015;
@@ -59,8 +59,10 @@ int run_design(const DesignArguments& args) {
   parse_alpha(args.alpha, options);
   if (args.members_u < 0) throw InvalidInput("--members-u: must be >= 0 (0 = automatic)");
   if (args.members_v < 0) throw InvalidInput("--members-v: must be >= 0 (0 = automatic)");
-  if (!(args.lamella_width > 0)) throw InvalidInput("--lamella-width: must be positive");
-  if (!(args.lamella_thickness > 0)) throw InvalidInput("--lamella-thickness: must be positive");
+  if (!(args.lamella_width >= 0) || !std::isfinite(args.lamella_width))
+    throw InvalidInput("--lamella-width: must be positive (or 0 for 1% of the longest side)");
+  if (!(args.lamella_thickness >= 0) || !std::isfinite(args.lamella_thickness))
+    throw InvalidInput("--lamella-thickness: must be positive (or 0 for a tenth of the width)");
   if (args.resolution != 0 && (args.resolution < 8 || args.resolution > 1000))
     throw InvalidInput("--resolution: must be 0 (adaptive) or 8..1000");
   options.members_g = args.members_u;
@@ -82,8 +84,8 @@ int run_design(const DesignArguments& args) {
   used.set_alpha(args.alpha);
   used.set_members_u(args.members_u);
   used.set_members_v(args.members_v);
-  used.set_lamella_width(args.lamella_width);
-  used.set_lamella_thickness(args.lamella_thickness);
+  used.set_lamella_width(design.lamella_width);
+  used.set_lamella_thickness(design.lamella_thickness);
   used.set_map_resolution(design.maps.g.resolution());
   used.set_eta_max(args.eta_max);
   used.set_max_smoothing_iterations(options.patch.coverability.max_smoothing_iterations);
@@ -101,7 +103,7 @@ int run_design(const DesignArguments& args) {
   const std::filesystem::path out(args.out);
   write_file_atomically((out / "design.json").string(), to_json(message) + "\n");
   write_file_atomically((out / "report.json").string(), to_json(report) + "\n");
-  write_file_atomically((out / "planar.svg").string(), planar_svg(design, args.lamella_width));
+  write_file_atomically((out / "planar.svg").string(), planar_svg(design, design.lamella_width));
   write_file_atomically((out / "spatial.obj").string(), spatial_obj(design));
   write_file_atomically((out / "maps.svg").string(), maps_svg(design));
 
@@ -141,9 +143,11 @@ Command add_design_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--members-v", args->members_v, "inner h-members (0 = automatic)")
       ->capture_default_str();
-  sub->add_option("--lamella-width", args->lamella_width, "lamella width, mesh units")
+  sub->add_option("--lamella-width", args->lamella_width,
+                  "lamella width, mesh units (0 = 1% of the longest patch side)")
       ->capture_default_str();
-  sub->add_option("--lamella-thickness", args->lamella_thickness, "lamella thickness, mesh units")
+  sub->add_option("--lamella-thickness", args->lamella_thickness,
+                  "lamella thickness, mesh units (0 = width / 10)")
       ->capture_default_str();
   sub->add_option("--resolution", args->resolution, "distance map resolution R (0 = adaptive)")
       ->capture_default_str();

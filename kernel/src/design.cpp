@@ -1,5 +1,6 @@
 #include "gridshell/design.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -93,6 +94,14 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
 
   start = std::chrono::steady_clock::now();
   MemberPlacementOptions g_options = options.members, h_options = options.members;
+  const double longest_side = *std::max_element(lengths.begin(), lengths.end());
+  design.lamella_width =
+      options.members.lamella_width > 0 ? options.members.lamella_width : 0.01 * longest_side;
+  design.lamella_thickness = options.members.lamella_thickness > 0
+                                 ? options.members.lamella_thickness
+                                 : design.lamella_width / 10;
+  g_options.lamella_width = h_options.lamella_width = design.lamella_width;
+  g_options.lamella_thickness = h_options.lamella_thickness = design.lamella_thickness;
   if (options.members_g > 0) g_options.count = options.members_g;
   if (options.members_h > 0) h_options.count = options.members_h;
   const auto g_members =

@@ -16,12 +16,15 @@
 namespace gridshell {
 
 struct DesignOptions {
+  DesignOptions() { members.lamella_width = members.lamella_thickness = 0; }  // automatic
   TargetPatchOptions patch;
   DistanceMapOptions maps;
   CladdingOptions cladding;
-  MemberPlacementOptions members;  // count is overridden by members_g / members_h when > 0
-  int members_g = 0;               // explicit inner g-member count (CLI --members-u), 0 = auto
-  int members_h = 0;               // explicit inner h-member count (CLI --members-v), 0 = auto
+  /// Member placement; count is overridden by members_g / members_h when > 0. A lamella width of
+  /// 0 means 1% of the longest patch side, a thickness of 0 a tenth of the width (w:t = 10:1).
+  MemberPlacementOptions members;
+  int members_g = 0;  // explicit inner g-member count (CLI --members-u), 0 = auto
+  int members_h = 0;  // explicit inner h-member count (CLI --members-v), 0 = auto
   enum class Alpha { Min, Max, Value } alpha = Alpha::Min;  // paper default: ᾱ_min (compact)
   double alpha_value = 0;  // radians, with Alpha::Value; must lie in the feasible range
   GridOptions grid;
@@ -32,8 +35,10 @@ struct Design {
   TargetPatch target;
   DistanceMaps maps;
   AlphaRange alpha_range;
-  double alpha = 0;      ///< spatial inner angle at corner c0
-  double alpha_bar = 0;  ///< chosen planar angle at c0
+  double alpha = 0;              ///< spatial inner angle at corner c0
+  double alpha_bar = 0;          ///< chosen planar angle at c0
+  double lamella_width = 0;      ///< effective (after resolving 0 = automatic)
+  double lamella_thickness = 0;  ///< effective
   PlanarPatch planar;
   CladdingFunction cladding_g, cladding_h;
   Grid grid;
