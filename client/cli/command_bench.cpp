@@ -15,6 +15,7 @@
 
 #include "cli_support.h"
 #include "commands.h"
+#include "gridshell/design.h"
 #include "gridshell/errors.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/geodesic.h"
@@ -32,6 +33,7 @@ struct BenchArguments {
   int cgal_max_vertices = 70000;
   std::string out;
   bool no_write = false;
+  int repeats = 3;
 };
 
 double ms_since(std::chrono::steady_clock::time_point start) {
@@ -166,13 +168,86 @@ int bench_geodesic(const BenchArguments& args) {
   return 0;
 }
 
+// Paper Table 1 (Xeon E5-2687W v4): |M_V|, t_smooth (0 = not needed), t_grid in seconds.
+struct PaperRow {
+  const char* name;
+  int vertices;
+  double t_smooth, t_grid;
+};
+constexpr PaperRow kTable1[] = {{"torus-wide", 2122, 0, 5.33},  {"waves-bump", 3385, 31.63, 5.62},
+                                {"sphere", 1083, 0, 1.29},      {"double-vault", 571, 0, 0.68},
+                                {"waves", 1929, 10.22, 2.10},   {"archway", 975, 4.14, 1.50},
+                                {"triple-vault", 1322, 0, 1.67}};
+
+int bench_design(const BenchArguments& args) {
+  std::ostringstream table;
+  const double deg = 180 / 3.14159265358979323846;
+  table
+      << "## Grid design on the seven paper-like examples, next to the paper's Table 1\n\n"
+      << "Measured " << today() << " on " << cpu_name() << ", "
+      << std::thread::hardware_concurrency() << " hardware threads. Median of " << args.repeats
+      << " runs of `make_design` per example (default options: R = 100, ᾱ = ᾱ_min). t_grid is "
+      << "patch -> design (distance maps, ᾱ range, cladding, members, grid, anchors), "
+         "excluding cutting and smoothing. Paper values in parentheses (MATLAB, Xeon "
+         "E5-2687W v4).\n\n"
+      << "| example | \\|M_V\\| (paper) | t_smooth s (paper) | t_grid s (paper) | speed-up t_grid "
+         "| members g + h | ᾱ range deg | ᾱ deg |\n"
+      << "|---|---:|---:|---:|---:|---:|---|---:|\n";
+  for (const PaperRow& row : kTable1) {
+    const ExampleSurface example = make_example(row.name);
+    CornerSpec corners;
+    corners.kind = CornerSpec::Kind::Vertices;
+    corners.vertices = example.corners;
+    std::vector<double> t_grid, t_smooth;
+    std::string line;
+    for (int r = 0; r < args.repeats; ++r) {
+      std::cerr << "bench design: " << row.name << " run " << r + 1 << "\n";
+      try {
+        const Design design = make_design(example.mesh, corners, DesignOptions{});
+        double grid = 0;
+        for (const auto& [stage, s] : design.stage_seconds)
+          if (stage != "patch") grid += s;
+        t_grid.push_back(grid);
+        t_smooth.push_back(design.target.stage_seconds.at("smoothing"));
+        char buffer[512];
+        std::snprintf(buffer, sizeof buffer, "%zu + %zu | %.1f – %.1f | %.1f",
+                      design.grid.g.size() - 2, design.grid.h.size() - 2,
+                      design.alpha_range.min * deg, design.alpha_range.max * deg,
+                      design.alpha_bar * deg);
+        line = buffer;
+      } catch (const std::exception& e) {
+        line = std::string("infeasible: ") + e.what() + " | | ";
+        break;
+      }
+    }
+    char buffer[1024];
+    const double g = median(t_grid);
+    std::snprintf(buffer, sizeof buffer,
+                  "| %s | %d (%d) | %.3f (%s) | %.3f (%.2f) | %.1fx | %s |\n", row.name,
+                  example.mesh.vertex_count(), row.vertices, median(t_smooth),
+                  row.t_smooth > 0 ? std::to_string(row.t_smooth).substr(0, 5).c_str() : "–", g,
+                  row.t_grid, g > 0 ? row.t_grid / g : 0.0, line.c_str());
+    table << buffer;
+    std::cerr << buffer;
+  }
+  table << "\nCommand: `gridshell bench design --repeats " << args.repeats << "`\n";
+  std::cout << table.str();
+  if (!args.no_write) {
+    write_section(args.out, "design", table.str());
+    std::cerr << "wrote " << args.out << "\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 Command add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArguments>();
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
-  sub->add_option("WHAT", args->what, "geodesic")->required()->check(CLI::IsMember({"geodesic"}));
+  sub->add_option("WHAT", args->what, "geodesic | design")
+      ->required()
+      ->check(CLI::IsMember({"geodesic", "design"}));
   sub->add_option("--sizes", args->sizes, "target vertex counts")
       ->delimiter(',')
       ->capture_default_str();
@@ -184,11 +259,13 @@ Command add_bench_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--out", args->out, "markdown file to update")->capture_default_str();
   sub->add_flag("--no-write", args->no_write, "print only");
+  sub->add_option("--repeats", args->repeats, "runs per example (design)")->capture_default_str();
   return [args] {
     if (args->sources < 1) throw InvalidInput("--sources: must be at least 1");
     for (int s : args->sizes)
       if (s < 100 || s > 2000000) throw InvalidInput("--sizes: each size must be 100..2000000");
-    return bench_geodesic(*args);
+    if (args->repeats < 1) throw InvalidInput("--repeats: must be at least 1");
+    return args->what == "design" ? bench_design(*args) : bench_geodesic(*args);
   };
 }
 
