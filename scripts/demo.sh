@@ -4,4 +4,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-./build/gridshell patch example:double-vault --out out/double-vault
+./build/gridshell design example:double-vault --out out/double-vault

@@ -75,6 +75,53 @@ TEST(CliPatch, CrossingBoundaryIsInfeasible) {
   EXPECT_EQ(result.err.rfind("error:", 0), 0u) << result.err;
 }
 
+TEST(CliDesign, WritesDesignFilesWithTheIssueFields) {
+  const std::string out = testing::temp_dir() + "/design";
+  const auto result =
+      run_cli("design example:double-vault --quiet --resolution 48 --out '" + out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json design = json::parse(testing::read_text(out + "/design.json"));
+  for (const char* key : {"alpha", "alpha_bar", "alpha_bar_range", "members", "crossings",
+                          "anchors", "patch", "options"})
+    EXPECT_TRUE(design.contains(key)) << key;
+  ASSERT_EQ(design["alpha_bar_range"].size(), 2u);
+  const auto& member = design["members"][1];
+  for (const char* key : {"family", "index", "u_start", "u_end", "surface", "planar", "length"})
+    EXPECT_TRUE(member.contains(key)) << key;
+  EXPECT_EQ(member["planar"].size(), 2u);
+  EXPECT_EQ(member["surface"][0].size(), 3u);
+  const auto& crossing = design["crossings"][0];
+  for (const char* key : {"g", "h", "surface_point", "planar_point", "s_g", "s_bar_g", "s_h",
+                          "s_bar_h", "notch_g", "notch_h"})
+    EXPECT_TRUE(crossing.contains(key)) << key;
+  EXPECT_FALSE(design.contains("seconds"));  // timings live in report.json
+  EXPECT_TRUE(json::parse(testing::read_text(out + "/report.json")).contains("t_grid"));
+  for (const char* file : {"planar.svg", "maps.svg", "spatial.obj"})
+    EXPECT_GT(testing::read_text(out + "/" + file).size(), 100u) << file;
+  // Same input and options: byte-identical design.json.
+  const std::string again = testing::temp_dir() + "/again";
+  ASSERT_EQ(run_cli("design example:double-vault --quiet --resolution 48 --threads 1 --out '" +
+                    again + "'")
+                .exit_code,
+            0);
+  EXPECT_EQ(testing::read_text(out + "/design.json"), testing::read_text(again + "/design.json"));
+}
+
+TEST(CliDesign, ReflexCornerIsInfeasibleAndBadOptionsInvalid) {
+  // A dart on the plane example: corner c2 pulled inside makes a reflex corner.
+  const std::string corners = "'-40,-30,0;40,-30,0;0,-10,0;-40,30,0'";
+  auto result = run_cli("design example:plane --quiet --corners " + corners + " --out " +
+                        testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 3) << result.err;
+  EXPECT_NE(result.err.find("criterion iv"), std::string::npos) << result.err;
+  result = run_cli("design example:plane --quiet --alpha 7 --out " + testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--alpha"), std::string::npos) << result.err;
+  result = run_cli("design example:plane --quiet --lamella-width -1 --out " + testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--lamella-width"), std::string::npos) << result.err;
+}
+
 TEST(CliGeodesic, JsonComparesWithCgal) {
   const auto result =
       run_cli("geodesic example:double-vault --source 5 --compare cgal --repeat 3 --json");
