@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -77,6 +78,22 @@ TriangleMesh grid_mesh(int nu, int nv, const std::function<Vec3(double u, double
       }
     }
   return mesh;
+}
+
+TriangleMesh flat_square(int n) {
+  return grid_mesh(n, n, [n](double u, double v) {
+    const bool interior = u > 0 && u < 1 && v > 0 && v < 1;
+    const double jitter = interior ? 0.3 / n : 0.0;
+    return Vec3(10 * u + jitter * std::sin(37 * u + 11 * v),
+                10 * v + jitter * std::cos(19 * u - 7 * v), 0);
+  });
+}
+
+TriangleMesh bump(int n) {
+  return grid_mesh(n, n, [](double u, double v) {
+    const double x = 10 * u, y = 10 * v;
+    return Vec3(x, y, 2.5 * std::exp(-((x - 5) * (x - 5) + (y - 5) * (y - 5)) / 8));
+  });
 }
 
 CommandResult run_cli(const std::string& arguments) {

@@ -32,6 +32,13 @@ CommandResult run_cli(const std::string& arguments);
 /// diagonals, faces counter-clockwise in (u,v). Vertex (i,j) has index j*(nu+1)+i.
 TriangleMesh grid_mesh(int nu, int nv, const std::function<Vec3(double u, double v)>& map);
 
+/// Irregular flat square [0,10]^2: an n x n grid_mesh with interior vertices jittered
+/// deterministically (so no two triangles are alike).
+TriangleMesh flat_square(int n);
+
+/// A smooth Gaussian bump of height 2.5 over [0,10]^2 on an n x n grid_mesh.
+TriangleMesh bump(int n);
+
 /// Reads a whole file.
 std::string read_text(const std::string& path);
 

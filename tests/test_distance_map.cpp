@@ -23,30 +23,14 @@
 namespace gridshell {
 namespace {
 
+using testing::bump;
+using testing::flat_square;
 using testing::grid_mesh;
-
-// Irregular flat square [0,10]^2 (interior vertices jittered deterministically).
-TriangleMesh flat_square(int n = 20) {
-  return grid_mesh(n, n, [n](double u, double v) {
-    const bool interior = u > 0 && u < 1 && v > 0 && v < 1;
-    const double jitter = interior ? 0.3 / n : 0.0;
-    return Vec3(10 * u + jitter * std::sin(37 * u + 11 * v),
-                10 * v + jitter * std::cos(19 * u - 7 * v), 0);
-  });
-}
-
-// A smooth bump over [0,10]^2.
-TriangleMesh bump(int n = 20) {
-  return grid_mesh(n, n, [](double u, double v) {
-    const double x = 10 * u, y = 10 * v;
-    return Vec3(x, y, 2.5 * std::exp(-((x - 5) * (x - 5) + (y - 5) * (y - 5)) / 8));
-  });
-}
 
 // A general convex quadrilateral patch on the flat square.
 const Patch& flat_patch() {
   static const Patch patch = [] {
-    const TriangleMesh mesh = flat_square();
+    const TriangleMesh mesh = flat_square(20);
     const std::array<Vec3, 4> q{Vec3(2, 1, 0), Vec3(8.3, 2.2, 0), Vec3(9, 9, 0), Vec3(1.1, 7.3, 0)};
     std::array<SurfacePoint, 4> corners;
     for (int i = 0; i < 4; ++i) corners[i] = closest_surface_point(mesh, q[i]);
@@ -57,7 +41,7 @@ const Patch& flat_patch() {
 
 const Patch& bump_patch() {
   static const Patch patch = [] {
-    const TriangleMesh mesh = bump();
+    const TriangleMesh mesh = bump(20);
     std::array<SurfacePoint, 4> corners;
     const std::array<Vec2, 4> q{Vec2(1.3, 0.8), Vec2(9.1, 1.7), Vec2(8.6, 9.2), Vec2(0.7, 8.4)};
     for (int i = 0; i < 4; ++i) {
@@ -292,13 +276,11 @@ TEST(DistanceMaps, ErrorsFromWorkersAndCallbackPropagate) {
 // KEY TEST: on developable surfaces, at ᾱ = the surface corner angle at c0, the planar patch is
 // the development of the surface patch, so D = D̄ for both families.
 //
-// That needs every side to be a straight line in the development. For cylinder and plane the
-// example's own corners qualify. For the cone they do not: its development is an annular sector
-// and the chord between the two corners on the inner arc leaves it, so the shortest geodesic
-// c0->c1 runs along the mesh boundary (turning by ~0.87 rad in total; the patch's corner angles
-// then sum to ~5.41, not 2 pi). The cone patch is therefore cut with interior corners, grid
-// vertices (i, j) = (2,6), (42,9), (40,30), (5,31) of the 45 x 33 grid, whose four chords lie
-// inside the sector -- a general (non-symmetric) quadrilateral in the development.
+// That needs every side to be a straight line in the development. The examples' own corners
+// qualify (the cone's near corners sit far enough out along the rulings for their chord to clear
+// the concave inner arc of its annular-sector development). The cone is also cut with interior
+// corners, grid vertices (i, j) = (2,6), (42,9), (40,30), (5,31) of the 45 x 33 grid, whose
+// four chords lie inside the sector -- a general (non-symmetric) quadrilateral.
 struct DevelopableCase {
   std::string name;
   std::vector<std::array<int, 2>> grid_corners;  // empty: the example's suggested corners
@@ -310,7 +292,8 @@ TEST_P(DevelopableExample, SurfaceMapsEqualPlanarMapsAtTheSurfaceAngle) {
   const ExampleSurface example = make_example(GetParam().name);
   std::array<int, 4> corner_vertices = example.corners;
   if (!GetParam().grid_corners.empty()) {
-    const int nu = example.corners[1] + 1;  // corners[1] is grid vertex (nu-1, 0)
+    // corners[2] and corners[3] are grid vertices (nu-1, nv-1) and (0, nv-1).
+    const int nu = example.corners[2] - example.corners[3] + 1;
     for (int k = 0; k < 4; ++k) {
       corner_vertices[k] = GetParam().grid_corners[k][0] + nu * GetParam().grid_corners[k][1];
     }
@@ -352,8 +335,11 @@ TEST_P(DevelopableExample, SurfaceMapsEqualPlanarMapsAtTheSurfaceAngle) {
 INSTANTIATE_TEST_SUITE_P(
     Examples, DevelopableExample,
     ::testing::Values(DevelopableCase{"cylinder", {}}, DevelopableCase{"plane", {}},
+                      DevelopableCase{"cone", {}},
                       DevelopableCase{"cone", {{{2, 6}}, {{42, 9}}, {{40, 30}}, {{5, 31}}}}),
-    [](const ::testing::TestParamInfo<DevelopableCase>& info) { return info.param.name; });
+    [](const ::testing::TestParamInfo<DevelopableCase>& info) {
+      return info.param.name + (info.param.grid_corners.empty() ? "" : "_interior_corners");
+    });
 
 }  // namespace
 }  // namespace gridshell

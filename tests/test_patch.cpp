@@ -16,25 +16,9 @@
 namespace gridshell {
 namespace {
 
+using testing::bump;
+using testing::flat_square;
 using testing::grid_mesh;
-
-// Irregular flat square [0,10]^2 (interior vertices jittered deterministically).
-TriangleMesh flat_square(int n = 24) {
-  return grid_mesh(n, n, [n](double u, double v) {
-    const bool interior = u > 0 && u < 1 && v > 0 && v < 1;
-    const double jitter = interior ? 0.3 / n : 0.0;
-    return Vec3(10 * u + jitter * std::sin(37 * u + 11 * v),
-                10 * v + jitter * std::cos(19 * u - 7 * v), 0);
-  });
-}
-
-// A smooth bump over [0,10]^2.
-TriangleMesh bump(int n = 30) {
-  return grid_mesh(n, n, [](double u, double v) {
-    const double x = 10 * u, y = 10 * v;
-    return Vec3(x, y, 2.5 * std::exp(-((x - 5) * (x - 5) + (y - 5) * (y - 5)) / 8));
-  });
-}
 
 std::array<SurfacePoint, 4> points(const TriangleMesh& mesh, const std::array<Vec3, 4>& p) {
   return {closest_surface_point(mesh, p[0]), closest_surface_point(mesh, p[1]),
@@ -78,7 +62,7 @@ TEST(AutoCorners, FindsTheFourCornersOfASquare) {
 }
 
 TEST(CutPatch, PlanarQuadrilateralHasExactAreaSidesAndAngles) {
-  const TriangleMesh mesh = flat_square();
+  const TriangleMesh mesh = flat_square(24);
   const std::array<Vec3, 4> q{Vec3(2, 1, 0), Vec3(8.3, 2.2, 0), Vec3(9, 9, 0), Vec3(1.1, 7.3, 0)};
   const Patch patch = cut_patch(mesh, points(mesh, q));
   EXPECT_FALSE(patch.corners_reversed);
@@ -106,7 +90,7 @@ TEST(CutPatch, PlanarQuadrilateralHasExactAreaSidesAndAngles) {
 }
 
 TEST(CutPatch, ClockwiseCornersGiveTheSamePatch) {
-  const TriangleMesh mesh = flat_square();
+  const TriangleMesh mesh = flat_square(24);
   const std::array<Vec3, 4> q{Vec3(2, 1, 0), Vec3(8.3, 2.2, 0), Vec3(9, 9, 0), Vec3(1.1, 7.3, 0)};
   const Patch ccw = cut_patch(mesh, points(mesh, q));
   const Patch cw = cut_patch(mesh, points(mesh, {q[0], q[3], q[2], q[1]}));
@@ -134,7 +118,7 @@ TEST(CutPatch, CornersOnTheBoundaryOfAConvexMeshKeepEverything) {
 }
 
 TEST(CutPatch, CurvedSurfaceSidesAreShortestGeodesics) {
-  const TriangleMesh mesh = bump();
+  const TriangleMesh mesh = bump(30);
   const std::array<Vec3, 4> q{Vec3(1.3, 0.8, 0), Vec3(9.1, 1.7, 0), Vec3(8.6, 9.2, 0),
                               Vec3(0.7, 8.4, 0)};
   // Corners: points of the analytic surface, snapped to the mesh.
@@ -163,7 +147,7 @@ TEST(CutPatch, CurvedSurfaceSidesAreShortestGeodesics) {
 }
 
 TEST(CutPatch, CrossingBoundaryGeodesicsAreInfeasible) {
-  const TriangleMesh mesh = flat_square();
+  const TriangleMesh mesh = flat_square(24);
   const std::array<Vec3, 4> bow_tie{Vec3(2, 2, 0), Vec3(8, 8, 0), Vec3(8, 2, 0), Vec3(2, 8, 0)};
   try {
     cut_patch(mesh, points(mesh, bow_tie));
@@ -174,7 +158,7 @@ TEST(CutPatch, CrossingBoundaryGeodesicsAreInfeasible) {
 }
 
 TEST(CutPatch, ReflexCornerIsInfeasible) {
-  const TriangleMesh mesh = flat_square();
+  const TriangleMesh mesh = flat_square(24);
   const std::array<Vec3, 4> dart{Vec3(1, 1, 0), Vec3(9, 1, 0), Vec3(4, 4, 0), Vec3(1, 9, 0)};
   const Patch patch = cut_patch(mesh, points(mesh, dart));
   try {

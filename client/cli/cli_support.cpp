@@ -46,6 +46,24 @@ int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& fiel
   return map[file_vertex];
 }
 
+CornerSpec resolve_corners(const InputMesh& input, const std::string& text, std::string* used) {
+  CornerSpec spec;
+  if (!text.empty()) {
+    spec = parse_corners(text);
+    if (spec.kind == CornerSpec::Kind::Vertices)
+      for (int& v : spec.vertices) v = mesh_vertex(input, v, "--corners");
+    if (used) *used = text;
+  } else if (input.example_corners) {
+    spec.kind = CornerSpec::Kind::Vertices;
+    spec.vertices = *input.example_corners;
+    if (used) *used = "example";
+  } else {
+    spec.kind = CornerSpec::Kind::Auto;
+    if (used) *used = "auto";
+  }
+  return spec;
+}
+
 namespace {
 std::mutex progress_mutex;
 bool progress_line_open = false;

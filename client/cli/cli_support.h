@@ -9,6 +9,7 @@
 
 #include "gridshell/mesh.h"
 #include "gridshell/mesh_io.h"
+#include "gridshell/patch.h"
 #include "gridshell/progress.h"
 
 namespace gridshell::cli {
@@ -26,6 +27,11 @@ InputMesh load_input(const std::string& name);
 
 /// Maps a file-order vertex index to the loaded mesh (InvalidInput if removed or out of range).
 int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& field);
+
+/// The corners named by --corners (file-order vertex indices translated to the loaded mesh);
+/// with no --corners: a built-in example's own corners, else auto. `used` receives a
+/// description for the output files ("example", "auto" or the text given).
+CornerSpec resolve_corners(const InputMesh& input, const std::string& text, std::string* used);
 
 /// Set by SIGINT/SIGTERM (defined in main.cpp); every computation polls it through Progress.
 const std::atomic<bool>* cancel_flag();

@@ -34,22 +34,8 @@ struct DesignArguments {
 int run_design(const DesignArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   const InputMesh input = load_input(args.mesh);
-  CornerSpec spec;
-  std::string corners_used = args.corners;
-  if (args.corners.empty()) {
-    if (input.example_corners) {
-      spec.kind = CornerSpec::Kind::Vertices;
-      spec.vertices = *input.example_corners;
-      corners_used = "example";
-    } else {
-      spec.kind = CornerSpec::Kind::Auto;
-      corners_used = "auto";
-    }
-  } else {
-    spec = parse_corners(args.corners);
-    if (spec.kind == CornerSpec::Kind::Vertices)
-      for (int& v : spec.vertices) v = mesh_vertex(input, v, "--corners");
-  }
+  std::string corners_used;
+  const CornerSpec spec = resolve_corners(input, args.corners, &corners_used);
   DesignOptions options;
   options.patch.cut.method = options.patch.coverability.method = parse_geodesic_method(args.method);
   if (options.patch.cut.method == GeodesicMethod::Heat)

@@ -29,19 +29,7 @@ struct PatchArguments {
 int run_patch(const PatchArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   const InputMesh input = load_input(args.mesh);
-  CornerSpec spec;
-  if (args.corners.empty()) {
-    if (input.example_corners) {
-      spec.kind = CornerSpec::Kind::Vertices;
-      spec.vertices = *input.example_corners;
-    } else {
-      spec.kind = CornerSpec::Kind::Auto;
-    }
-  } else {
-    spec = parse_corners(args.corners);
-    if (spec.kind == CornerSpec::Kind::Vertices)
-      for (int& v : spec.vertices) v = mesh_vertex(input, v, "--corners");
-  }
+  const CornerSpec spec = resolve_corners(input, args.corners, nullptr);
   TargetPatchOptions options;
   options.cut.method = options.coverability.method = parse_geodesic_method(args.method);
   if (options.cut.method == GeodesicMethod::Heat)
