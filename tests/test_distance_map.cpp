@@ -286,6 +286,10 @@ struct DevelopableCase {
   std::vector<std::array<int, 2>> grid_corners;  // empty: the example's suggested corners
 };
 
+void PrintTo(const DevelopableCase& c, std::ostream* os) {
+  *os << c.name << (c.grid_corners.empty() ? "" : " (interior corners)");
+}
+
 class DevelopableExample : public ::testing::TestWithParam<DevelopableCase> {};
 
 TEST_P(DevelopableExample, SurfaceMapsEqualPlanarMapsAtTheSurfaceAngle) {
