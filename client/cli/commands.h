@@ -4,6 +4,10 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
+#include <string>
+
+#include "gridshell/deployment_job.h"
 
 namespace gridshell::cli {
 
@@ -14,5 +18,25 @@ Command add_geodesic_command(CLI::App& app);
 Command add_design_command(CLI::App& app);
 Command add_examples_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
+Command add_simulate_command(CLI::App& app);
+
+/// Simulation options shared by `simulate` and `run`.
+struct SimulationFlags {
+  std::string notches = "both";
+  std::string material;  // empty: lime-wood, or custom when --young/--shear are given
+  std::optional<double> young, shear;
+  std::string unit;
+  double mu = 0.1;
+  double edges_per_interval = 2;
+  int max_iterations = 2000;
+  std::string solver = "newton";
+};
+void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
+/// Resolved and validated (InvalidInput names the flag).
+v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags);
+/// deployment.json, deployed.obj, deviation.ply (+ the without-notches views), atomically.
+void write_deployment_files(const DeploymentJob& job, const std::string& out);
+void print_deployment_summary(const DeploymentJob& job, const std::string& input,
+                              const std::string& out);
 
 }  // namespace gridshell::cli

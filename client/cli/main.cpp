@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   add(cli::add_geodesic_command);
   add(cli::add_examples_command);
   add(cli::add_bench_command);
+  add(cli::add_simulate_command);
 
   try {
     app.parse(argc, argv);

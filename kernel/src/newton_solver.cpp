@@ -1,0 +1,335 @@
+#include "newton_solver.h"
+
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <unordered_map>
+
+namespace gridshell {
+
+struct NewtonSolver::Impl {
+  std::vector<std::pair<double*, int>> blocks;
+  std::vector<Term> terms;
+  int unknowns = 0;
+  struct TermLayout {
+    std::vector<int> offset;  // per parameter: global offset, -1 if constant
+    std::vector<int> local;   // per parameter: local offset among the free ones
+    int free_size = 0;
+    int residuals = 0;
+    std::vector<int> value_index;  // per local (p, q) with p <= q in global terms, or -1
+  };
+  std::vector<TermLayout> layout;
+  std::unordered_map<const double*, int> offset_of;
+  Eigen::SparseMatrix<double> hessian;  // upper triangle
+  std::vector<int> diagonal;            // value index of each diagonal entry
+  Eigen::VectorXd gradient;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper> cholesky;
+  int threads = 1;
+
+  bool exact_hessian = false;
+
+  void accumulate(size_t begin, size_t end, double* values, double* gradient_out, double* cost_out,
+                  bool* ok_out) const {
+    std::vector<double> residuals, jacobian_storage;
+    std::vector<double*> jacobians;
+    Eigen::MatrixXd J, H;
+    double cost = 0;
+    bool ok = true;
+    for (size_t t = begin; t < end; ++t) {
+      const Term& term = terms[t];
+      const TermLayout& l = layout[t];
+      const auto& sizes = term.cost->parameter_block_sizes();
+      residuals.assign(l.residuals, 0.0);
+      jacobian_storage.assign(static_cast<size_t>(l.residuals) * l.free_size, 0.0);
+      jacobians.assign(sizes.size(), nullptr);
+      for (size_t p = 0; p < sizes.size(); ++p)
+        if (l.offset[p] >= 0)
+          jacobians[p] = jacobian_storage.data() + static_cast<size_t>(l.residuals) * l.local[p];
+      if (!term.cost->Evaluate(term.parameters.data(), residuals.data(), jacobians.data())) {
+        ok = false;
+        break;
+      }
+      // Each block's Jacobian is row-major residuals x size; gather into J (residuals x m).
+      J.resize(l.residuals, l.free_size);
+      for (size_t p = 0; p < sizes.size(); ++p) {
+        if (l.offset[p] < 0) continue;
+        const double* block = jacobians[p];
+        for (int r = 0; r < l.residuals; ++r)
+          for (int c = 0; c < sizes[p]; ++c) J(r, l.local[p] + c) = block[r * sizes[p] + c];
+      }
+      const Eigen::Map<const Eigen::VectorXd> r(residuals.data(), l.residuals);
+      for (double v : residuals) cost += 0.5 * v * v;
+      H.noalias() = J.transpose() * J;
+      if (term.curvature) {
+        term.curvature(residuals.data(), H);
+      } else if (exact_hessian && term.numeric_curvature) {
+        // sum_i r_i Hess(r_i) = Hess(rbar . r) at rbar = r, by forward differences of the exact
+        // (automatic) gradient J(x + e_k h)^T rbar, symmetrized.
+        const Eigen::VectorXd g0 = J.transpose() * r;
+        Eigen::MatrixXd C(l.free_size, l.free_size);
+        // Perturb private copies: other threads read the shared blocks meanwhile.
+        std::vector<std::vector<double>> copies(sizes.size());
+        std::vector<const double*> pointers(sizes.size());
+        for (size_t p = 0; p < sizes.size(); ++p) {
+          copies[p].assign(term.parameters[p], term.parameters[p] + sizes[p]);
+          pointers[p] = copies[p].data();
+        }
+        std::vector<double> rr(l.residuals), js(jacobian_storage.size());
+        std::vector<double*> jp(sizes.size(), nullptr);
+        for (size_t p = 0; p < sizes.size(); ++p)
+          if (l.offset[p] >= 0) jp[p] = js.data() + static_cast<size_t>(l.residuals) * l.local[p];
+        for (size_t p = 0; p < sizes.size(); ++p) {
+          if (l.offset[p] < 0) continue;
+          for (int c = 0; c < sizes[p]; ++c) {
+            double& v = copies[p][c];
+            const double keep = v, h = 1e-7 * std::max(1.0, std::abs(keep));
+            v = keep + h;
+            const double step = v - keep;  // exactly representable
+            term.cost->Evaluate(pointers.data(), rr.data(), jp.data());
+            v = keep;
+            Eigen::VectorXd gk = Eigen::VectorXd::Zero(l.free_size);
+            for (size_t q = 0; q < sizes.size(); ++q) {
+              if (l.offset[q] < 0) continue;
+              for (int r2 = 0; r2 < l.residuals; ++r2)
+                for (int b = 0; b < sizes[q]; ++b)
+                  gk[l.local[q] + b] += jp[q][r2 * sizes[q] + b] * residuals[r2];
+            }
+            C.col(l.local[p] + c) = (gk - g0) / step;
+          }
+        }
+        H += 0.5 * (C + C.transpose());
+      }
+      const Eigen::VectorXd g = J.transpose() * r;
+      for (size_t p = 0; p < sizes.size(); ++p) {
+        if (l.offset[p] < 0) continue;
+        for (int a = 0; a < sizes[p]; ++a) gradient_out[l.offset[p] + a] += g[l.local[p] + a];
+      }
+      size_t k = 0;
+      for (int p = 0; p < l.free_size; ++p)
+        for (int q = 0; q < l.free_size; ++q, ++k)
+          if (l.value_index[k] >= 0) values[l.value_index[k]] += H(p, q);
+    }
+    *cost_out = cost;
+    *ok_out = ok;
+  }
+};
+
+NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vector<Term> terms,
+                           Options options)
+    : impl_(std::make_unique<Impl>()), options_(options) {
+  Impl& m = *impl_;
+  m.blocks = std::move(blocks);
+  m.terms = std::move(terms);
+  m.threads = std::max(1, options.threads);
+  lambda_ = options.initial_lambda;
+  std::unordered_map<const double*, int>& offset_of = m.offset_of;
+  for (const auto& [pointer, size] : m.blocks) {
+    offset_of[pointer] = m.unknowns;
+    m.unknowns += size;
+  }
+  // Layout of every term and the Hessian's sparsity pattern (upper triangle).
+  std::vector<Eigen::Triplet<double>> pattern;
+  m.layout.resize(m.terms.size());
+  for (size_t t = 0; t < m.terms.size(); ++t) {
+    const Term& term = m.terms[t];
+    Impl::TermLayout& l = m.layout[t];
+    const auto& sizes = term.cost->parameter_block_sizes();
+    l.residuals = term.cost->num_residuals();
+    for (size_t p = 0; p < sizes.size(); ++p) {
+      const auto it = offset_of.find(term.parameters[p]);
+      l.offset.push_back(it == offset_of.end() ? -1 : it->second);
+      l.local.push_back(l.free_size);
+      if (it != offset_of.end()) l.free_size += sizes[p];
+    }
+    for (size_t p = 0; p < sizes.size(); ++p)
+      for (size_t q = 0; q < sizes.size(); ++q) {
+        if (l.offset[p] < 0 || l.offset[q] < 0) continue;
+        for (int a = 0; a < sizes[p]; ++a)
+          for (int b = 0; b < sizes[q]; ++b) {
+            const int row = l.offset[p] + a, col = l.offset[q] + b;
+            if (row <= col) pattern.emplace_back(row, col, 0.0);
+          }
+      }
+  }
+  for (int i = 0; i < m.unknowns; ++i) pattern.emplace_back(i, i, 0.0);
+  m.hessian.resize(m.unknowns, m.unknowns);
+  m.hessian.setFromTriplets(pattern.begin(), pattern.end());
+  m.hessian.makeCompressed();
+  const int* outer = m.hessian.outerIndexPtr();
+  const int* inner = m.hessian.innerIndexPtr();
+  auto index_of = [&](int row, int col) {
+    const int* first = inner + outer[col];
+    const int* last = inner + outer[col + 1];
+    const int* it = std::lower_bound(first, last, row);
+    return static_cast<int>(it - inner);
+  };
+  for (int i = 0; i < m.unknowns; ++i) m.diagonal.push_back(index_of(i, i));
+  for (size_t t = 0; t < m.terms.size(); ++t) {
+    Impl::TermLayout& l = m.layout[t];
+    const auto& sizes = m.terms[t].cost->parameter_block_sizes();
+    // Global index of each local free unknown.
+    std::vector<int> global;
+    for (size_t p = 0; p < sizes.size(); ++p)
+      if (l.offset[p] >= 0)
+        for (int a = 0; a < sizes[p]; ++a) global.push_back(l.offset[p] + a);
+    l.value_index.assign(static_cast<size_t>(l.free_size) * l.free_size, -1);
+    for (int p = 0; p < l.free_size; ++p)
+      for (int q = 0; q < l.free_size; ++q) {
+        const int row = global[p], col = global[q];
+        // Each unordered pair once: the entry (row, col) with row <= col, taken from the local
+        // (p, q) with row < col, or p <= q when the same global unknown repeats.
+        if (row < col || (row == col && p == q))
+          l.value_index[p * l.free_size + q] = index_of(row, col);
+      }
+  }
+  m.cholesky.analyzePattern(m.hessian);
+  m.gradient = Eigen::VectorXd::Zero(m.unknowns);
+}
+
+NewtonSolver::~NewtonSolver() = default;
+
+bool NewtonSolver::evaluate() {
+  Impl& m = *impl_;
+  const size_t count = m.terms.size();
+  const int threads =
+      static_cast<int>(std::min<size_t>(m.threads, std::max<size_t>(1, count / 64)));
+  const int nnz = static_cast<int>(m.hessian.nonZeros());
+  std::vector<std::vector<double>> values(threads, std::vector<double>(nnz, 0.0));
+  std::vector<Eigen::VectorXd> gradients(threads, Eigen::VectorXd::Zero(m.unknowns));
+  std::vector<double> costs(threads, 0.0);
+  std::vector<char> oks(threads, 1);
+  auto work = [&](int t) {
+    const size_t begin = count * t / threads, end = count * (t + 1) / threads;
+    bool ok = true;
+    m.accumulate(begin, end, values[t].data(), gradients[t].data(), &costs[t], &ok);
+    oks[t] = ok;
+  };
+  if (threads == 1) {
+    work(0);
+  } else {
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    work(0);
+    for (auto& th : pool) th.join();
+  }
+  for (char ok : oks)
+    if (!ok) return false;
+  double* out = m.hessian.valuePtr();
+  std::copy(values[0].begin(), values[0].end(), out);
+  m.gradient = gradients[0];
+  cost_ = costs[0];
+  for (int t = 1; t < threads; ++t) {
+    for (int k = 0; k < nnz; ++k) out[k] += values[t][k];
+    m.gradient += gradients[t];
+    cost_ += costs[t];
+  }
+  return true;
+}
+
+void NewtonSolver::set_exact_hessian(bool exact) { impl_->exact_hessian = exact; }
+
+double NewtonSolver::gradient_max_norm() const {
+  return impl_->gradient.size() ? impl_->gradient.cwiseAbs().maxCoeff() : 0.0;
+}
+
+bool NewtonSolver::evaluate_cost(double* cost) const {
+  const Impl& m = *impl_;
+  std::vector<double> residuals;
+  double sum = 0;
+  for (const Term& term : m.terms) {
+    residuals.assign(term.cost->num_residuals(), 0.0);
+    if (!term.cost->Evaluate(term.parameters.data(), residuals.data(), nullptr)) return false;
+    for (double v : residuals) sum += 0.5 * v * v;
+  }
+  *cost = sum;
+  return std::isfinite(sum);
+}
+
+Eigen::VectorXd NewtonSolver::read() const {
+  Eigen::VectorXd x(impl_->unknowns);
+  int k = 0;
+  for (const auto& [pointer, size] : impl_->blocks)
+    for (int a = 0; a < size; ++a) x[k++] = pointer[a];
+  return x;
+}
+
+void NewtonSolver::write(const Eigen::VectorXd& x) const {
+  int k = 0;
+  for (const auto& [pointer, size] : impl_->blocks)
+    for (int a = 0; a < size; ++a) pointer[a] = x[k++];
+}
+
+NewtonSolver::StepResult NewtonSolver::step() {
+  Impl& m = *impl_;
+  StepResult result;
+  const Eigen::VectorXd x0 = read();
+  Eigen::SparseMatrix<double> A = m.hessian;
+  const double* h = m.hessian.valuePtr();
+  double max_diagonal = 0;
+  for (int i : m.diagonal) max_diagonal = std::max(max_diagonal, std::abs(h[i]));
+  const double floor = std::max(max_diagonal, 1e-300) * 1e-12;
+  while (true) {
+    if (lambda_ > options_.max_lambda) {
+      result.stalled = true;
+      write(x0);
+      return result;
+    }
+    ++result.trials;
+    std::copy(h, h + m.hessian.nonZeros(), A.valuePtr());
+    for (int i : m.diagonal) A.valuePtr()[i] += lambda_ * std::max(std::abs(h[i]), floor);
+    m.cholesky.factorize(A);
+    if (m.cholesky.info() != Eigen::Success) {
+      lambda_ = std::max(lambda_ * nu_, 1e-8);
+      nu_ *= 2;
+      continue;
+    }
+    Eigen::VectorXd d = m.cholesky.solve(-m.gradient);
+    // Fraction to the boundary of every barrier's domain.
+    double alpha = 1;
+    for (const Term& term : m.terms) {
+      if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
+      const auto it = m.offset_of.find(term.parameters[0]);
+      if (it == m.offset_of.end()) continue;
+      const double value = *term.parameters[0], step = d[it->second];
+      if (step < 0 && std::isfinite(term.lower))
+        alpha = std::min(alpha, 0.95 * (value - term.lower) / -step);
+      if (step > 0 && std::isfinite(term.upper))
+        alpha = std::min(alpha, 0.95 * (term.upper - value) / step);
+    }
+    if (alpha < 1) d *= std::max(alpha, 0.0);
+    const Eigen::VectorXd Hd = m.hessian.selfadjointView<Eigen::Upper>() * d;
+    const double predicted = -(m.gradient.dot(d) + 0.5 * d.dot(Hd));
+    double trial = 0;
+    bool ok = false;
+    if (predicted > 0 && d.allFinite()) {
+      write(x0 + d);
+      ok = evaluate_cost(&trial);
+    }
+    double rho = ok ? (cost_ - trial) / predicted : -1;
+    // Near the minimum the predicted decrease drops below the cost's rounding: accept a step
+    // that does not raise the cost beyond rounding and let the gradient decide convergence.
+    const double rounding = 1e-13 * std::abs(cost_);
+    if (ok && predicted < rounding && trial <= cost_ + rounding) rho = 1;
+    if (ok && rho > 1e-4) {
+      lambda_ = std::max(options_.min_lambda,
+                         lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
+      nu_ = 2;
+      result.accepted = true;
+      return result;
+    }
+    static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
+    if (trace)
+      std::fprintf(stderr,
+                   "   reject lambda %.1e alpha %.3g pred %.3e trial %.12e ok %d |d| %.2e\n",
+                   lambda_, alpha, predicted, trial, ok, d.norm());
+    write(x0);
+    lambda_ = std::max(lambda_ * nu_, 1e-8);
+    nu_ *= 2;
+  }
+}
+
+}  // namespace gridshell

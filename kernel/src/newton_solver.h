@@ -1,0 +1,95 @@
+// gridshell — damped Newton minimizer for sums of squared residual blocks (private header).
+//
+// Minimizes E(x) = 1/2 sum_b |r_b(x)|^2 over parameter blocks, where every residual block is a
+// Ceres cost function (automatic Jacobians). Ceres' own Levenberg-Marquardt uses the
+// Gauss-Newton Hessian J^T J, which drops sum_i r_i Hess(r_i). For the deployment simulation one
+// dropped term is large: the geometric stiffness T / |e| (I - t t^T) of every rod edge under
+// axial force T (a stiff stretching penalty with a non-zero multiplier). In a deployed gridshell
+// axial forces exceed the weak-axis Euler loads by orders of magnitude, so Gauss-Newton crawls
+// along the soft, near-buckling modes (thousands of iterations). This solver takes the
+// Gauss-Newton Hessian of each block plus a per-block second-order correction supplied by the
+// caller (the geometric stiffness, the exact curvature of the log barriers), damps it
+// Levenberg-Marquardt style (which also handles the indefiniteness of compressed edges), and
+// solves with a sparse Cholesky factorization (AMD ordering, pattern analysed once per
+// structure).
+#pragma once
+
+#include <ceres/cost_function.h>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace gridshell {
+
+class NewtonSolver {
+ public:
+  /// One residual block. `parameters` point at the blocks it reads; blocks that are not free
+  /// (not among the solver's parameter blocks) are held constant.
+  struct Term {
+    const ceres::CostFunction* cost = nullptr;
+    std::vector<double*> parameters;
+    /// Adds the second-order correction sum_i r_i Hess(r_i) to `hessian` (local, rows/columns
+    /// in the order of the term's free parameters, each block's entries consecutive) given the
+    /// term's residuals. Optional.
+    std::function<void(const double* residuals, Eigen::MatrixXd& hessian)> curvature;
+    /// Without `curvature`: in exact-Hessian mode, take sum_i r_i Hess(r_i) by forward
+    /// differences of the term's exact Jacobian. Otherwise the term contributes J^T J only.
+    bool numeric_curvature = false;
+    /// Domain of a barrier term's first parameter (a block of size 1): a step is shortened so
+    /// that the parameter keeps 5% of its distance to these bounds (fraction to the boundary,
+    /// as in interior-point methods) instead of being rejected.
+    double lower = -std::numeric_limits<double>::infinity();
+    double upper = std::numeric_limits<double>::infinity();
+  };
+
+  struct Options {
+    double initial_lambda = 1e-4;  ///< Levenberg-Marquardt damping, relative to diag(H)
+    double min_lambda = 1e-12;
+    double max_lambda = 1e16;
+    int threads = 1;
+  };
+
+  struct StepResult {
+    bool accepted = false;
+    int trials = 0;        ///< linear solves this step took
+    bool stalled = false;  ///< damping hit its maximum without an acceptable step
+  };
+
+  /// `blocks`: the free parameter blocks (pointer, size); their order defines the unknowns.
+  NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vector<Term> terms,
+               Options options);
+  ~NewtonSolver();
+
+  /// Evaluates cost, gradient and Hessian at the current parameter values. Returns false if a
+  /// residual block cannot be evaluated there.
+  bool evaluate();
+  double cost() const { return cost_; }
+  /// Max-norm of the gradient from the last evaluate().
+  double gradient_max_norm() const;
+  /// One damped Newton step from the last evaluate(): tries (H + lambda D) d = -g until the
+  /// cost decreases (gain ratio > 1e-4), increasing lambda otherwise; on success the
+  /// parameters hold x + d (not yet re-evaluated).
+  StepResult step();
+  double lambda() const { return lambda_; }
+  /// Full Hessian (numeric curvature of the flagged terms) from the next evaluate() on; costs
+  /// one extra Jacobian evaluation per free parameter of each flagged term.
+  void set_exact_hessian(bool exact);
+  void set_lambda(double lambda) { lambda_ = lambda; }
+
+ private:
+  bool evaluate_cost(double* cost) const;
+  void write(const Eigen::VectorXd& x) const;
+  Eigen::VectorXd read() const;
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Options options_;
+  double cost_ = 0;
+  double lambda_ = 1e-4, nu_ = 2;
+};
+
+}  // namespace gridshell

@@ -1,0 +1,297 @@
+// gridshell — the energy terms of the deployment simulation as residuals (private header).
+//
+// Discrete elastic rods after Bergou et al. 2008/2010 and the connection, anchor, notch-limit and
+// pseudo-friction terms of paper Section 5. Every term is written as a residual vector r whose
+// energy is E = 1/2 |r|^2 (Ceres' convention), templated on the scalar so that the same code is
+// evaluated with doubles (reporting, tests) and with Ceres jets (automatic Jacobians).
+//
+// Conventions
+//   A rod has vertices x_0..x_n and edges e_k = x_{k+1} - x_k with one twist angle theta_k each.
+//   Each edge carries a reference frame (t_ref, d1_ref) from the last frame update; within a
+//   solve the reference director of the current edge is the time-parallel transport of d1_ref
+//   from t_ref to the current tangent t (the minimal rotation taking t_ref to t), which is a
+//   smooth function of the vertices (singular only if an edge reverses within one update).
+//   Material frame: m1 = cos(theta) d1 + sin(theta) d2, m2 = t x m1 (right-handed (t, m1, m2)).
+//   m1 is the lamella's material normal (its thickness direction, the target surface normal at
+//   the start); m2 its width direction. Bending with the curvature vector along m1 (out of the
+//   lamella's plane) is the weak axis, with stiffness E w t^3 / 12; bending along m2 (in the
+//   lamella's plane) the strong axis, E t w^3 / 12.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace gridshell::rod_terms {
+
+template <typename T>
+using V3 = Eigen::Matrix<T, 3, 1>;
+
+template <typename T>
+V3<T> load(const T* p) {
+  return V3<T>(p[0], p[1], p[2]);
+}
+
+template <typename T>
+void store(const V3<T>& v, T* out) {
+  out[0] = v[0];
+  out[1] = v[1];
+  out[2] = v[2];
+}
+
+/// The minimal rotation taking unit vector a to unit vector b, applied to v (parallel transport
+/// along the shortest arc). R v = (a.b) v + (a x b) x v + ((a x b).v / (1 + a.b)) (a x b): smooth
+/// at a = b, singular only at a = -b.
+template <typename T>
+V3<T> transport(const V3<T>& a, const V3<T>& b, const V3<T>& v) {
+  const V3<T> k = a.cross(b);
+  const T c = a.dot(b);
+  return c * v + k.cross(v) + (k.dot(v) / (T(1) + c)) * k;
+}
+
+/// Reference frame of one edge from the last frame update (constants within a solve).
+struct EdgeReference {
+  Eigen::Vector3d tangent = Eigen::Vector3d::UnitX();  ///< unit tangent at the update
+  Eigen::Vector3d d1 = Eigen::Vector3d::UnitY();       ///< unit reference director, ⟂ tangent
+};
+
+/// Frame of an edge at the current vertices and twist.
+template <typename T>
+struct EdgeFrame {
+  V3<T> t, d1, m1, m2;
+  T length;
+};
+
+template <typename T>
+EdgeFrame<T> edge_frame(const T* xa, const T* xb, const T* theta, const EdgeReference& ref) {
+  EdgeFrame<T> f;
+  const V3<T> e = load(xb) - load(xa);
+  f.length = e.norm();
+  f.t = e / f.length;
+  f.d1 = transport<T>(ref.tangent.cast<T>(), f.t, ref.d1.cast<T>());
+  const V3<T> d2 = f.t.cross(f.d1);
+  using std::cos;
+  using std::sin;
+  const T c = cos(*theta), s = sin(*theta);
+  f.m1 = c * f.d1 + s * d2;
+  f.m2 = -s * f.d1 + c * d2;
+  return f;
+}
+
+/// Stretching of one edge: E = 1/2 (EA / l̄) (|e| - l̄)^2. One residual.
+struct Stretch {
+  double sqrt_stiffness = 1;  ///< sqrt(EA / l̄)
+  double rest_length = 1;     ///< l̄
+  template <typename T>
+  bool operator()(const T* xa, const T* xb, T* r) const {
+    const T length = (load(xb) - load(xa)).norm();
+    r[0] = T(sqrt_stiffness) * (length - T(rest_length));
+    return true;
+  }
+};
+
+/// Bending and twisting at the interior vertex between edges e0 = x1 - x0 and e1 = x2 - x1.
+///   curvature binormal  kb = 2 e0 x e1 / (|e0| |e1| + e0.e1)   (|kb| = 2 tan(phi/2))
+///   material curvatures k1 = (m2_0 + m2_1)/2 . kb   (weak axis: curvature vector along m1)
+///                       k2 = -(m1_0 + m1_1)/2 . kb  (strong axis: in the lamella's plane)
+///   twist               m = theta1 - theta0 + m_ref, m_ref the angle from the space-parallel
+///                       transport of d1_0 onto edge 1 to d1_1, about t1
+///   E = 1/2 (EI_weak k1^2 + EI_strong k2^2 + GJ m^2) / l̄_v,  l̄_v = (l̄_0 + l̄_1) / 2.
+/// Straight and untwisted rest state. Three residuals.
+struct BendTwist {
+  const EdgeReference* ref0 = nullptr;
+  const EdgeReference* ref1 = nullptr;
+  double sqrt_weak = 1;    ///< sqrt(EI_weak / l̄_v)
+  double sqrt_strong = 1;  ///< sqrt(EI_strong / l̄_v)
+  double sqrt_twist = 1;   ///< sqrt(GJ / l̄_v)
+  template <typename T>
+  bool operator()(const T* x0, const T* x1, const T* x2, const T* theta0, const T* theta1,
+                  T* r) const {
+    const EdgeFrame<T> f0 = edge_frame(x0, x1, theta0, *ref0);
+    const EdgeFrame<T> f1 = edge_frame(x1, x2, theta1, *ref1);
+    const V3<T> e0 = load(x1) - load(x0), e1 = load(x2) - load(x1);
+    const T denominator = f0.length * f1.length + e0.dot(e1);
+    if (!(denominator > T(1e-12) * f0.length * f1.length)) return false;  // folded back
+    const V3<T> kb = T(2) * e0.cross(e1) / denominator;
+    const T k1 = T(0.5) * (f0.m2 + f1.m2).dot(kb);
+    const T k2 = T(-0.5) * (f0.m1 + f1.m1).dot(kb);
+    const V3<T> u = transport<T>(f0.t, f1.t, f0.d1);
+    using std::atan2;
+    const T reference_twist = atan2(u.cross(f1.d1).dot(f1.t), u.dot(f1.d1));
+    r[0] = T(sqrt_weak) * k1;
+    r[1] = T(sqrt_strong) * k2;
+    r[2] = T(sqrt_twist) * (*theta1 - *theta0 + reference_twist);
+    return true;
+  }
+};
+
+/// The point of a member at a connection and the member's material normal there.
+/// q = (1 - b) x_a + b x_b on edge (x_a, x_b). The discrete material normal is constant per edge
+/// and jumps by the turning angle at a vertex; a connection sliding across a vertex would jump
+/// with it. So past the middle of the edge the normal is blended linearly towards the
+/// neighbouring edge's, reaching the vertex normal (m1 + m1') / |m1 + m1'| at the vertex from
+/// both sides: continuous along the member. `neighbour` is the next edge (x_b, x_n) when
+/// side > 0, the previous one (x_n, x_a) when side < 0, or absent (rod end).
+template <typename T>
+struct MemberPoint {
+  V3<T> q, m;
+};
+
+struct MemberEdge {
+  const EdgeReference* ref = nullptr;
+  const EdgeReference* neighbour = nullptr;  ///< null: no blending
+  int side = 0;                              ///< +1 next edge, -1 previous edge
+};
+
+template <typename T>
+MemberPoint<T> member_point(const T* const* p, const MemberEdge& edge) {
+  // p: x_a, x_b, theta, beta [, x_n, theta_n]
+  const EdgeFrame<T> f = edge_frame(p[0], p[1], p[2], *edge.ref);
+  const T beta = *p[3];
+  MemberPoint<T> out;
+  out.q = (T(1) - beta) * load(p[0]) + beta * load(p[1]);
+  out.m = f.m1;
+  if (edge.neighbour) {
+    const T w = edge.side > 0 ? beta - T(0.5) : T(0.5) - beta;
+    if (w > T(0)) {
+      const EdgeFrame<T> n = edge.side > 0 ? edge_frame(p[1], p[4], p[5], *edge.neighbour)
+                                           : edge_frame(p[4], p[0], p[5], *edge.neighbour);
+      const V3<T> blend = (T(1) - w) * f.m1 + w * n.m1;
+      out.m = blend / blend.norm();
+    }
+  }
+  return out;
+}
+
+/// A connection q of paper Section 5: q_g on an edge of member g and q_h on an edge of member
+/// h, with the thickness offset t along the material normals:
+///   E_q = w1 |q_g - q_h + t m_g|^2 + w1 |q_h - q_g - t m_h|^2 + w2 |angle(m_g, m_h)|^2,
+/// so h lies on the m side of g and the lamellas may only rotate about their common normal.
+/// The angle term uses the chord |m_g - m_h| = 2 sin(angle / 2) (smooth, = angle to third order).
+/// Residuals carry sqrt(2 w) so that 1/2 |r|^2 equals the paper's energy. Nine residuals.
+struct ConnectionResidual {
+  MemberEdge g, h;
+  double thickness = 0;
+  double sqrt_position = 1;   ///< sqrt(2 w_q1)
+  double sqrt_direction = 1;  ///< sqrt(2 w_q2)
+  template <typename T>
+  bool evaluate(const T* const* pg, const T* const* ph, T* r) const {
+    const MemberPoint<T> a = member_point(pg, g), b = member_point(ph, h);
+    const T t(thickness), wp(sqrt_position), wd(sqrt_direction);
+    store<T>(wp * (a.q - b.q + t * a.m), r);
+    store<T>(wp * (b.q - a.q - t * b.m), r + 3);
+    store<T>(wd * (a.m - b.m), r + 6);
+    return true;
+  }
+};
+
+/// Anchor E_a of paper Section 5 at a connection: its position (the midpoint between the two
+/// lamellas' centerlines, which is where the target surface lies) and both material normals
+/// pinned to the anchor's target position and surface normal:
+///   E_a = w1 |(q_g + q_h)/2 - q_a|^2 + w2 (|angle(m_g, m_a)|^2 + |angle(m_h, m_a)|^2).
+/// Nine residuals with the same sqrt(2 w) convention.
+struct AnchorResidual {
+  MemberEdge g, h;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double sqrt_position = 1;
+  double sqrt_direction = 1;
+  template <typename T>
+  bool evaluate(const T* const* pg, const T* const* ph, T* r) const {
+    const MemberPoint<T> a = member_point(pg, g), b = member_point(ph, h);
+    const T wp(sqrt_position), wd(sqrt_direction);
+    const V3<T> n = normal.cast<T>();
+    store<T>(wp * (T(0.5) * (a.q + b.q) - position.cast<T>()), r);
+    store<T>(wd * (a.m - n), r + 3);
+    store<T>(wd * (b.m - n), r + 6);
+    return true;
+  }
+};
+
+/// Fixed-arity adaptors for Ceres: a member contributes 4 parameter blocks (x_a, x_b, theta,
+/// beta) or 6 with a neighbouring edge (+ x_n, theta_n). G and H are 4 or 6.
+template <typename Residual, int G, int H>
+struct PairFunctor;
+
+template <typename Residual>
+struct PairFunctor<Residual, 4, 4> {
+  Residual residual;
+  template <typename T>
+  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* b0, const T* b1,
+                  const T* b2, const T* b3, T* r) const {
+    const T* g[] = {a0, a1, a2, a3};
+    const T* h[] = {b0, b1, b2, b3};
+    return residual.evaluate(g, h, r);
+  }
+};
+template <typename Residual>
+struct PairFunctor<Residual, 6, 4> {
+  Residual residual;
+  template <typename T>
+  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* a4, const T* a5,
+                  const T* b0, const T* b1, const T* b2, const T* b3, T* r) const {
+    const T* g[] = {a0, a1, a2, a3, a4, a5};
+    const T* h[] = {b0, b1, b2, b3};
+    return residual.evaluate(g, h, r);
+  }
+};
+template <typename Residual>
+struct PairFunctor<Residual, 4, 6> {
+  Residual residual;
+  template <typename T>
+  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* b0, const T* b1,
+                  const T* b2, const T* b3, const T* b4, const T* b5, T* r) const {
+    const T* g[] = {a0, a1, a2, a3};
+    const T* h[] = {b0, b1, b2, b3, b4, b5};
+    return residual.evaluate(g, h, r);
+  }
+};
+template <typename Residual>
+struct PairFunctor<Residual, 6, 6> {
+  Residual residual;
+  template <typename T>
+  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* a4, const T* a5,
+                  const T* b0, const T* b1, const T* b2, const T* b3, const T* b4, const T* b5,
+                  T* r) const {
+    const T* g[] = {a0, a1, a2, a3, a4, a5};
+    const T* h[] = {b0, b1, b2, b3, b4, b5};
+    return residual.evaluate(g, h, r);
+  }
+};
+
+/// Pseudo-friction E_p = (mu log(eps + b))^2 + (mu log(eps + 1 - b))^2 of a sliding connection
+/// on its current edge (paper Section 5). Two residuals, sqrt(2) mu log(...). Undefined (the
+/// step is rejected) when b leaves (-eps, 1 + eps).
+struct Friction {
+  double mu = 0.1;
+  double epsilon = 1e-4;
+  template <typename T>
+  bool operator()(const T* beta, T* r) const {
+    const T a = T(epsilon) + *beta, b = T(epsilon) + T(1) - *beta;
+    if (!(a > T(0)) || !(b > T(0))) return false;
+    using std::log;
+    const T scale(std::sqrt(2.0) * mu);
+    r[0] = scale * log(a);
+    r[1] = scale * log(b);
+    return true;
+  }
+};
+
+/// Notch limit E_n = (w log(b - b_lo))^2 or (w log(b_hi - b))^2 (paper: w = 1/10), active while
+/// the connection lies on the edge of that notch bound. One residual, sqrt(2) w log(...).
+/// Undefined (the step is rejected) beyond the bound.
+struct NotchLimit {
+  double bound = 0;   ///< b_lo or b_hi on the edge
+  bool upper = true;  ///< bound is an upper limit (b < bound) or a lower one (b > bound)
+  double weight = 0.1;
+  template <typename T>
+  bool operator()(const T* beta, T* r) const {
+    const T gap = upper ? T(bound) - *beta : *beta - T(bound);
+    if (!(gap > T(0))) return false;
+    using std::log;
+    r[0] = T(std::sqrt(2.0) * weight) * log(gap);
+    return true;
+  }
+};
+
+}  // namespace gridshell::rod_terms

@@ -1,0 +1,150 @@
+#include "gridshell/deployment_job.h"
+
+#include <cmath>
+#include <cstdlib>
+
+#include "gridshell/convert_deployment.h"
+#include "gridshell/deployment_export.h"
+#include "gridshell/errors.h"
+
+namespace gridshell {
+namespace {
+
+void require(bool ok, const std::string& field, const std::string& problem) {
+  if (!ok) throw InvalidInput(field + ": " + problem);
+}
+
+bool positive(double v) { return std::isfinite(v) && v > 0; }
+
+}  // namespace
+
+double parse_length_unit(const std::string& unit, const std::string& field) {
+  if (unit.empty()) return 0;
+  if (unit == "mm") return 1e-3;
+  if (unit == "cm") return 1e-2;
+  if (unit == "m") return 1;
+  if (unit == "in") return 0.0254;
+  if (unit == "ft") return 0.3048;
+  char* end = nullptr;
+  const double v = std::strtod(unit.c_str(), &end);
+  if (end && *end == '\0' && positive(v)) return v;
+  throw InvalidInput(field + ": expected mm, cm, m, in, ft or a positive number of metres, got '" +
+                     unit + "'");
+}
+
+v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
+  const SimulationOptions defaults;
+  if (o.notches().empty()) o.set_notches("both");
+  if (o.solver().empty()) o.set_solver("newton");
+  require(o.solver() == "newton" || o.solver() == "ceres", "solver",
+          "expected newton or ceres, got '" + o.solver() + "'");
+  require(o.notches() == "on" || o.notches() == "off" || o.notches() == "both", "notches",
+          "expected on, off or both, got '" + o.notches() + "'");
+  // Material: a preset by name; explicit moduli override it ("custom" when no name is given).
+  if (o.material().empty() && o.young_modulus() == 0 && o.shear_modulus() == 0)
+    o.set_material(defaults.material.name);
+  if (!o.material().empty() && o.material() != "custom") {
+    const Material preset = material_by_name(o.material());
+    if (o.young_modulus() == 0) o.set_young_modulus(preset.young_modulus);
+    if (o.shear_modulus() == 0) o.set_shear_modulus(preset.shear_modulus);
+  } else {
+    o.set_material("custom");
+  }
+  require(positive(o.young_modulus()), "young_modulus", "must be a positive number (Pa)");
+  require(positive(o.shear_modulus()), "shear_modulus",
+          "must be a positive number (Pa); give it with the Young's modulus or pick a material");
+  auto fill = [](double value, double fallback) { return value == 0 ? fallback : value; };
+  o.set_friction_mu(fill(o.friction_mu(), defaults.friction_mu));
+  o.set_friction_epsilon(fill(o.friction_epsilon(), defaults.friction_epsilon));
+  o.set_notch_limit_weight(fill(o.notch_limit_weight(), defaults.notch_limit_weight));
+  o.set_connection_position_weight(
+      fill(o.connection_position_weight(), defaults.connection_position_weight));
+  o.set_connection_direction_weight(
+      fill(o.connection_direction_weight(), defaults.connection_direction_weight));
+  o.set_anchor_position_weight(fill(o.anchor_position_weight(), defaults.anchor_position_weight));
+  o.set_anchor_direction_weight(
+      fill(o.anchor_direction_weight(), defaults.anchor_direction_weight));
+  o.set_edges_per_interval(fill(o.edges_per_interval(), defaults.edges_per_interval));
+  o.set_reference_extent(fill(o.reference_extent(), defaults.reference_extent));
+  o.set_gradient_tolerance(fill(o.gradient_tolerance(), defaults.gradient_tolerance));
+  if (o.max_iterations() == 0) o.set_max_iterations(defaults.max_iterations);
+  require(std::isfinite(o.friction_mu()) && o.friction_mu() > 0, "friction_mu",
+          "must be a positive number");
+  require(positive(o.friction_epsilon()) && o.friction_epsilon() < 0.5, "friction_epsilon",
+          "must be in (0, 0.5)");
+  require(positive(o.notch_limit_weight()), "notch_limit_weight", "must be a positive number");
+  for (const auto& [value, name] :
+       {std::pair{o.connection_position_weight(), "connection_position_weight"},
+        {o.connection_direction_weight(), "connection_direction_weight"},
+        {o.anchor_position_weight(), "anchor_position_weight"},
+        {o.anchor_direction_weight(), "anchor_direction_weight"},
+        {o.reference_extent(), "reference_extent"},
+        {o.gradient_tolerance(), "gradient_tolerance"}})
+    require(positive(value), name, "must be a positive number");
+  require(std::isfinite(o.edges_per_interval()) && o.edges_per_interval() >= 1 &&
+              o.edges_per_interval() <= 64,
+          "edges_per_interval", "must be between 1 and 64");
+  require(o.max_iterations() >= 1 && o.max_iterations() <= 1000000, "max_iterations",
+          "must be between 1 and 1000000");
+  if (o.unit_in_meters() == 0) o.set_unit_in_meters(parse_length_unit(o.unit()));
+  require(std::isfinite(o.unit_in_meters()) && o.unit_in_meters() >= 0, "unit_in_meters",
+          "must be a positive number of metres (or 0 for unknown)");
+  return o;
+}
+
+SimulationOptions kernel_simulation_options(const v1::SimulationOptions& o, bool notches) {
+  SimulationOptions k;
+  k.material = {o.material(), o.young_modulus(), o.shear_modulus()};
+  k.notches = notches;
+  k.solver = o.solver() == "ceres" ? SimulationSolver::Ceres : SimulationSolver::Newton;
+  k.friction_mu = o.friction_mu();
+  k.friction_epsilon = o.friction_epsilon();
+  k.notch_limit_weight = o.notch_limit_weight();
+  k.connection_position_weight = o.connection_position_weight();
+  k.connection_direction_weight = o.connection_direction_weight();
+  k.anchor_position_weight = o.anchor_position_weight();
+  k.anchor_direction_weight = o.anchor_direction_weight();
+  k.edges_per_interval = o.edges_per_interval();
+  k.reference_extent = o.reference_extent();
+  k.gradient_tolerance = o.gradient_tolerance();
+  k.max_iterations = o.max_iterations();
+  k.unit_in_meters = o.unit_in_meters();
+  return k;
+}
+
+DeploymentJob run_deployment_job(const v1::Design& design_message,
+                                 const v1::SimulationOptions& requested,
+                                 const std::string& design_name, const Progress& progress) {
+  v1::SimulationOptions options = resolve_simulation_options(requested);
+  const Design design = design_from_proto(design_message);
+  options.set_lamella_width(design.lamella_width);
+  options.set_lamella_thickness(design.lamella_thickness);
+  DeploymentJob job;
+  const bool without = options.notches() != "on", with = options.notches() != "off";
+  const TriangleMesh& target = design.target.patch.mesh;
+  if (without)
+    job.without_notches = simulate_deployment(design.grid, design.anchors, target,
+                                              design.lamella_width, design.lamella_thickness,
+                                              kernel_simulation_options(options, false), progress);
+  if (with)
+    job.with_notches = simulate_deployment(design.grid, design.anchors, target,
+                                           design.lamella_width, design.lamella_thickness,
+                                           kernel_simulation_options(options, true), progress);
+  job.deployment = to_proto(job.without_notches ? &*job.without_notches : nullptr,
+                            job.with_notches ? &*job.with_notches : nullptr, options, design_name);
+  // One colour scale for both runs so the two PLY files compare at a glance.
+  double top = 0;
+  for (const auto* run : {&job.without_notches, &job.with_notches})
+    if (*run) top = std::max(top, (*run)->max_deviation);
+  const DeploymentRun& main = job.with_notches ? *job.with_notches : *job.without_notches;
+  job.deployed_obj = deployed_obj(main, design.lamella_width, design.lamella_thickness);
+  job.deviation_ply = deviation_ply(main, top);
+  if (job.with_notches && job.without_notches) {
+    job.deployed_without_notches_obj =
+        deployed_obj(*job.without_notches, design.lamella_width, design.lamella_thickness);
+    job.deviation_without_notches_ply = deviation_ply(*job.without_notches, top);
+  }
+  return job;
+}
+
+}  // namespace gridshell
