@@ -70,6 +70,8 @@ void add_simulation_flags(CLI::App* sub, SimulationFlags& flags) {
       ->capture_default_str();
   sub->add_option("--max-iterations", flags.max_iterations, "solver iteration cap")
       ->capture_default_str();
+  sub->add_option("--threads", flags.threads, "worker threads (0 = all cores)")
+      ->capture_default_str();
   sub->add_option("--solver", flags.solver,
                   "newton (default) | ceres (Levenberg-Marquardt, the reference)")
       ->check(CLI::IsMember({"newton", "ceres"}))
@@ -98,6 +100,7 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
     throw InvalidInput("--edges-per-interval: must be between 1 and 64");
   o.set_edges_per_interval(flags.edges_per_interval);
   if (flags.max_iterations < 1) throw InvalidInput("--max-iterations: must be at least 1");
+  if (flags.threads < 0) throw InvalidInput("--threads: must be >= 0 (0 = all cores)");
   o.set_max_iterations(flags.max_iterations);
   try {
     return resolve_simulation_options(o);

@@ -30,6 +30,7 @@ struct SimulationFlags {
   double edges_per_interval = 2;
   int max_iterations = 2000;
   std::string solver = "newton";
+  int threads = 0;
 };
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
 /// Resolved and validated (InvalidInput names the flag).

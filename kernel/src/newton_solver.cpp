@@ -2,6 +2,7 @@
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -20,10 +21,12 @@ struct NewtonSolver::Impl {
     std::vector<int> local;   // per parameter: local offset among the free ones
     int free_size = 0;
     int residuals = 0;
-    std::vector<int> value_index;  // per local (p, q) with p <= q in global terms, or -1
+    std::vector<int> value_index;       // per local (p, q) with p <= q in global terms, or -1
+    mutable Eigen::MatrixXd curvature;  // last numeric curvature (written by one thread only)
   };
   std::vector<TermLayout> layout;
   std::unordered_map<const double*, int> offset_of;
+  std::vector<double> limits;           // per block, 0 = unlimited
   Eigen::SparseMatrix<double> hessian;  // upper triangle
   std::vector<int> diagonal;            // value index of each diagonal entry
   Eigen::VectorXd gradient;
@@ -31,6 +34,8 @@ struct NewtonSolver::Impl {
   int threads = 1;
 
   bool exact_hessian = false;
+  bool refresh_curvature = true;
+  int evaluations = 0;
 
   void accumulate(size_t begin, size_t end, double* values, double* gradient_out, double* cost_out,
                   bool* ok_out) const {
@@ -66,6 +71,9 @@ struct NewtonSolver::Impl {
       H.noalias() = J.transpose() * J;
       if (term.curvature) {
         term.curvature(residuals.data(), H);
+      } else if (exact_hessian && term.numeric_curvature && !refresh_curvature &&
+                 l.curvature.rows() == l.free_size) {
+        H += l.curvature;  // lagged: from the last refresh
       } else if (exact_hessian && term.numeric_curvature) {
         // sum_i r_i Hess(r_i) = Hess(rbar . r) at rbar = r, by forward differences of the exact
         // (automatic) gradient J(x + e_k h)^T rbar, symmetrized.
@@ -101,7 +109,8 @@ struct NewtonSolver::Impl {
             C.col(l.local[p] + c) = (gk - g0) / step;
           }
         }
-        H += 0.5 * (C + C.transpose());
+        l.curvature = 0.5 * (C + C.transpose());
+        H += l.curvature;
       }
       const Eigen::VectorXd g = J.transpose() * r;
       for (size_t p = 0; p < sizes.size(); ++p) {
@@ -194,43 +203,55 @@ NewtonSolver::~NewtonSolver() = default;
 
 bool NewtonSolver::evaluate() {
   Impl& m = *impl_;
+  // The numeric curvature changes slowly; refresh it every options_.curvature_refresh calls.
+  m.refresh_curvature = m.evaluations % std::max(1, options_.curvature_refresh) == 0;
+  if (m.exact_hessian) ++m.evaluations;
+  // A fixed number of chunks summed in a fixed order: the result does not depend on the thread
+  // count.
+  constexpr int kChunks = 8;
   const size_t count = m.terms.size();
-  const int threads =
-      static_cast<int>(std::min<size_t>(m.threads, std::max<size_t>(1, count / 64)));
   const int nnz = static_cast<int>(m.hessian.nonZeros());
-  std::vector<std::vector<double>> values(threads, std::vector<double>(nnz, 0.0));
-  std::vector<Eigen::VectorXd> gradients(threads, Eigen::VectorXd::Zero(m.unknowns));
-  std::vector<double> costs(threads, 0.0);
-  std::vector<char> oks(threads, 1);
-  auto work = [&](int t) {
-    const size_t begin = count * t / threads, end = count * (t + 1) / threads;
-    bool ok = true;
-    m.accumulate(begin, end, values[t].data(), gradients[t].data(), &costs[t], &ok);
-    oks[t] = ok;
+  std::vector<std::vector<double>> values(kChunks, std::vector<double>(nnz, 0.0));
+  std::vector<Eigen::VectorXd> gradients(kChunks, Eigen::VectorXd::Zero(m.unknowns));
+  std::vector<double> costs(kChunks, 0.0);
+  std::vector<char> oks(kChunks, 1);
+  std::atomic<int> next{0};
+  auto work = [&] {
+    for (int c = next++; c < kChunks; c = next++) {
+      const size_t begin = count * c / kChunks, end = count * (c + 1) / kChunks;
+      bool ok = true;
+      m.accumulate(begin, end, values[c].data(), gradients[c].data(), &costs[c], &ok);
+      oks[c] = ok;
+    }
   };
-  if (threads == 1) {
-    work(0);
-  } else {
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool) th.join();
-  }
+  const int threads = std::clamp(m.threads, 1, kChunks);
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
   for (char ok : oks)
     if (!ok) return false;
   double* out = m.hessian.valuePtr();
   std::copy(values[0].begin(), values[0].end(), out);
   m.gradient = gradients[0];
   cost_ = costs[0];
-  for (int t = 1; t < threads; ++t) {
-    for (int k = 0; k < nnz; ++k) out[k] += values[t][k];
-    m.gradient += gradients[t];
-    cost_ += costs[t];
+  for (int c = 1; c < kChunks; ++c) {
+    for (int k = 0; k < nnz; ++k) out[k] += values[c][k];
+    m.gradient += gradients[c];
+    cost_ += costs[c];
   }
   return true;
 }
 
-void NewtonSolver::set_exact_hessian(bool exact) { impl_->exact_hessian = exact; }
+void NewtonSolver::set_step_limits(std::vector<double> limits) {
+  limits.resize(impl_->blocks.size(), 0.0);
+  impl_->limits = std::move(limits);
+}
+
+void NewtonSolver::set_exact_hessian(bool exact) {
+  if (exact && !impl_->exact_hessian) impl_->evaluations = 0;
+  impl_->exact_hessian = exact;
+}
 
 double NewtonSolver::gradient_max_norm() const {
   return impl_->gradient.size() ? impl_->gradient.cwiseAbs().maxCoeff() : 0.0;
@@ -301,6 +322,15 @@ NewtonSolver::StepResult NewtonSolver::step() {
         alpha = std::min(alpha, 0.95 * (term.upper - value) / step);
     }
     if (alpha < 1) d *= std::max(alpha, 0.0);
+    bool too_long = false;
+    for (size_t b = 0, k = 0; b < m.limits.size() && !too_long; k += m.blocks[b].second, ++b)
+      if (m.limits[b] > 0)
+        too_long = d.segment(k, m.blocks[b].second).cwiseAbs().maxCoeff() > m.limits[b];
+    if (too_long) {
+      lambda_ = std::max(lambda_ * nu_, 1e-8);
+      nu_ *= 2;
+      continue;
+    }
     const Eigen::VectorXd Hd = m.hessian.selfadjointView<Eigen::Upper>() * d;
     const double predicted = -(m.gradient.dot(d) + 0.5 * d.dot(Hd));
     double trial = 0;
@@ -319,6 +349,7 @@ NewtonSolver::StepResult NewtonSolver::step() {
                          lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
       nu_ = 2;
       result.accepted = true;
+      result.relative_step = (d.array().abs() / (1 + x0.array().abs())).maxCoeff();
       return result;
     }
     static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;

@@ -51,12 +51,16 @@ class NewtonSolver {
     double min_lambda = 1e-12;
     double max_lambda = 1e16;
     int threads = 1;
+    /// Exact-Hessian mode: recompute the numeric curvature every this many evaluations and
+    /// reuse it in between (it varies slowly; a lagged Hessian keeps fast convergence).
+    int curvature_refresh = 3;
   };
 
   struct StepResult {
     bool accepted = false;
-    int trials = 0;        ///< linear solves this step took
-    bool stalled = false;  ///< damping hit its maximum without an acceptable step
+    int trials = 0;            ///< linear solves this step took
+    bool stalled = false;      ///< damping hit its maximum without an acceptable step
+    double relative_step = 0;  ///< max_i |d_i| / (1 + |x_i|) of the accepted step
   };
 
   /// `blocks`: the free parameter blocks (pointer, size); their order defines the unknowns.
@@ -68,6 +72,11 @@ class NewtonSolver {
   /// residual block cannot be evaluated there.
   bool evaluate();
   double cost() const { return cost_; }
+  /// The cost at the current parameters by a plain residual evaluation (a consistency check).
+  double recompute_cost() const {
+    double c = 0;
+    return evaluate_cost(&c) ? c : -1;
+  }
   /// Max-norm of the gradient from the last evaluate().
   double gradient_max_norm() const;
   /// One damped Newton step from the last evaluate(): tries (H + lambda D) d = -g until the
@@ -78,6 +87,11 @@ class NewtonSolver {
   /// Full Hessian (numeric curvature of the flagged terms) from the next evaluate() on; costs
   /// one extra Jacobian evaluation per free parameter of each flagged term.
   void set_exact_hessian(bool exact);
+  /// Trust radius per parameter block (max-norm of its change in one step, 0 = unlimited), in
+  /// the order of the blocks: a longer step is rejected and the damping increased, so that the
+  /// iterates follow the energy downhill to the nearest equilibrium instead of jumping to a
+  /// distant one (a rotated connection, a flipped lamella).
+  void set_step_limits(std::vector<double> limits);
   void set_lambda(double lambda) { lambda_ = lambda; }
 
  private:

@@ -27,6 +27,13 @@ namespace gridshell::rod_terms {
 template <typename T>
 using V3 = Eigen::Matrix<T, 3, 1>;
 
+/// The value part of a scalar: the double itself, or a Ceres jet's .a.
+inline double ceres_value(double v) { return v; }
+template <typename J>
+auto ceres_value(const J& jet) -> decltype(ceres_value(jet.a)) {
+  return ceres_value(jet.a);
+}
+
 template <typename T>
 V3<T> load(const T* p) {
   return V3<T>(p[0], p[1], p[2]);
@@ -78,6 +85,15 @@ EdgeFrame<T> edge_frame(const T* xa, const T* xb, const T* theta, const EdgeRefe
   return f;
 }
 
+/// The angle from the space-parallel transport of d1_0 onto edge 1 to d1_1, about t1, in
+/// (-pi, pi].
+template <typename T>
+T raw_reference_twist(const EdgeFrame<T>& f0, const EdgeFrame<T>& f1) {
+  const V3<T> u = transport<T>(f0.t, f1.t, f0.d1);
+  using std::atan2;
+  return atan2(u.cross(f1.d1).dot(f1.t), u.dot(f1.d1));
+}
+
 /// Stretching of one edge: E = 1/2 (EA / l̄) (|e| - l̄)^2. One residual.
 struct Stretch {
   double sqrt_stiffness = 1;  ///< sqrt(EA / l̄)
@@ -104,6 +120,10 @@ struct BendTwist {
   double sqrt_weak = 1;    ///< sqrt(EI_weak / l̄_v)
   double sqrt_strong = 1;  ///< sqrt(EI_strong / l̄_v)
   double sqrt_twist = 1;   ///< sqrt(GJ / l̄_v)
+  /// The reference twist at the last frame update. atan2 alone wraps at +-pi; the reference
+  /// twist is tracked continuously as this value plus the (wrapped) change since, as in DER.
+  /// Null: the value in (-pi, pi].
+  const double* previous_reference_twist = nullptr;
   template <typename T>
   bool operator()(const T* x0, const T* x1, const T* x2, const T* theta0, const T* theta1,
                   T* r) const {
@@ -115,9 +135,15 @@ struct BendTwist {
     const V3<T> kb = T(2) * e0.cross(e1) / denominator;
     const T k1 = T(0.5) * (f0.m2 + f1.m2).dot(kb);
     const T k2 = T(-0.5) * (f0.m1 + f1.m1).dot(kb);
-    const V3<T> u = transport<T>(f0.t, f1.t, f0.d1);
-    using std::atan2;
-    const T reference_twist = atan2(u.cross(f1.d1).dot(f1.t), u.dot(f1.d1));
+    T reference_twist = raw_reference_twist(f0, f1);
+    if (previous_reference_twist) {
+      // Unwrap: the offset is a multiple of 2 pi (piecewise constant, so derivatives are
+      // unaffected).
+      const double pi = 3.14159265358979323846;
+      const double turns =
+          std::round((ceres_value(reference_twist) - *previous_reference_twist) / (2 * pi));
+      reference_twist -= T(2 * pi * turns);
+    }
     r[0] = T(sqrt_weak) * k1;
     r[1] = T(sqrt_strong) * k2;
     r[2] = T(sqrt_twist) * (*theta1 - *theta0 + reference_twist);
@@ -128,10 +154,12 @@ struct BendTwist {
 /// The point of a member at a connection and the member's material normal there.
 /// q = (1 - b) x_a + b x_b on edge (x_a, x_b). The discrete material normal is constant per edge
 /// and jumps by the turning angle at a vertex; a connection sliding across a vertex would jump
-/// with it. So past the middle of the edge the normal is blended linearly towards the
-/// neighbouring edge's, reaching the vertex normal (m1 + m1') / |m1 + m1'| at the vertex from
-/// both sides: continuous along the member. `neighbour` is the next edge (x_b, x_n) when
-/// side > 0, the previous one (x_n, x_a) when side < 0, or absent (rod end).
+/// with it. So past the middle of the edge the normal is blended towards the neighbouring
+/// edge's with weight w = 2 (b - 1/2)^2, reaching the vertex normal (m1 + m1') / |m1 + m1'| at
+/// the vertex from both sides with the same slope: continuously differentiable along the
+/// member (a kink would stall Newton's method where a connection comes to rest mid-edge).
+/// `neighbour` is the next edge (x_b, x_n) when side > 0, the previous one (x_n, x_a) when side <
+/// 0, or absent (rod end).
 template <typename T>
 struct MemberPoint {
   V3<T> q, m;
@@ -152,8 +180,9 @@ MemberPoint<T> member_point(const T* const* p, const MemberEdge& edge) {
   out.q = (T(1) - beta) * load(p[0]) + beta * load(p[1]);
   out.m = f.m1;
   if (edge.neighbour) {
-    const T w = edge.side > 0 ? beta - T(0.5) : T(0.5) - beta;
-    if (w > T(0)) {
+    const T d = edge.side > 0 ? beta - T(0.5) : T(0.5) - beta;
+    if (d > T(0)) {
+      const T w = T(2) * d * d;
       const EdgeFrame<T> n = edge.side > 0 ? edge_frame(p[1], p[4], p[5], *edge.neighbour)
                                            : edge_frame(p[4], p[0], p[5], *edge.neighbour);
       const V3<T> blend = (T(1) - w) * f.m1 + w * n.m1;

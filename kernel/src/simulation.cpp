@@ -91,6 +91,7 @@ struct Rod {
   std::vector<Vec3> x;     // n + 1 vertices (Ceres parameter blocks)
   std::vector<double> theta;
   std::vector<EdgeReference> ref;
+  std::vector<double> reference_twist;  // per interior vertex k (index k - 1), unwrapped
 };
 
 /// One end of a connection, on one rod.
@@ -179,6 +180,7 @@ class Deployment {
   void solve_newton(const Progress& progress, const std::string& stage, DeploymentRun& run);
   void solve_ceres(const Progress& progress, const std::string& stage, DeploymentRun& run);
   void update_frames();
+  void update_reference_twist(Rod& rod);
   bool reproject(Slider& slider);
   void notch_edges(const Slider& s, int* lo_edge, double* lo_beta, int* hi_edge,
                    double* hi_beta) const;
@@ -188,6 +190,12 @@ class Deployment {
   };
   Binding bind(Slider& s);
   bool sides_changed() const;
+  bool is_twist(const double* block) const {
+    for (const Rod& rod : rods_)
+      if (!rod.theta.empty() && block >= rod.theta.data() && block < rod.theta.data() + rod.n)
+        return true;
+    return false;
+  }
   DeploymentRun results();
 
   const SimulationOptions& options_;
@@ -197,6 +205,7 @@ class Deployment {
   double width_ = 0, thickness_ = 0;  // scaled
   Stiffness k_;
   double force_reference_ = 1;
+  double h_mean_ = 1;  // mean rest edge length, scaled
   double w_position_ = 0, w_direction_ = 0, w_anchor_position_ = 0, w_anchor_direction_ = 0;
   std::vector<Rod> rods_;
   int ng_ = 0;
@@ -308,9 +317,11 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
         rod.ref.push_back(ref);
         rod.theta.push_back(0.0);
       }
+      update_reference_twist(rod);
       rods_.push_back(std::move(rod));
     }
   const double h_mean = h_sum / rods_.size();
+  h_mean_ = h_mean;
   w_position_ = options.connection_position_weight * k_.EA / h_mean;
   w_direction_ = options.connection_direction_weight * k_.EI_strong / h_mean;
   w_anchor_position_ = options.anchor_position_weight * k_.EA / h_mean;
@@ -332,9 +343,13 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
       slider.lo = std::min(slider.s_bar, s_rest);
       slider.hi = std::max(slider.s_bar, s_rest);
       // Start at the geodesic crossing (the notch's far end), where the grid laid on the
-      // geodesics closes every connection; just inside, as the notch limit is a log barrier.
+      // geodesics closes every connection, or at s̄; just inside, as the notch limits are log
+      // barriers.
       const double inset = std::min(1e-3 * rod.h, 0.1 * std::abs(slider.notch));
-      sigma = s_rest - (slider.notch > 0 ? inset : -inset);
+      const double direction = slider.notch > 0 ? 1.0 : -1.0;
+      sigma = options.notch_start == SimulationOptions::NotchStart::Planar
+                  ? slider.s_bar + direction * inset
+                  : s_rest - direction * inset;
     }
     slider.edge = std::clamp(static_cast<int>(std::floor(sigma / rod.h)), 0, rod.n - 1);
     slider.beta = sigma / rod.h - slider.edge;
@@ -382,7 +397,9 @@ Deployment::Binding Deployment::bind(Slider& s) {
   b.edge.ref = &rod.ref[s.edge];
   s.side = s.beta >= 0.5 ? 1 : -1;
   const int neighbour = s.edge + s.side;
-  if (neighbour >= 0 && neighbour < rod.n) {
+  // Only a sliding connection crosses vertices and needs the continuous (blended) normal; a
+  // fixed one keeps its edge's own material normal.
+  if (s.sliding && neighbour >= 0 && neighbour < rod.n) {
     b.edge.neighbour = &rod.ref[neighbour];
     b.edge.side = s.side;
     b.parameters.push_back(s.side > 0 ? rod.x[s.edge + 2].data() : rod.x[s.edge - 1].data());
@@ -455,8 +472,8 @@ Deployment::Terms Deployment::build_terms() {
     const double weak = std::sqrt(k_.EI_weak / rod.h), strong = std::sqrt(k_.EI_strong / rod.h),
                  twist = std::sqrt(k_.GJ / rod.h);
     for (int k = 1; k < rod.n; ++k)
-      add(new AutoDiffCostFunction<rod_terms::BendTwist, 3, 3, 3, 3, 1, 1>(
-              new rod_terms::BendTwist{&rod.ref[k - 1], &rod.ref[k], weak, strong, twist}),
+      add(new AutoDiffCostFunction<rod_terms::BendTwist, 3, 3, 3, 3, 1, 1>(new rod_terms::BendTwist{
+              &rod.ref[k - 1], &rod.ref[k], weak, strong, twist, &rod.reference_twist[k - 1]}),
           {rod.x[k - 1].data(), rod.x[k].data(), rod.x[k + 1].data(), &rod.theta[k - 1],
            &rod.theta[k]});
   }
@@ -531,7 +548,7 @@ void Deployment::fill_problem(const Terms& terms, ceres::Problem& problem) const
 }
 
 void Deployment::update_frames() {
-  for (Rod& rod : rods_)
+  for (Rod& rod : rods_) {
     for (int k = 0; k < rod.n; ++k) {
       EdgeReference& ref = rod.ref[k];
       const Vec3 t = (rod.x[k + 1] - rod.x[k]).normalized();
@@ -539,6 +556,24 @@ void Deployment::update_frames() {
       ref.tangent = t;
       ref.d1 = (d1 - d1.dot(t) * t).normalized();
     }
+    update_reference_twist(rod);
+  }
+}
+
+void Deployment::update_reference_twist(Rod& rod) {
+  const bool first = rod.reference_twist.empty();
+  rod.reference_twist.resize(std::max(0, rod.n - 1), 0.0);
+  for (int k = 1; k < rod.n; ++k) {
+    const auto f0 = rod_terms::edge_frame(rod.x[k - 1].data(), rod.x[k].data(), &rod.theta[k - 1],
+                                          rod.ref[k - 1]);
+    const auto f1 =
+        rod_terms::edge_frame(rod.x[k].data(), rod.x[k + 1].data(), &rod.theta[k], rod.ref[k]);
+    const double raw = rod_terms::raw_reference_twist(f0, f1);
+    double& previous = rod.reference_twist[k - 1];
+    previous =
+        first ? raw
+              : raw - 2 * std::numbers::pi * std::round((raw - previous) / (2 * std::numbers::pi));
+  }
 }
 
 bool Deployment::reproject(Slider& s) {
@@ -587,6 +622,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
                               DeploymentRun& run) {
   NewtonSolver::Options newton_options;
   newton_options.threads = solver_threads(options_.threads);
+
   double lambda = newton_options.initial_lambda;
   std::unique_ptr<NewtonSolver> newton;
   Terms terms;
@@ -603,6 +639,12 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       newton = std::make_unique<NewtonSolver>(terms.blocks, terms.terms, newton_options);
       newton->set_lambda(lambda);
       newton->set_exact_hessian(exact);
+      // Trust radii: a quarter of an edge per step for vertices, 0.5 rad for twist angles (the
+      // connection coordinates keep to their barriers' domains by themselves).
+      std::vector<double> limits;
+      for (const auto& [pointer, size] : terms.blocks)
+        limits.push_back(size == 3 ? 0.25 * h_mean_ : (is_twist(pointer) ? 0.5 : 0.0));
+      newton->set_step_limits(std::move(limits));
       rebuild = false;
       ++run.outer_iterations;
     }
@@ -614,7 +656,10 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
         std::log(first / std::max(run.gradient_norm, tolerance)) / std::log(first / tolerance);
     best = std::clamp(std::max(best, fraction), 0.0, 0.99);
     progress.report(stage, best);
-    if (!exact && run.gradient_norm < options_.exact_hessian_below) {
+    static const double below = std::getenv("GRIDSHELL_SIM_BELOW")
+                                    ? std::atof(std::getenv("GRIDSHELL_SIM_BELOW"))
+                                    : options_.exact_hessian_below;
+    if (!exact && run.gradient_norm < below) {
       exact = true;
       newton->set_exact_hessian(true);
       if (!newton->evaluate())
@@ -631,13 +676,23 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
     }
     static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
     if (trace)
-      std::fprintf(stderr, "it %4d cost %.12e |g| %.3e lambda %.1e moves %d\n", run.iterations,
-                   newton->cost(), run.gradient_norm, newton->lambda(), moves_);
+      std::fprintf(stderr, "it %4d cost %.12e (recomputed %.12e) |g| %.3e lambda %.1e moves %d\n",
+                   run.iterations, newton->cost(), newton->recompute_cost(), run.gradient_norm,
+                   newton->lambda(), moves_);
     const NewtonSolver::StepResult step = newton->step();
     run.iterations += step.trials;
     lambda = newton->lambda();
     if (!step.accepted) {
       run.termination = "no step decreases the energy (damping at its maximum)";
+      return;
+    }
+    // Step criterion: a Newton step at rounding level (1e-12 relative) with the gradient close
+    // to tolerance. A connection resting against a notch limit (a log barrier) has a gradient
+    // whose rounding grows with the barrier's curvature, so the gradient alone cannot go
+    // lower there.
+    if (step.relative_step < 1e-12 && run.gradient_norm < 1e3 * tolerance) {
+      run.converged = true;
+      run.termination = "step below tolerance (gradient at its rounding limit)";
       return;
     }
     update_frames();
@@ -683,6 +738,11 @@ void Deployment::solve_ceres(const Progress& progress, const std::string& stage,
     run.iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);
     ++run.outer_iterations;
     run.termination = summary.message;
+    static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
+    if (trace)
+      std::fprintf(stderr, "ceres outer %d: %d its, %s, |g| %.3e\n", run.outer_iterations,
+                   static_cast<int>(summary.iterations.size()) - 1, summary.message.c_str(),
+                   summary.iterations.back().gradient_max_norm / force_reference_);
     if (summary.termination_type == ceres::FAILURE)
       throw std::runtime_error("simulation: the solver failed: " + summary.message);
     update_frames();
@@ -769,7 +829,7 @@ DeploymentRun Deployment::results() {
     }
     for (int k = 1; k < rod.n; ++k) {
       double r[3] = {0, 0, 0};
-      rod_terms::BendTwist{&rod.ref[k - 1], &rod.ref[k], 1, 1, 1}(
+      rod_terms::BendTwist{&rod.ref[k - 1], &rod.ref[k], 1, 1, 1, &rod.reference_twist[k - 1]}(
           rod.x[k - 1].data(), rod.x[k].data(), rod.x[k + 1].data(), &rod.theta[k - 1],
           &rod.theta[k], r);
       // r holds the integrated curvatures and twist; pointwise values divide by h.

@@ -114,7 +114,8 @@ SimulationOptions kernel_simulation_options(const v1::SimulationOptions& o, bool
 
 DeploymentJob run_deployment_job(const v1::Design& design_message,
                                  const v1::SimulationOptions& requested,
-                                 const std::string& design_name, const Progress& progress) {
+                                 const std::string& design_name, const Progress& progress,
+                                 int threads) {
   v1::SimulationOptions options = resolve_simulation_options(requested);
   const Design design = design_from_proto(design_message);
   options.set_lamella_width(design.lamella_width);
@@ -122,6 +123,9 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   DeploymentJob job;
   const bool without = options.notches() != "on", with = options.notches() != "off";
   const TriangleMesh& target = design.target.patch.mesh;
+  SimulationOptions without_options = kernel_simulation_options(options, false),
+                    with_options = kernel_simulation_options(options, true);
+  without_options.threads = with_options.threads = threads;
   if (without)
     job.without_notches = simulate_deployment(design.grid, design.anchors, target,
                                               design.lamella_width, design.lamella_thickness,

@@ -51,6 +51,9 @@ struct SimulationOptions {
   SimulationSolver solver = SimulationSolver::Newton;
   Material material = material_presets().front();  // lime wood
   bool notches = true;  // sliding connections within [s̄, s] at inner crossings
+  /// Where sliding connections start: at the geodesic crossing s (default: the grid laid on
+  /// the target's geodesics closes every connection), or at the planar arc length s̄.
+  enum class NotchStart { Geodesic, Planar } notch_start = NotchStart::Geodesic;
   /// Pseudo-friction E_p (paper Section 5): weight mu and how far past an edge end a connection
   /// may move within one solve.
   double friction_mu = 0.1;

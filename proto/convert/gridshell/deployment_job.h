@@ -34,8 +34,10 @@ struct DeploymentJob {
   std::string deviation_without_notches_ply;
 };
 
-/// Simulates the design (runs without and/or with notches as options.notches says).
+/// Simulates the design (runs without and/or with notches as options.notches says) with
+/// `threads` worker threads (0 = all cores; the result does not depend on it).
 DeploymentJob run_deployment_job(const v1::Design& design, const v1::SimulationOptions& options,
-                                 const std::string& design_name, const Progress& progress = {});
+                                 const std::string& design_name, const Progress& progress = {},
+                                 int threads = 0);
 
 }  // namespace gridshell
