@@ -13,6 +13,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/design.h"
@@ -39,44 +40,6 @@ struct BenchArguments {
 double ms_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
-}
-
-std::string cpu_name() {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown CPU";
-}
-
-std::string today() {
-  const std::time_t now = std::time(nullptr);
-  char buffer[32];
-  std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::gmtime(&now));
-  return buffer;
-}
-
-// Replaces the text between the section's markers (or appends the section).
-void write_section(const std::string& path, const std::string& name, const std::string& body) {
-  const std::string begin = "<!-- bench " + name + " begin -->";
-  const std::string end = "<!-- bench " + name + " end -->";
-  std::string text;
-  if (std::filesystem::exists(path)) {
-    std::ifstream in(path);
-    std::ostringstream all;
-    all << in.rdbuf();
-    text = all.str();
-  } else {
-    text =
-        "# Benchmarks\n\nWritten by `gridshell bench`; do not edit the marked sections by hand.\n";
-  }
-  const std::string section = begin + "\n" + body + end;
-  const auto b = text.find(begin), e = text.find(end);
-  if (b != std::string::npos && e != std::string::npos && e > b)
-    text.replace(b, e + end.size() - b, section);
-  else
-    text += "\n" + section + "\n";
-  write_file_atomically(path, text);
 }
 
 int bench_geodesic(const BenchArguments& args) {
@@ -245,9 +208,9 @@ Command add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArguments>();
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
-  sub->add_option("WHAT", args->what, "geodesic | design")
+  sub->add_option("WHAT", args->what, "geodesic | design | simulate")
       ->required()
-      ->check(CLI::IsMember({"geodesic", "design"}));
+      ->check(CLI::IsMember({"geodesic", "design", "simulate"}));
   sub->add_option("--sizes", args->sizes, "target vertex counts")
       ->delimiter(',')
       ->capture_default_str();
@@ -265,6 +228,7 @@ Command add_bench_command(CLI::App& app) {
     for (int s : args->sizes)
       if (s < 100 || s > 2000000) throw InvalidInput("--sizes: each size must be 100..2000000");
     if (args->repeats < 1) throw InvalidInput("--repeats: must be at least 1");
+    if (args->what == "simulate") return bench_simulate(args->repeats, args->out, args->no_write);
     return args->what == "design" ? bench_design(*args) : bench_geodesic(*args);
   };
 }

@@ -639,11 +639,12 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       newton = std::make_unique<NewtonSolver>(terms.blocks, terms.terms, newton_options);
       newton->set_lambda(lambda);
       newton->set_exact_hessian(exact);
-      // Trust radii: a quarter of an edge per step for vertices, 0.5 rad for twist angles (the
-      // connection coordinates keep to their barriers' domains by themselves).
+      // Trust radii (options): a quarter of an edge per step for vertices, 2 rad for twist angles
+      // (the connection coordinates keep to their barriers' domains by themselves).
       std::vector<double> limits;
       for (const auto& [pointer, size] : terms.blocks)
-        limits.push_back(size == 3 ? 0.25 * h_mean_ : (is_twist(pointer) ? 0.5 : 0.0));
+        limits.push_back(size == 3 ? options_.max_vertex_step * h_mean_
+                                   : (is_twist(pointer) ? options_.max_twist_step : 0.0));
       newton->set_step_limits(std::move(limits));
       rebuild = false;
       ++run.outer_iterations;

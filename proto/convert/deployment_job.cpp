@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <exception>
+#include <thread>
 
 #include "gridshell/convert_deployment.h"
 #include "gridshell/deployment_export.h"
@@ -109,6 +111,9 @@ SimulationOptions kernel_simulation_options(const v1::SimulationOptions& o, bool
   k.gradient_tolerance = o.gradient_tolerance();
   k.max_iterations = o.max_iterations();
   k.unit_in_meters = o.unit_in_meters();
+  if (const char* v = std::getenv("GRIDSHELL_SIM_VERTEX_STEP")) k.max_vertex_step = std::atof(v);
+  if (const char* v = std::getenv("GRIDSHELL_SIM_TWIST_STEP")) k.max_twist_step = std::atof(v);
+  if (const char* v = std::getenv("GRIDSHELL_SIM_BELOW")) k.exact_hessian_below = std::atof(v);
   return k;
 }
 
@@ -126,14 +131,36 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   SimulationOptions without_options = kernel_simulation_options(options, false),
                     with_options = kernel_simulation_options(options, true);
   without_options.threads = with_options.threads = threads;
-  if (without)
-    job.without_notches = simulate_deployment(design.grid, design.anchors, target,
-                                              design.lamella_width, design.lamella_thickness,
-                                              kernel_simulation_options(options, false), progress);
-  if (with)
-    job.with_notches = simulate_deployment(design.grid, design.anchors, target,
-                                           design.lamella_width, design.lamella_thickness,
-                                           kernel_simulation_options(options, true), progress);
+  // Both runs are independent: with two or more threads they run side by side, one thread
+  // each (results do not depend on the thread count).
+  const int available =
+      threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  auto simulate = [&](const SimulationOptions& o) {
+    return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
+                               design.lamella_thickness, o, progress);
+  };
+  if (without && with && available >= 2) {
+    without_options.threads = with_options.threads = std::max(1, available / 2);
+    std::exception_ptr failure;
+    std::thread second([&] {
+      try {
+        job.with_notches = simulate(with_options);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+    });
+    try {
+      job.without_notches = simulate(without_options);
+    } catch (...) {
+      second.join();
+      throw;
+    }
+    second.join();
+    if (failure) std::rethrow_exception(failure);
+  } else {
+    if (without) job.without_notches = simulate(without_options);
+    if (with) job.with_notches = simulate(with_options);
+  }
   job.deployment = to_proto(job.without_notches ? &*job.without_notches : nullptr,
                             job.with_notches ? &*job.with_notches : nullptr, options, design_name);
   // One colour scale for both runs so the two PLY files compare at a glance.

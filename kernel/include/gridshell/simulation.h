@@ -76,6 +76,10 @@ struct SimulationOptions {
   /// Newton solver: switch from the Gauss-Newton-plus-geometric-stiffness Hessian to the full
   /// Hessian once the relative gradient norm is below this. Default 1e-3.
   double exact_hessian_below = 1e-3;
+  /// Newton solver trust radii per step: vertex moves in rest edge lengths, twist changes in
+  /// radians (0 = unlimited). They keep the iterates on the deployment's branch.
+  double max_vertex_step = 0.25;
+  double max_twist_step = 2.0;
   int max_outer_iterations = 200;  // frame updates / connection re-projections
   int threads = 0;                 // Jacobian evaluation threads, 0 = hardware concurrency
   /// The model's length unit in metres (0 = unknown): energies are then reported in joules.

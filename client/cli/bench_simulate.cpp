@@ -1,0 +1,99 @@
+// `gridshell bench simulate`: the deployment simulation on the seven paper-like examples next
+// to the paper's Table 1 (|G_V|, RMS1, RMS2, t1, t2). Writes a table into docs/benchmarks.md.
+//
+// A benchmark, not a test: each example is designed once with default options, then simulated
+// without and with notches `repeats` times, one run after the other with all cores; times are
+// medians. RMS and iterations are deterministic.
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "bench_support.h"
+#include "cli_support.h"
+#include "gridshell/design.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/simulation.h"
+
+namespace gridshell::cli {
+namespace {
+
+struct PaperSimulationRow {
+  const char* name;
+  int grid_vertices;
+  double rms1, rms2, t1, t2;
+};
+
+// Pillwein et al. 2020, Table 1 (simulation in C++ on a Xeon E5-2687W v4).
+constexpr PaperSimulationRow kTable1[] = {
+    {"torus-wide", 767, 1.17, 0.27, 1.92, 6.48},  {"waves-bump", 388, 1.47, 0.78, 12.60, 57.22},
+    {"sphere", 414, 1.09, 0.58, 6.05, 4.25},      {"double-vault", 300, 0.69, 0.31, 2.25, 4.05},
+    {"waves", 328, 0.59, 0.43, 3.03, 9.56},       {"archway", 625, 0.63, 0.42, 37.74, 85.43},
+    {"triple-vault", 494, 0.69, 0.46, 3.50, 5.80}};
+
+}  // namespace
+
+int bench_simulate(int repeats, const std::string& out, bool no_write) {
+  std::ostringstream table;
+  const SimulationOptions defaults;
+  table << "## Deployment simulation on the seven paper-like examples, next to the paper's "
+           "Table 1\n\n"
+        << "Measured " << today() << " on " << cpu_name() << ", "
+        << std::thread::hardware_concurrency()
+        << " hardware threads. Each example designed once with default options, then simulated "
+           "without (1) and with (2) notches, "
+        << repeats
+        << " times each, one run after the other with all cores (Newton solver, default "
+           "options: lime wood, mu = 0.1, 2 edges per interval between crossings, gradient "
+           "tolerance "
+        << defaults.gradient_tolerance
+        << "). t1, t2 are medians in seconds; RMS is the root mean square distance of all rod "
+           "vertices to the target patch (100 units wide). Paper values in parentheses.\n\n"
+        << "| example | \\|G_V\\| (paper) | RMS1 (paper) | RMS2 (paper) | t1 s (paper) | t2 s "
+           "(paper) | iterations 1 / 2 | converged |\n"
+        << "|---|---:|---:|---:|---:|---:|---:|---|\n";
+  for (const PaperSimulationRow& row : kTable1) {
+    std::cerr << "bench simulate: " << row.name << ": design\n";
+    const ExampleSurface example = make_example(row.name);
+    CornerSpec corners;
+    corners.kind = CornerSpec::Kind::Vertices;
+    corners.vertices = example.corners;
+    char buffer[1024];
+    try {
+      const Design design = make_design(example.mesh, corners, DesignOptions{});
+      std::vector<double> t1, t2;
+      DeploymentRun without, with;
+      for (int r = 0; r < repeats; ++r) {
+        std::cerr << "bench simulate: " << row.name << " run " << r + 1 << "\n";
+        SimulationOptions options;
+        options.notches = false;
+        without = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                                      design.lamella_width, design.lamella_thickness, options);
+        options.notches = true;
+        with = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                                   design.lamella_width, design.lamella_thickness, options);
+        t1.push_back(without.seconds);
+        t2.push_back(with.seconds);
+      }
+      std::snprintf(buffer, sizeof buffer,
+                    "| %s | %d (%d) | %.3f (%.2f) | %.3f (%.2f) | %.2f (%.2f) | %.2f (%.2f) | %d / "
+                    "%d | %s |\n",
+                    row.name, with.grid_vertices, row.grid_vertices, without.rms, row.rms1,
+                    with.rms, row.rms2, median(t1), row.t1, median(t2), row.t2, without.iterations,
+                    with.iterations, without.converged && with.converged ? "yes" : "**no**");
+    } catch (const std::exception& e) {
+      std::snprintf(buffer, sizeof buffer, "| %s | failed: %s | | | | | | |\n", row.name, e.what());
+    }
+    table << buffer;
+    std::cerr << buffer;
+  }
+  table << "\nCommand: `gridshell bench simulate --repeats " << repeats << "`\n";
+  std::cout << table.str();
+  if (!no_write) {
+    write_section(out, "simulate", table.str());
+    std::cerr << "wrote " << out << "\n";
+  }
+  return 0;
+}
+
+}  // namespace gridshell::cli

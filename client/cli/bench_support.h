@@ -1,0 +1,20 @@
+// Shared pieces of `gridshell bench`: machine description and the marked sections of
+// docs/benchmarks.md.
+#pragma once
+
+#include <string>
+
+namespace gridshell::cli {
+
+/// The CPU model from /proc/cpuinfo.
+std::string cpu_name();
+/// Today's date, YYYY-MM-DD (UTC).
+std::string today();
+/// Replaces the text between `<!-- bench NAME begin/end -->` in the file (or appends it).
+void write_section(const std::string& path, const std::string& name, const std::string& body);
+
+/// `gridshell bench simulate`: the seven paper-like examples designed with default options and
+/// simulated without and with notches, `repeats` times each; medians next to Table 1.
+int bench_simulate(int repeats, const std::string& out, bool no_write);
+
+}  // namespace gridshell::cli
