@@ -308,8 +308,9 @@ NewtonSolver::StepResult NewtonSolver::step() {
       nu_ *= 2;
       continue;
     }
-    Eigen::VectorXd d = m.cholesky.solve(-m.gradient);
-    // Fraction to the boundary of every barrier's domain.
+    const Eigen::VectorXd d = m.cholesky.solve(-m.gradient);
+    // The step taken is alpha d: the fraction to the boundary of every barrier's domain, and
+    // the trust radii.
     double alpha = 1;
     for (const Term& term : m.terms) {
       if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
@@ -321,42 +322,46 @@ NewtonSolver::StepResult NewtonSolver::step() {
       if (step > 0 && std::isfinite(term.upper))
         alpha = std::min(alpha, 0.95 * (term.upper - value) / step);
     }
-    if (alpha < 1) d *= std::max(alpha, 0.0);
-    bool too_long = false;
-    for (size_t b = 0, k = 0; b < m.limits.size() && !too_long; k += m.blocks[b].second, ++b)
-      if (m.limits[b] > 0)
-        too_long = d.segment(k, m.blocks[b].second).cwiseAbs().maxCoeff() > m.limits[b];
-    if (too_long) {
+    // Trust radii: shorten the step along the same direction (no new factorization).
+    for (size_t b = 0, k = 0; b < m.limits.size(); k += m.blocks[b].second, ++b)
+      if (m.limits[b] > 0) {
+        const double longest = d.segment(k, m.blocks[b].second).cwiseAbs().maxCoeff();
+        if (longest > m.limits[b]) alpha = std::min(alpha, m.limits[b] / longest);
+      }
+    const Eigen::VectorXd Hd = m.hessian.selfadjointView<Eigen::Upper>() * d;
+    const double gd = m.gradient.dot(d), dHd = d.dot(Hd);
+    if (!(gd < 0) || !d.allFinite()) {  // not a descent direction: damp more
       lambda_ = std::max(lambda_ * nu_, 1e-8);
       nu_ *= 2;
       continue;
     }
-    const Eigen::VectorXd Hd = m.hessian.selfadjointView<Eigen::Upper>() * d;
-    const double predicted = -(m.gradient.dot(d) + 0.5 * d.dot(Hd));
-    double trial = 0;
-    bool ok = false;
-    if (predicted > 0 && d.allFinite()) {
-      write(x0 + d);
-      ok = evaluate_cost(&trial);
-    }
-    double rho = ok ? (cost_ - trial) / predicted : -1;
-    // Near the minimum the predicted decrease drops below the cost's rounding: accept a step
-    // that does not raise the cost beyond rounding and let the gradient decide convergence.
+    // Try the (shortened) step, then back off along it twice before damping more: a cost
+    // evaluation is far cheaper than another factorization.
     const double rounding = 1e-13 * std::abs(cost_);
-    if (ok && predicted < rounding && trial <= cost_ + rounding) rho = 1;
-    if (ok && rho > 1e-4) {
-      lambda_ = std::max(options_.min_lambda,
-                         lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
-      nu_ = 2;
-      result.accepted = true;
-      result.relative_step = (d.array().abs() / (1 + x0.array().abs())).maxCoeff();
-      return result;
+    double step = std::max(alpha, 0.0);
+    for (int attempt = 0; attempt < 3; ++attempt, step *= 0.5) {
+      const double predicted = -(step * gd + 0.5 * step * step * dHd);
+      double trial = 0;
+      write(x0 + step * d);
+      const bool ok = predicted > 0 && evaluate_cost(&trial);
+      double rho = ok ? (cost_ - trial) / predicted : -1;
+      // Near the minimum the predicted decrease drops below the cost's rounding: accept a step
+      // that does not raise the cost beyond rounding and let the gradient decide convergence.
+      if (ok && predicted < rounding && trial <= cost_ + rounding) rho = 1;
+      if (ok && rho > 1e-4) {
+        if (attempt == 0 && step == 1.0)
+          lambda_ = std::max(options_.min_lambda,
+                             lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
+        nu_ = 2;
+        result.accepted = true;
+        result.relative_step = (step * d.array().abs() / (1 + x0.array().abs())).maxCoeff();
+        return result;
+      }
+      static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
+      if (trace)
+        std::fprintf(stderr, "   reject lambda %.1e step %.3g pred %.3e trial %.12e ok %d\n",
+                     lambda_, step, predicted, trial, ok);
     }
-    static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
-    if (trace)
-      std::fprintf(stderr,
-                   "   reject lambda %.1e alpha %.3g pred %.3e trial %.12e ok %d |d| %.2e\n",
-                   lambda_, alpha, predicted, trial, ok, d.norm());
     write(x0);
     lambda_ = std::max(lambda_ * nu_, 1e-8);
     nu_ *= 2;
