@@ -1,0 +1,115 @@
+// End-to-end tests of `gridshell simulate`: files, deployment.json fields, exit codes, errors.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "support.h"
+
+namespace gridshell {
+namespace {
+
+using nlohmann::json;
+using testing::run_cli;
+
+/// One design of the double vault shared by the tests of this file.
+const std::string& design_dir() {
+  static const std::string dir = [] {
+    const std::string out = testing::temp_dir() + "/design";
+    const auto result = run_cli("design example:double-vault --quiet --out '" + out + "'");
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return out;
+  }();
+  return dir;
+}
+
+TEST(CliSimulate, WritesDeploymentFilesWithBothRuns) {
+  const std::string out = testing::temp_dir() + "/sim";
+  const auto result =
+      run_cli("simulate '" + design_dir() + "/design.json' --quiet --unit cm --out '" + out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json d = json::parse(testing::read_text(out + "/deployment.json"));
+  for (const char* key : {"rms_without_notches", "rms_with_notches", "seconds_without_notches",
+                          "seconds_with_notches", "converged", "iterations", "rods",
+                          "rods_without_notches", "grid_vertices", "options"})
+    EXPECT_TRUE(d.contains(key)) << key;
+  EXPECT_TRUE(d["converged"].get<bool>());
+  EXPECT_LT(d["rms_with_notches"].get<double>(), d["rms_without_notches"].get<double>());
+  ASSERT_EQ(d["rods"].size(), d["rods_without_notches"].size());
+  int vertices = 0;
+  for (const auto& rod : d["rods"]) {
+    EXPECT_TRUE(rod["member"]["family"] == "g" || rod["member"]["family"] == "h");
+    ASSERT_EQ(rod["centerline"].size(), rod["normals"].size());
+    ASSERT_EQ(rod["centerline"].size(), rod["deviation"].size());
+    vertices += static_cast<int>(rod["centerline"].size());
+    for (const auto& n : rod["normals"]) {
+      const double x = n[0], y = n[1], z = n[2];
+      EXPECT_NEAR(x * x + y * y + z * z, 1.0, 1e-9);
+    }
+    EXPECT_GT(rod["max_bending_stress"].get<double>(), 0.0);
+  }
+  EXPECT_EQ(vertices, d["grid_vertices"].get<int>());
+  EXPECT_EQ(d["with_notches"]["energy_unit"], "J");  // --unit given
+  EXPECT_EQ(d["options"]["material"], "lime-wood");
+  // The views: boxes of the lamellas and the coloured centerlines.
+  for (const char* file : {"deployed.obj", "deviation.ply", "deployed_without_notches.obj",
+                           "deviation_without_notches.ply"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + file)) << file;
+  const std::string ply = testing::read_text(out + "/deviation.ply");
+  EXPECT_NE(ply.find("element vertex " + std::to_string(vertices)), std::string::npos);
+  const std::string obj = testing::read_text(out + "/deployed.obj");
+  size_t boxes = 0;
+  for (size_t at = obj.find("\no "); at != std::string::npos; at = obj.find("\no ", at + 1))
+    ++boxes;
+  EXPECT_EQ(boxes, d["rods"].size());
+  EXPECT_NE(result.out.find("with notches"), std::string::npos);
+}
+
+TEST(CliSimulate, OneRunOnly) {
+  const std::string out = testing::temp_dir() + "/off";
+  const auto result = run_cli("simulate '" + design_dir() +
+                              "/design.json' --quiet --notches off --out '" + out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json d = json::parse(testing::read_text(out + "/deployment.json"));
+  EXPECT_TRUE(d.contains("rms_without_notches"));
+  EXPECT_FALSE(d.contains("rms_with_notches"));
+  EXPECT_TRUE(d["rods"].empty());
+  EXPECT_FALSE(d["rods_without_notches"].empty());
+  EXPECT_EQ(d["without_notches"]["energy_unit"], "scaled");
+}
+
+TEST(CliSimulate, BadInputsNameTheProblem) {
+  const std::string dir = testing::temp_dir();
+  struct Case {
+    std::string arguments, expected;
+  };
+  json design = json::parse(testing::read_text(design_dir() + "/design.json"));
+  json broken = design;
+  broken["crossings"][3]["h"] = 999;
+  const std::string broken_path = testing::write_text(dir, "broken.json", broken.dump());
+  json no_width = design;
+  no_width["options"]["lamella_width"] = -1;
+  const std::string width_path = testing::write_text(dir, "width.json", no_width.dump());
+  const std::string good = "'" + design_dir() + "/design.json'";
+  const std::vector<Case> cases{
+      {"/nonexistent/design.json", "cannot open"},
+      {"'" + testing::write_text(dir, "garbage.json", "{not json") + "'", "not a gridshell design"},
+      {"'" + broken_path + "'", "crossings[3].h"},
+      {"'" + width_path + "'", "options.lamella_width"},
+      {good + " --material unobtainium", "unknown material"},
+      {good + " --unit parsec", "--unit"},
+      {good + " --young -5", "--young"},
+      {good + " --mu 0", "--mu"},
+      {good + " --edges-per-interval 100", "--edges-per-interval"},
+  };
+  for (const Case& c : cases) {
+    const auto result = run_cli("simulate " + c.arguments + " --quiet --out '" + dir + "/x'");
+    EXPECT_EQ(result.exit_code, 2) << c.arguments << ": " << result.err;
+    EXPECT_EQ(result.err.rfind("error:", 0), 0u) << result.err;
+    EXPECT_NE(result.err.find(c.expected), std::string::npos) << c.arguments << ": " << result.err;
+  }
+}
+
+}  // namespace
+}  // namespace gridshell
