@@ -116,12 +116,29 @@ constexpr double kConeTolerance = 1e-6;
 /// Path points on an edge this close to an end (relative to the edge length) are that vertex.
 constexpr double kSnapRelative = 1e-12;
 /// Key width of the event queue's buckets, relative to the mean edge length.
-constexpr double kBucketWidth = 0.01;
+constexpr double kBucketWidth = 0.002;
 /// A new window may be split by older, better windows into at most this many pieces.
 constexpr int kMaxPieces = 4;
 
-inline int next3(int i) { return i == 2 ? 0 : i + 1; }
-inline int prev3(int i) { return i == 0 ? 2 : i - 1; }
+// Tables, not conditionals: the branches were mispredicted often enough to show in profiles.
+constexpr int kNext3[3] = {1, 2, 0};
+constexpr int kPrev3[3] = {2, 0, 1};
+inline int next3(int i) { return kNext3[i]; }
+inline int prev3(int i) { return kPrev3[i]; }
+
+/// Number of slots in [base, base + n) with lo < x (they are sorted by lo), without
+/// data-dependent branches (binary searches over these short lists were a main source of
+/// branch mispredictions).
+template <class Slot>
+inline int count_below(const Slot* base, int n, double x) {
+  const Slot* b = base;
+  while (n > 1) {
+    const int half = n >> 1;
+    b = b[half - 1].lo < x ? b + half : b;
+    n -= half;
+  }
+  return static_cast<int>(b - base) + (n == 1 && b->lo < x);
+}
 inline double hyp(double x, double y) { return std::sqrt(x * x + y * y); }
 
 /// Geometry of half-edge h = 3 f + e (edge e of face f, from v[e] to v[e+1]) in its own frame:
@@ -496,6 +513,7 @@ class EventQueue {
 struct EdgeSlot {
   double lo, hi;
   int id;
+  int flip;  ///< the window's half-edge runs against the edge (it fills the padding)
 };
 
 struct EdgeList {
@@ -655,7 +673,7 @@ class Propagator {
                          double& f1) const;
   void propagate(const Window& w, int id);
   /// Inserts into the edge's sorted list; `hint` is an index at or after the insertion position.
-  void insert_slot(int edge, double lo, double hi, int id, int hint);
+  void insert_slot(int edge, double lo, double hi, int id, int flip, int hint);
 
   const FastMesh& m_;
   FastField& out_;
@@ -676,7 +694,7 @@ class Propagator {
   std::vector<int> stop_faces_, stop_vertices_;
 };
 
-void Propagator::insert_slot(int edge, double lo, double hi, int id, int hint) {
+void Propagator::insert_slot(int edge, double lo, double hi, int id, int flip, int hint) {
   EdgeList& list = lists_[edge];
   if (list.count == list.capacity) {  // move the edge's list to the end of the arena, doubled
     const int capacity = list.capacity ? 2 * list.capacity : 4;
@@ -687,11 +705,11 @@ void Propagator::insert_slot(int edge, double lo, double hi, int id, int hint) {
     list.capacity = capacity;
   }
   EdgeSlot* base = slots_.data() + list.start;
+  // Before the first slot with start > lo (the hint is past it: the new window's range).
   int k = std::min(hint, list.count);
   while (k > 0 && base[k - 1].lo > lo) --k;
-  while (k < list.count && base[k].lo <= lo) ++k;
   std::copy_backward(base + k, base + list.count, base + list.count + 1);
-  base[k] = {lo, hi, id};
+  base[k] = {lo, hi, id, flip};
   ++list.count;
 }
 
@@ -759,19 +777,9 @@ void Propagator::insert(Window& w) {
   piece[1] = flip ? length - w.b0 : w.b1;
   EdgeList& list = lists_[h.edge];
   EdgeSlot* base = slots_.data() + list.start;
-  int i = 0;
-  {  // first slot that may overlap: binary search by lo, then back over long predecessors
-    int lo = 0, hi = list.count;
-    while (lo < hi) {
-      const int mid = (lo + hi) >> 1;
-      if (base[mid].lo < piece[0])
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    i = lo;
-    while (i > 0 && base[i - 1].hi > piece[0]) --i;
-  }
+  // First slot that may overlap: by start, then back over long predecessors.
+  int i = count_below(base, list.count, piece[0]);
+  while (i > 0 && base[i - 1].hi > piece[0]) --i;
   while (i < list.count && pieces > 0 && base[i].lo < piece[2 * pieces - 1]) {
     double olo = base[i].lo, ohi = base[i].hi;
     if (ohi <= piece[0]) {
@@ -779,7 +787,7 @@ void Propagator::insert(Window& w) {
       continue;
     }
     Window& o = windows_[base[i].id];
-    const bool oflip = m_.half[o.he].flip;
+    const bool oflip = base[i].flip;
     const double ox = oflip ? length - o.sx : o.sx, oyy = o.sy * o.sy;
     std::array<double, 2 * kMaxPieces> kept;
     int nk = 0;
@@ -865,7 +873,7 @@ void Propagator::insert(Window& w) {
       relax(h.vc, dc, id);
     }
     windows_.push_back(w);
-    insert_slot(h.edge, flip ? length - w.b1 : w.b0, flip ? length - w.b0 : w.b1, id, i);
+    insert_slot(h.edge, flip ? length - w.b1 : w.b0, flip ? length - w.b0 : w.b1, id, flip, i);
     ++i;
     if (track_targets_ && target_face_[face]) target_windows_.push_back(id);
     if (!h.has_exit) continue;  // no children: nothing to propagate
