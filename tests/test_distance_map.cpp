@@ -198,6 +198,28 @@ TEST(DistanceMaps, SwappingSourcesAndTargetsTransposes) {
   EXPECT_GT(maps.g.distances(0, R - 1), (corner(patch, 2) - corner(patch, 0)).norm() * (1 + 1e-3));
 }
 
+TEST(DistanceMaps, TargetOnlySolvesEqualQueriesOfCompleteFields) {
+  // The maps are computed by solves that keep no windows and stop once the targets are final;
+  // the same entries read off complete distance fields must agree (up to rounding).
+  const Patch& patch = bump_patch();
+  const GeodesicSolver solver(patch.mesh);
+  const int R = 11;
+  const DistanceMaps maps = compute_distance_maps(patch, solver, {.resolution = R, .threads = 2});
+  for (const DistanceMap* map : {&maps.g, &maps.h}) {
+    const auto first = family_boundary(patch, map->family, 0);
+    const auto second = family_boundary(patch, map->family, 1);
+    for (int i = 0; i < R; ++i) {
+      const DistanceField field =
+          solver.solve(point_on_chain(patch.mesh, first, double(i) / (R - 1)));
+      for (int j = 0; j < R; ++j) {
+        const double full =
+            field.distance_to(point_on_chain(patch.mesh, second, double(j) / (R - 1)));
+        EXPECT_LT(relative_error(map->distances(i, j), full), 1e-13) << i << " " << j;
+      }
+    }
+  }
+}
+
 TEST(DistanceMaps, ResultDoesNotDependOnThreadCount) {
   const Patch& patch = bump_patch();
   const GeodesicSolver solver(patch.mesh);

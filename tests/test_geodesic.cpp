@@ -774,6 +774,250 @@ TEST(Geodesic, ShortestPathShorthandAndPathLength) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Rule S (saddle cone) against a closed form
+
+/// An exactly polyhedral cone over the apex (vertex 0): rings at radii 1..rings along the unit
+/// rays d_k ~ (cos phi_k, sin phi_k, a sin 3 phi_k); each quad between two rays lies in the plane
+/// of d_k, d_{k+1} through the apex, so the mesh is flat everywhere except at the apex, whose angle
+/// sum is the sum of the angles between consecutive rays (> 2 pi: a saddle). `psi` receives each
+/// ray's angle in the unfolding (cumulative), `total` the apex's angle sum.
+TriangleMesh saddle_cone(int sectors, int rings, double a, std::vector<double>& psi,
+                         double& total) {
+  TriangleMesh mesh;
+  mesh.vertices.push_back(Vec3::Zero());
+  std::vector<Vec3> ray(sectors);
+  for (int k = 0; k < sectors; ++k) {
+    const double phi = 2 * kPi * k / sectors;
+    ray[k] = Vec3(std::cos(phi), std::sin(phi), a * std::sin(3 * phi)).normalized();
+  }
+  psi.assign(sectors + 1, 0.0);
+  for (int k = 0; k < sectors; ++k) {
+    const Vec3 &u = ray[k], &v = ray[(k + 1) % sectors];
+    psi[k + 1] = psi[k] + std::atan2(u.cross(v).norm(), u.dot(v));
+  }
+  total = psi[sectors];
+  for (int r = 1; r <= rings; ++r)
+    for (int k = 0; k < sectors; ++k) mesh.vertices.push_back(r * ray[k]);
+  const auto id = [&](int r, int k) { return r == 0 ? 0 : 1 + (r - 1) * sectors + k % sectors; };
+  for (int k = 0; k < sectors; ++k) mesh.faces.push_back({0, id(1, k), id(1, k + 1)});
+  for (int r = 1; r < rings; ++r)
+    for (int k = 0; k < sectors; ++k) {
+      mesh.faces.push_back({id(r, k), id(r + 1, k), id(r + 1, k + 1)});
+      mesh.faces.push_back({id(r, k), id(r + 1, k + 1), id(r, k + 1)});
+    }
+  return mesh;
+}
+
+TEST(GeodesicFast, PathsBendOnlyAroundTheSaddleInsideItsCone) {
+  // Intrinsic polar coordinates (r, psi) on the cone: two points are joined by a straight
+  // unfolded segment if their angular separation (the shorter way round) is below pi, and
+  // otherwise through the apex (length r1 + r2). The apex is the only pseudo-source, and rule S
+  // lets it emit only into the cone [pi, total - pi] from the incoming direction.
+  std::vector<double> psi;
+  double total = 0;
+  const int sectors = 40, rings = 8;
+  const TriangleMesh mesh = saddle_cone(sectors, rings, 0.4, psi, total);
+  ASSERT_GT(total, 2.4 * kPi);  // a strong saddle
+  ASSERT_LT(total, 2.9 * kPi);
+  const MeshTopology top = build_topology(mesh);
+  const GeodesicSolver solver(mesh);
+  const auto polar = [&](int v, double& r, double& angle) {
+    if (v == 0) {
+      r = 0, angle = 0;
+      return;
+    }
+    r = 1 + (v - 1) / sectors;
+    angle = psi[(v - 1) % sectors];
+  };
+  const auto closed_form = [&](double r1, double a1, double r2, double a2) {
+    double d = std::fmod(std::abs(a1 - a2), total);
+    d = std::min(d, total - d);
+    if (d >= kPi) return r1 + r2;
+    return std::sqrt(std::max(0.0, r1 * r1 + r2 * r2 - 2 * r1 * r2 * std::cos(d)));
+  };
+  int around = 0;
+  for (const int s : {1 + 2 * sectors + 3, 1 + 5 * sectors + 17, 1 + (rings - 1) * sectors + 30}) {
+    double rs, as;
+    polar(s, rs, as);
+    const DistanceField field = solver.solve(SurfacePoint::at_vertex(mesh, s));
+    const SurfacePoint source = SurfacePoint::at_vertex(mesh, s);
+    for (int v = 0; v < mesh.vertex_count(); ++v) {
+      double r, a;
+      polar(v, r, a);
+      const double expected = closed_form(rs, as, r, a);
+      EXPECT_NEAR(field.vertex_distances()[v], expected, 1e-12 * std::max(1.0, expected))
+          << "source " << s << " vertex " << v;
+    }
+    // Points inside faces: unfold the face's sector (between rays k and k+1, at psi[k] and
+    // psi[k+1]) into the plane and read off the point's intrinsic polar coordinates.
+    std::mt19937 rng(s);
+    for (int n = 0; n < 300; ++n) {
+      const SurfacePoint q = random_face_point(mesh, rng);
+      const Face& f = mesh.faces[q.face];
+      std::set<int> rays;
+      for (int v : f)
+        if (v != 0) rays.insert((v - 1) % sectors);
+      const int k = rays.count(0) && rays.count(sectors - 1) ? sectors - 1 : *rays.begin();
+      Vec2 p = Vec2::Zero();
+      for (int i = 0; i < 3; ++i) {
+        if (f[i] == 0) continue;
+        const int ray = (f[i] - 1) % sectors;
+        const double r = 1 + (f[i] - 1) / sectors;
+        const double a = ray == k ? psi[k] : psi[k + 1];
+        p += q.barycentric[i] * r * Vec2(std::cos(a), std::sin(a));
+      }
+      const Vec2 e(std::cos(psi[k]), std::sin(psi[k]));
+      const double angle = psi[k] + std::atan2(e.x() * p.y() - e.y() * p.x(), e.dot(p));
+      const double expected = closed_form(rs, as, p.norm(), angle);
+      EXPECT_NEAR(field.distance_to(q), expected, 1e-11 * std::max(1.0, expected))
+          << "source " << s << " face " << q.face;
+    }
+    // Paths into the shadow of the apex pass through it.
+    for (int v = 1; v < mesh.vertex_count(); v += 7) {
+      double r, a;
+      polar(v, r, a);
+      double d = std::fmod(std::abs(a - as), total);
+      d = std::min(d, total - d);
+      if (d < kPi + 0.05) continue;
+      ++around;
+      const std::vector<SurfacePoint> path = field.path_to(SurfacePoint::at_vertex(mesh, v));
+      expect_valid_path(mesh, top, path, source, SurfacePoint::at_vertex(mesh, v), "cone");
+      bool through_apex = false;
+      for (const SurfacePoint& p : path) through_apex |= p.vertex(mesh) == 0;
+      EXPECT_TRUE(through_apex) << "source " << s << " target " << v;
+      EXPECT_NEAR(path_length(mesh, path), rs + r, 1e-12 * (rs + r));
+    }
+  }
+  EXPECT_GT(around, 20);
+}
+
+// ---------------------------------------------------------------------------------------------
+// SolveOptions: solves that keep no windows, targets, early stop
+
+TEST(GeodesicSolveOptions, WithoutWindowsVertexAndTargetDistancesEqualTheCompleteField) {
+  for (const TriangleMesh& mesh : {bump_saddle_mesh(), irregular_mesh(), nonconvex_mesh()}) {
+    const MeshTopology top = build_topology(mesh);
+    const GeodesicSolver solver(mesh);
+    std::mt19937 rng(21);
+    SolveOptions lean;
+    lean.keep_windows = false;
+    for (int k = 0; k < 8; ++k) lean.targets.push_back(random_face_point(mesh, rng));
+    const Face& f = mesh.faces[5];
+    lean.targets.push_back(SurfacePoint::on_edge(mesh, f[0], f[1], 0.3));
+    lean.targets.push_back(SurfacePoint::at_vertex(mesh, f[2]));
+    for (const auto& [kind, source] : test_sources(mesh, top)) {
+      const DistanceField full = solver.solve(source);
+      const DistanceField field = solver.solve(source, lean);
+      // The same propagation: bit-identical vertex distances.
+      EXPECT_TRUE(field.vertex_distances() == full.vertex_distances()) << kind;
+      ASSERT_EQ(field.target_distances().size(), lean.targets.size());
+      for (size_t t = 0; t < lean.targets.size(); ++t)
+        EXPECT_EQ(field.target_distances()[t], full.distance_to(lean.targets[t])) << kind << t;
+      EXPECT_THROW(field.distance_to(lean.targets[0]), InvalidInput);
+      EXPECT_THROW(field.path_to(lean.targets[0]), InvalidInput);
+    }
+    // The shorthand solves without windows too.
+    const SurfacePoint s = SurfacePoint::at_vertex(mesh, 7);
+    EXPECT_TRUE(solver.distances(s) == solver.solve(s).vertex_distances());
+  }
+}
+
+TEST(GeodesicSolveOptions, StopAtTargetsIsExactOnTheTargetsFaces) {
+  // Targets near the source: the solve stops early (most vertex distances are then only upper
+  // bounds), yet distances and paths in the targets' closed faces equal the complete field's.
+  const ExampleSurface ex = make_example("waves-bump", 0.5);
+  const TriangleMesh& mesh = ex.mesh;
+  const MeshTopology top = build_topology(mesh);
+  const GeodesicSolver solver(mesh), cgal(mesh, {GeodesicMethod::Cgal});
+  const int s = mesh.vertex_count() / 2 + 7;
+  const SurfacePoint source = SurfacePoint::at_vertex(mesh, s);
+  const DistanceField full = solver.solve(source);
+  // Targets a few rings away: a vertex, a point on an edge, a point inside a face.
+  std::vector<int> ring{s};
+  for (int step = 0; step < 4; ++step) {
+    std::vector<int> next;
+    for (int v : ring)
+      for (int f : top.vertex_faces[v])
+        for (int u : mesh.faces[f]) next.push_back(u);
+    ring = next;
+  }
+  const int tv = ring.back();
+  const int tf = top.vertex_faces[ring[ring.size() / 2]][0];
+  const Face& face = mesh.faces[tf];
+  SolveOptions options;
+  options.stop_at_targets = true;
+  options.targets = {SurfacePoint::at_vertex(mesh, tv),
+                     SurfacePoint::on_edge(mesh, face[0], face[1], 0.42), face_point(tf, 0.2, 0.5)};
+  for (const bool keep : {true, false}) {
+    options.keep_windows = keep;
+    const DistanceField field = solver.solve(source, options);
+    const DistanceField reference = cgal.solve(source, options);
+    const double floor = 1e-12 * diagonal(mesh);
+    for (size_t t = 0; t < options.targets.size(); ++t) {
+      const double expected = full.distance_to(options.targets[t]);
+      EXPECT_LE(rel_error(field.target_distances()[t], expected, floor), 1e-13) << t;
+      EXPECT_LE(rel_error(field.target_distances()[t], reference.target_distances()[t], floor),
+                1e-9)
+          << t;
+    }
+    // Upper bounds everywhere, exact on the targets' faces, and the solve did stop early.
+    int larger = 0;
+    for (int v = 0; v < mesh.vertex_count(); ++v) {
+      EXPECT_GE(field.vertex_distances()[v], full.vertex_distances()[v] * (1 - 1e-14));
+      larger += field.vertex_distances()[v] > full.vertex_distances()[v] * (1 + 1e-12);
+    }
+    EXPECT_GT(larger, mesh.vertex_count() / 2);
+    std::vector<int> closed = {tf};
+    for (int f : top.vertex_faces[tv]) closed.push_back(f);
+    for (int f : closed)
+      for (int v : mesh.faces[f])
+        EXPECT_EQ(field.vertex_distances()[v], full.vertex_distances()[v]) << v;
+    if (!keep) continue;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> uni(0.01, 1.0);
+    for (int f : closed)
+      for (int k = 0; k < 4; ++k) {
+        SurfacePoint q;
+        q.face = f;
+        q.barycentric = Vec3(uni(rng), uni(rng), uni(rng));
+        q.barycentric /= q.barycentric.sum();
+        EXPECT_LE(rel_error(field.distance_to(q), full.distance_to(q), floor), 1e-13);
+        const std::vector<SurfacePoint> path = field.path_to(q);
+        expect_valid_path(mesh, top, path, source, q, "stopped solve");
+        EXPECT_LE(rel_error(path_length(mesh, path), full.distance_to(q), floor), 1e-12);
+      }
+  }
+}
+
+TEST(GeodesicSolveOptions, EveryEngineReportsTargetDistances) {
+  const TriangleMesh mesh = bump_saddle_mesh();
+  SolveOptions options;
+  options.targets = {face_point(3, 0.2, 0.3), SurfacePoint::at_vertex(mesh, 40)};
+  for (GeodesicMethod method : {GeodesicMethod::Fast, GeodesicMethod::Cgal, GeodesicMethod::Heat}) {
+    const GeodesicSolver solver(mesh, {method});
+    const DistanceField field = solver.solve(SurfacePoint::at_vertex(mesh, 11), options);
+    ASSERT_EQ(field.target_distances().size(), 2u) << to_string(method);
+    for (size_t t = 0; t < 2; ++t)
+      EXPECT_EQ(field.target_distances()[t], field.distance_to(options.targets[t]))
+          << to_string(method);
+    EXPECT_TRUE(solver.solve(SurfacePoint::at_vertex(mesh, 11)).target_distances().empty());
+  }
+}
+
+TEST(GeodesicSolveOptions, RejectsInvalidOptions) {
+  const TriangleMesh mesh = bump_saddle_mesh();
+  const GeodesicSolver solver(mesh);
+  SolveOptions stop;
+  stop.stop_at_targets = true;
+  EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), stop), InvalidInput);
+  SolveOptions bad;
+  bad.targets = {face_point(mesh.face_count() + 2, 0.2, 0.2)};
+  EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), bad), InvalidInput);
+  bad.targets = {face_point(0, 0.9, 0.9)};
+  EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), bad), InvalidInput);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Timing harness (not a test: run with --gtest_also_run_disabled_tests).
 
 TEST(GeodesicTiming, DISABLED_MillisecondsPerSource) {

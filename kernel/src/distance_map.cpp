@@ -1,10 +1,11 @@
 // Distance maps between opposite patch boundaries (paper Section 4.2).
 //
 // For each family, R source points at u1_i = i/(R-1) on the first boundary get one exact
-// single-source distance field each, which is then queried at the R target points u2_j on the
-// second boundary. The 2R solves (both families) are independent: worker threads take them from
-// an atomic counter and write to distinct matrix rows, so the result does not depend on the
-// number of threads or on scheduling.
+// single-source solve each for the R target points u2_j on the second boundary. The solves ask
+// only for those targets (SolveOptions: no windows kept, stop once the targets' faces are
+// final), which gives the same exact distances as querying a complete field. The 2R solves (both
+// families) are independent: worker threads take them from an atomic counter and write to
+// distinct matrix rows, so the result does not depend on the number of threads or on scheduling.
 //
 // Threads and errors: the calling thread only reports progress ("distance maps", fraction) and
 // waits. Workers check cancellation before every solve and (through a wrapper Progress) at the
@@ -124,17 +125,20 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
   progress.report(kStage, 0.0);
 
   // Sources and targets of both families, computed up front on the calling thread.
-  std::array<std::vector<SurfacePoint>, 2> sources, targets;
+  std::array<std::vector<SurfacePoint>, 2> sources;
+  std::array<SolveOptions, 2> targets;
   for (int f = 0; f < 2; ++f) {
     const Family family = static_cast<Family>(f);
     const std::vector<int> first = family_boundary(patch, family, 0);
     const std::vector<int> second = family_boundary(patch, family, 1);
     sources[f].resize(R);
-    targets[f].resize(R);
+    targets[f].targets.resize(R);
+    targets[f].keep_windows = false;
+    targets[f].stop_at_targets = true;
     for (int i = 0; i < R; ++i) {
       const double t = static_cast<double>(i) / (R - 1);
       sources[f][i] = point_on_chain(mesh, first, t);
-      targets[f][i] = point_on_chain(mesh, second, t);
+      targets[f].targets[i] = point_on_chain(mesh, second, t);
     }
   }
 
@@ -169,9 +173,10 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
         if (task >= total) break;
         progress.check();
         const int f = task / R, i = task % R;
-        const DistanceField field = solver.solve(sources[f][i], inner);
+        const DistanceField field = solver.solve(sources[f][i], targets[f], inner);
         Eigen::MatrixXd& matrix = *out[f];
-        for (int j = 0; j < R; ++j) matrix(i, j) = field.distance_to(targets[f][j]);
+        const std::vector<double>& row = field.target_distances();
+        for (int j = 0; j < R; ++j) matrix(i, j) = row[j];
         {
           std::lock_guard lock(mutex);
           ++done;

@@ -142,6 +142,9 @@ DistanceField& DistanceField::operator=(DistanceField&&) noexcept = default;
 
 const SurfacePoint& DistanceField::source() const { return impl_->source; }
 const std::vector<double>& DistanceField::vertex_distances() const { return impl_->distances; }
+const std::vector<double>& DistanceField::target_distances() const {
+  return impl_->target_distances;
+}
 double DistanceField::distance_to(const SurfacePoint& target) const {
   return impl_->distance_to(target);
 }
@@ -179,13 +182,25 @@ const TriangleMesh& GeodesicSolver::mesh() const { return impl_->mesh; }
 GeodesicMethod GeodesicSolver::method() const { return impl_->method; }
 
 DistanceField GeodesicSolver::solve(const SurfacePoint& source, const Progress& progress) const {
+  return solve(source, SolveOptions{}, progress);
+}
+
+DistanceField GeodesicSolver::solve(const SurfacePoint& source, const SolveOptions& options,
+                                    const Progress& progress) const {
   const SurfacePoint s = geodesic_detail::normalize_surface_point(impl_->mesh, source, "source");
-  return impl_->solve(s, progress);
+  if (options.stop_at_targets && options.targets.empty())
+    throw InvalidInput("geodesic solve: stop_at_targets needs at least one target");
+  SolveOptions checked = options;
+  for (SurfacePoint& t : checked.targets)
+    t = geodesic_detail::normalize_surface_point(impl_->mesh, t, "target");
+  return impl_->solve(s, checked, progress);
 }
 
 std::vector<double> GeodesicSolver::distances(const SurfacePoint& source,
                                               const Progress& progress) const {
-  return solve(source, progress).vertex_distances();
+  SolveOptions options;
+  options.keep_windows = false;
+  return solve(source, options, progress).vertex_distances();
 }
 
 std::vector<SurfacePoint> GeodesicSolver::shortest_path(const SurfacePoint& from,

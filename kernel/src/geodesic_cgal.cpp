@@ -169,9 +169,12 @@ class CgalSolver final : public GeodesicSolver::Impl {
     data_ = std::move(data);
   }
 
-  DistanceField solve(const SurfacePoint& source, const Progress& progress) const override {
+  DistanceField solve(const SurfacePoint& source, const SolveOptions& options,
+                      const Progress& progress) const override {
     progress.report("geodesic distances (cgal)", 0.0);
     auto field = std::make_shared<CgalField>(data_, source);
+    for (const SurfacePoint& t : options.targets)
+      field->target_distances.push_back(field->distance_to(t));
     progress.report("geodesic distances (cgal)", 1.0);
     return DistanceField(std::move(field));
   }

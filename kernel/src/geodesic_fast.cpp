@@ -10,34 +10,34 @@
 // ACM TOG 28(4), 2009, and a barrier form of Chen & Han's "one angle, one split" rule (SoCG
 // 1990) that Qin et al.'s VTP (ACM TOG 35(4), 2016) also builds on.
 //
-// A window w lives on an edge AB of a face F and represents the straight unfolded paths from a
-// (pseudo-)source image I, at distance sigma from the source, through the interval [b0, b1] of
-// AB into F. It is stored in the frame of F's edge: A = (0,0), B = (L,0), the opposite corner
-// C = (cx, cy) with cy > 0, the image I = (sx, sy) with sy <= 0. Every point p of the interval
-// is reached by a real surface path of length sigma + |I p|. Propagating w across F gives at
-// most two children, on CA and on BC (split by the ray I->C).
+// A window w lives on a half-edge AB of a face F and represents the straight unfolded paths from
+// a (pseudo-)source image I, at distance sigma from the source, through the interval [b0, b1] of
+// AB into F. It is stored in the frame of the half-edge: A = (0,0), B = (L,0), the opposite
+// corner C = (cx, cy) with cy > 0, the image I = (sx, sy) with sy <= 0. Every point p of the
+// interval is reached by a real surface path of length sigma + |I p|. Propagating w across F
+// gives at most two children, on CA and on BC (split by the ray I->C).
 //
 // Events are processed in increasing order of the window's minimum distance
 // key(w) = sigma + dist(I, [b0,b1]) (a radix heap). Children are never closer than their parent
 // (their points are reached through the parent's interval) and trimming only raises keys, so
 // popped keys are non-decreasing: when the event of a vertex pops, its distance is final.
 // Saddle vertices (angle sum > 2 pi) and reflex boundary vertices (angle sum > pi) become
-// pseudo-sources at that moment and emit full-edge windows onto the opposite edges of all their
-// faces (shortest paths can only bend there); the true source emits the same way.
+// pseudo-sources at that moment and emit windows onto the opposite edges of their faces (shortest
+// paths can only bend there); the true source emits the same way, onto all of them.
 //
 // Vertex distances d(V) are upper bounds realised by real paths at every moment (set from
 // windows that see V, or from a pseudo-source along an edge), as early as possible: when a window
 // that sees the corner opposite its edge is created.
 //
 // Pruning rules. Each removes only paths that are longer than another real path to the same
-// point (for E and B by more than a safety margin); such a path is not a shortest path, nor is
-// any extension of it, so no shortest path is ever removed and all results, including distances
-// to arbitrary surface points, stay exact:
+// point (for E and B by more than a safety margin) or that can be shortened (S); such a path is
+// not a shortest path, nor is any extension of it, so no shortest path is ever removed and all
+// results, including distances to arbitrary surface points, stay exact:
 //
-//  (M) MMP trimming: each edge keeps its windows (from both sides) sorted along the edge. A new
-//      window is compared with the overlapping ones: where an old window gives a shorter
-//      distance the new one is cut away (possibly splitting it), where the new one is shorter at
-//      an end of an old one, the old one is shortened. The crossover points are the roots of
+//  (M) MMP trimming: each edge keeps a list of its windows (from both sides). A new window is
+//      compared with the overlapping ones: where an old window gives a shorter distance the new
+//      one is cut away (possibly splitting it), where the new one is shorter at an end of an old
+//      one, the old one is shortened. The crossover points are the roots of
 //      sigma1 + |I1 p| = sigma2 + |I2 p| on the edge line (a quadratic after squaring twice;
 //      signs are decided by direct evaluation between the roots). This keeps the number of
 //      windows created close to the size of the final structure.
@@ -54,6 +54,14 @@
 //      So w2's paths must not cross X1-C: its left child keeps only entries left of X1, its
 //      right child only entries right of X1 (if C lies outside w2's cone one child is cut or
 //      vanishes). When w2 covers C this is exactly "one angle one split".
+//  (S) saddle cone: a shortest path bends at a vertex only with angles >= pi on both sides (at
+//      a boundary vertex: an angle >= pi on the surface side), else it could be shortened
+//      around the vertex. Only subpaths of shortest paths matter, so a path through a
+//      pseudo-source u arrives along a shortest path to u, and (all shortest paths to u being
+//      equally long) leaves at an angle in [pi, total - pi] from the incoming direction of any
+//      one of them. u emits windows only into that cone, widened by 1e-6 rad on each side (the
+//      incoming direction is known to ~1e-12 rad). Measured: -10% instructions on waves-bump,
+//      -7% on torus-wide (saddles), nothing on convex surfaces.
 //  An exact form of ICH's third rule (the opposite corner dominating a whole window) and
 //  re-filtering at pop time were tried; once M was in place they (almost) never fired and were
 //  dropped.
@@ -67,17 +75,22 @@
 // keeps vertices that lie exactly on a cone boundary (rays through flat vertices of regular grids)
 // from slipping between two windows.
 //
-// Queries: all windows are kept with their parent and pseudo-source, bucketed by the face they
-// propagate into. The distance to a point q of face f is the minimum of sigma + |I q| over the
-// windows entering f whose cone contains q, of d(V) + |V q| over f's corners and of |S q| if the
-// source lies in f; the path is traced back through the window's ancestors (one point per edge
-// crossing), then through pseudo-source vertices to the source.
+// What a solve keeps (SolveOptions). By default all windows are kept with their parent and
+// pseudo-source and indexed by the face they propagate into: the distance to a point q of face f
+// is the minimum of sigma + |I q| over the windows entering f whose cone contains q, of
+// d(V) + |V q| over f's corners and of |S q| if the source lies in f; the path is traced back
+// through the window's ancestors (one point per edge crossing), then through pseudo-source
+// vertices to the source. Without keep_windows the windows live in per-thread scratch memory
+// reused by the next solve, and only the windows entering the targets' faces are collected to
+// evaluate the targets. With stop_at_targets the propagation stops once the popped key exceeds
+// an upper bound of the distance anywhere in the targets' closed faces (max corner distance +
+// longest edge): every window or vertex event that could still lower a distance there has a key
+// below that distance, so it has already been processed (its children exist).
 #include "geodesic_fast.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -97,38 +110,71 @@ constexpr double kVisibilityTolerance = 1e-9;
 constexpr double kMarginRelative = 1e-10;
 /// A vertex is a pseudo-source if its angle sum exceeds 2*pi (interior) or pi (boundary) by this.
 constexpr double kAngleTolerance = 1e-12;
+/// Rule S widens the cone of directions a pseudo-source emits into by this angle (radians) on
+/// each side, far above the rounding error of the incoming direction (~1e-12 rad).
+constexpr double kConeTolerance = 1e-6;
+/// Path points on an edge this close to an end (relative to the edge length) are that vertex.
+constexpr double kSnapRelative = 1e-12;
+/// Key width of the event queue's buckets, relative to the mean edge length.
+constexpr double kBucketWidth = 0.002;
 /// A new window may be split by older, better windows into at most this many pieces.
 constexpr int kMaxPieces = 4;
 
-inline int next3(int i) { return i == 2 ? 0 : i + 1; }
-inline int prev3(int i) { return i == 0 ? 2 : i - 1; }
+// Tables, not conditionals: the branches were mispredicted often enough to show in profiles.
+constexpr int kNext3[3] = {1, 2, 0};
+constexpr int kPrev3[3] = {2, 0, 1};
+inline int next3(int i) { return kNext3[i]; }
+inline int prev3(int i) { return kPrev3[i]; }
+
+/// Number of slots in [base, base + n) with lo < x (they are sorted by lo), without
+/// data-dependent branches (binary searches over these short lists were a main source of
+/// branch mispredictions).
+template <class Slot>
+inline int count_below(const Slot* base, int n, double x) {
+  const Slot* b = base;
+  while (n > 1) {
+    const int half = n >> 1;
+    b = b[half - 1].lo < x ? b + half : b;
+    n -= half;
+  }
+  return static_cast<int>(b - base) + (n == 1 && b->lo < x);
+}
 inline double hyp(double x, double y) { return std::sqrt(x * x + y * y); }
 
-/// Per-face geometry, in the frame of each of its edges e (A = v[e] at the origin, B = v[e+1]
-/// on the positive x axis, C = v[e+2] above).
-struct FaceGeom {
-  std::array<int, 3> v;
-  std::array<int, 3> nbr;               ///< face across edge e, -1 on the boundary
-  std::array<std::int8_t, 3> nbr_edge;  ///< that face's local index of the shared edge
-  std::array<double, 3> len;            ///< |v[e] v[e+1]|
-  std::array<double, 3> cx, cy;         ///< C in frame e
-  std::array<double, 3> ox, oy;         ///< neighbour's opposite corner in frame e (oy <= 0)
-  std::array<double, 3> u1x, u1y;       ///< unit vector C->B in frame e (exit edge e+1)
-  std::array<double, 3> u2x, u2y;       ///< unit vector A->C in frame e (exit edge e+2)
+/// Geometry of half-edge h = 3 f + e (edge e of face f, from v[e] to v[e+1]) in its own frame:
+/// A = v[e] at the origin, B = v[e+1] = (len, 0), the opposite corner C = v[e+2] = (cx, cy) with
+/// cy > 0. A window on h propagates into face f; its children lie on the twins of f's other two
+/// half-edges, "left" = 3 f + e+2 (C -> A) and "right" = 3 f + e+1 (B -> C).
+struct HalfEdge {
+  double len, cx, cy;
+  double u1x, u1y;       ///< unit vector C -> B (the right child's frame axis)
+  double u2x, u2y;       ///< unit vector A -> C (the left child's frame axis)
+  double ox, oy;         ///< the twin face's opposite corner in this frame (oy <= 0)
+  int twin;              ///< the same edge in the neighbouring face, -1 on the boundary
+  int edge;              ///< undirected edge id
+  int va, vb, vc;        ///< vertices A, B, C
+  std::int8_t flip;      ///< 1 if it runs against its undirected edge's orientation
+  std::int8_t has_exit;  ///< a window on it can have children (a neighbour across CA or BC)
 };
 
 /// Everything a solve shares; immutable after construction.
 struct FastMesh {
   TriangleMesh mesh;
-  std::vector<FaceGeom> faces;
-  std::vector<int> vf_start;  ///< CSR: faces around each vertex
-  std::vector<int> vf_face;
-  std::vector<std::int8_t> vf_local;  ///< the vertex's local index in that face
-  std::vector<char> pseudo;           ///< saddle or reflex boundary vertex
-  std::vector<int> edge_id;           ///< per half-edge 3 f + e: undirected edge index
-  std::vector<char> edge_side;        ///< 1 if the half-edge runs against the edge's orientation
+  std::vector<HalfEdge> half;  ///< 3 per face
+  std::vector<int> vf_start;   ///< CSR: half-edges 3 f + i with v[i] = v, per vertex v
+  std::vector<int> vf_half;
+  std::vector<char> pseudo;  ///< saddle or reflex boundary vertex
+  /// Fans of pseudo-source vertices in rotation order (rule S): fan_start[v] .. fan_start[v+1]
+  /// index fan_half (half-edge 3 f + i starting at v) and fan_angle[fan_start[v] + v + k], the
+  /// angle at v from the fan's first edge to the start of slot k; fan_angle[fan_start[v + 1] + v]
+  /// is v's total angle. Empty for other vertices (and for fans that could not be walked).
+  std::vector<int> fan_start;
+  std::vector<int> fan_half;
+  std::vector<double> fan_angle;
+  std::vector<char> fan_closed;  ///< interior vertex (closed fan) vs boundary (open fan)
   int edge_count = 0;
   double margin = 0;
+  double bucket_width = 1;  ///< key width of the event queue's buckets
   /// Windows of the latest solve (+ slack), to reserve the next one's storage at once.
   mutable std::atomic<std::size_t> window_hint{0};
 };
@@ -138,109 +184,153 @@ std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
   m->mesh = mesh;
   const MeshTopology top = build_topology(mesh);
   const int nv = mesh.vertex_count(), nf = mesh.face_count();
-  m->faces.resize(nf);
+  m->half.resize(3 * static_cast<size_t>(nf));
   std::vector<double> angle(nv, 0.0);
   for (int f = 0; f < nf; ++f) {
-    FaceGeom& g = m->faces[f];
     const Face& t = mesh.faces[f];
     for (int e = 0; e < 3; ++e) {
-      g.v[e] = t[e];
-      g.nbr[e] = top.face_neighbors[f][e];
-      g.nbr_edge[e] = -1;
-      if (g.nbr[e] >= 0) {
-        const Face& n = mesh.faces[g.nbr[e]];
+      HalfEdge& h = m->half[3 * f + e];
+      h.va = t[e];
+      h.vb = t[next3(e)];
+      h.vc = t[prev3(e)];
+      h.twin = -1;
+      const int n = top.face_neighbors[f][e];
+      if (n >= 0) {
+        const Face& nt = mesh.faces[n];
         for (int k = 0; k < 3; ++k)
-          if (n[k] == t[next3(e)] && n[next3(k)] == t[e])
-            g.nbr_edge[e] = static_cast<std::int8_t>(k);
-        if (g.nbr_edge[e] < 0) throw InvalidInput("geodesic solver: inconsistent face orientation");
+          if (nt[k] == t[next3(e)] && nt[next3(k)] == t[e]) h.twin = 3 * n + k;
+        if (h.twin < 0) throw InvalidInput("geodesic solver: inconsistent face orientation");
       }
-    }
-    for (int e = 0; e < 3; ++e) {
-      const Vec3& a = mesh.vertices[t[e]];
-      const Vec3& b = mesh.vertices[t[next3(e)]];
-      const Vec3& c = mesh.vertices[t[prev3(e)]];
+      const Vec3& a = mesh.vertices[h.va];
+      const Vec3& b = mesh.vertices[h.vb];
+      const Vec3& c = mesh.vertices[h.vc];
       const Vec3 ab = b - a;
       const double len = ab.norm();
       const Vec3 ex = ab / len;
-      g.len[e] = len;
-      g.cx[e] = (c - a).dot(ex);
-      g.cy[e] = (c - a).cross(ex).norm();
-      if (!(len > 0) || !(g.cy[e] > 0) || !std::isfinite(g.cy[e])) {
+      h.len = len;
+      h.cx = (c - a).dot(ex);
+      h.cy = (c - a).cross(ex).norm();
+      if (!(len > 0) || !(h.cy > 0) || !std::isfinite(h.cy)) {
         std::ostringstream msg;
         msg << "geodesic solver: face " << f << " is degenerate (zero area)";
         throw InvalidInput(msg.str());
       }
       const double ac = (c - a).norm(), bc = (c - b).norm();
-      g.u2x[e] = g.cx[e] / ac;
-      g.u2y[e] = g.cy[e] / ac;
-      g.u1x[e] = (len - g.cx[e]) / bc;
-      g.u1y[e] = -g.cy[e] / bc;
-      // Corner angle at a (between ab and ac).
+      h.u2x = h.cx / ac;
+      h.u2y = h.cy / ac;
+      h.u1x = (len - h.cx) / bc;
+      h.u1y = -h.cy / bc;
       angle[t[e]] += std::atan2((c - a).cross(ab).norm(), (c - a).dot(ab));
     }
   }
-  for (int f = 0; f < nf; ++f) {
-    FaceGeom& g = m->faces[f];
+  for (int f = 0; f < nf; ++f)
     for (int e = 0; e < 3; ++e) {
-      g.ox[e] = g.oy[e] = 0;
-      if (g.nbr[e] < 0) continue;
-      const FaceGeom& n = m->faces[g.nbr[e]];
-      const Vec3& a = mesh.vertices[g.v[e]];
-      const Vec3 ex = (mesh.vertices[g.v[next3(e)]] - a) / g.len[e];
-      const Vec3 d = mesh.vertices[n.v[prev3(g.nbr_edge[e])]] - a;
-      g.ox[e] = d.dot(ex);
-      g.oy[e] = -d.cross(ex).norm();
+      HalfEdge& h = m->half[3 * f + e];
+      h.ox = h.oy = 0;
+      h.has_exit = m->half[3 * f + prev3(e)].twin >= 0 || m->half[3 * f + next3(e)].twin >= 0;
+      if (h.twin < 0) continue;
+      const Vec3& a = mesh.vertices[h.va];
+      const Vec3 ex = (mesh.vertices[h.vb] - a) / h.len;
+      const Vec3 d = mesh.vertices[m->half[h.twin].vc] - a;
+      h.ox = d.dot(ex);
+      h.oy = -d.cross(ex).norm();
     }
-  }
   m->vf_start.assign(nv + 1, 0);
   for (int f = 0; f < nf; ++f)
     for (int i = 0; i < 3; ++i) ++m->vf_start[mesh.faces[f][i] + 1];
   for (int v = 0; v < nv; ++v) m->vf_start[v + 1] += m->vf_start[v];
-  m->vf_face.resize(3 * nf);
-  m->vf_local.resize(3 * nf);
-  std::vector<int> fill(m->vf_start.begin(), m->vf_start.end() - 1);
-  for (int f = 0; f < nf; ++f)
-    for (int i = 0; i < 3; ++i) {
-      const int slot = fill[mesh.faces[f][i]]++;
-      m->vf_face[slot] = f;
-      m->vf_local[slot] = static_cast<std::int8_t>(i);
-    }
+  m->vf_half.resize(3 * static_cast<size_t>(nf));
+  {
+    std::vector<int> fill(m->vf_start.begin(), m->vf_start.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int i = 0; i < 3; ++i) m->vf_half[fill[mesh.faces[f][i]]++] = 3 * f + i;
+  }
   m->pseudo.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {
     const double flat = top.is_boundary_vertex[v] ? kPi : 2 * kPi;
     m->pseudo[v] = angle[v] > flat + kAngleTolerance;
   }
-  m->edge_id.assign(3 * nf, -1);
-  m->edge_side.assign(3 * nf, 0);
-  for (int f = 0; f < nf; ++f)
-    for (int e = 0; e < 3; ++e) {
-      if (m->edge_id[3 * f + e] >= 0) continue;
-      const int id = m->edge_count++;
-      m->edge_id[3 * f + e] = id;
-      const FaceGeom& g = m->faces[f];
-      if (g.nbr[e] >= 0) {
-        m->edge_id[3 * g.nbr[e] + g.nbr_edge[e]] = id;
-        m->edge_side[3 * g.nbr[e] + g.nbr_edge[e]] = 1;
+  // Fans of the pseudo-source vertices, in rotation order. From half-edge 3 f + i (v = v[i]),
+  // the slot spans the directions v -> v[i+1] to v -> v[i+2]; the next face around v lies across
+  // f's edge v[i+2] -> v, whose twin starts the next slot. A boundary fan starts at the slot
+  // whose edge v -> v[i+1] is a boundary edge. Every vertex takes count + 1 angle entries (one
+  // for a vertex without a fan), so that v's angles start at fan_start[v] + v.
+  m->fan_start.assign(nv + 1, 0);
+  m->fan_closed.assign(nv, 0);
+  std::vector<int> fan;
+  for (int v = 0; v < nv; ++v) {
+    m->fan_start[v + 1] = m->fan_start[v];
+    const int first = m->vf_start[v], count = m->vf_start[v + 1] - first;
+    fan.clear();
+    bool closed = false, boundary = false;
+    if (m->pseudo[v] && count > 0) {
+      int start = m->vf_half[first];
+      for (int k = first; k < first + count; ++k)
+        if (m->half[m->vf_half[k]].twin < 0) {
+          start = m->vf_half[k];
+          boundary = true;
+        }
+      int h = start;
+      while (static_cast<int>(fan.size()) < count) {
+        fan.push_back(h);
+        const int across = m->half[h - h % 3 + prev3(h % 3)].twin;
+        if (across < 0) break;
+        h = across;
+        if (h == start) {
+          closed = true;
+          break;
+        }
       }
     }
+    if (fan.empty() || static_cast<int>(fan.size()) != count || closed == boundary) {
+      m->fan_angle.push_back(0.0);  // no fan: rule S does not apply at v
+      continue;
+    }
+    double phi = 0;
+    for (int k : fan) {
+      m->fan_half.push_back(k);
+      m->fan_angle.push_back(phi);
+      phi += std::atan2(m->half[k].cy, m->half[k].cx);
+    }
+    m->fan_angle.push_back(phi);
+    m->fan_start[v + 1] = m->fan_start[v] + count;
+    m->fan_closed[v] = closed;
+  }
+  m->edge_count = 0;
+  std::vector<int> edge_of(3 * static_cast<size_t>(nf), -1);
+  for (int h = 0; h < 3 * nf; ++h) {
+    if (edge_of[h] >= 0) continue;
+    const int id = m->edge_count++;
+    edge_of[h] = id;
+    m->half[h].edge = id;
+    m->half[h].flip = 0;
+    const int t = m->half[h].twin;
+    if (t >= 0) {
+      edge_of[t] = id;
+      m->half[t].edge = id;
+      m->half[t].flip = 1;
+    }
+  }
+  double total_length = 0;
+  for (const HalfEdge& h : m->half) total_length += h.len;
+  m->bucket_width = kBucketWidth * (nf > 0 ? total_length / (3.0 * nf) : 1.0);
   const double diagonal = bounding_box_size(mesh).norm();
   m->margin = kMarginRelative * (diagonal > 0 ? diagonal : 1.0);
   return m;
 }
 
-/// A window (see the file comment). 56 bytes, stored flat.
+/// A window (see the file comment). 56 bytes.
 struct Window {
-  double b0, b1;  ///< interval on the edge, 0 <= b0 < b1 <= L (b0 == b1: emptied)
-  double sx, sy;  ///< source image, sy <= 0
-  double sigma;   ///< distance from the source to the image
-  int face;       ///< the face the window propagates into; the window lies on its edge `edge`
-  int parent;     ///< window it was propagated from, -1 for a window emitted by a source
-  int root;       ///< emitting pseudo-source vertex, -1 for the true source
-  std::int8_t edge;
-  std::int8_t exit;  ///< 1: lies on the parent's edge e+1 (C->B), 2: on e+2 (A->C), 0: root
+  double b0, b1;     ///< interval on the edge, 0 <= b0 < b1 <= L (b0 == b1: emptied)
+  double sx, sy;     ///< source image, sy <= 0
+  double sigma;      ///< distance from the source to the image
+  int he;            ///< half-edge it lies on; it propagates into face he / 3
+  int parent;        ///< window it was propagated from, -1 for a window emitted by a source
+  int root;          ///< emitting pseudo-source vertex, -1 for the true source
+  std::int8_t exit;  ///< 1: lies on the parent's right exit (B->C), 2: left exit (C->A), 0: root
 };
 
-/// Best window seeing the corner opposite an edge (for the barrier rule).
+/// Best window seeing the corner opposite a half-edge (for the barrier rule).
 struct CornerRecord {
   double d = kInf;  ///< sigma + |I C|
   double x = 0;     ///< crossing of I->C with the edge
@@ -258,6 +348,7 @@ class FastField final : public DistanceField::Impl {
   std::vector<int> face_start;  ///< CSR: live windows per face
   std::vector<int> face_window;
   std::array<int, 2> source_faces = {-1, -1};  ///< faces whose closure holds the source
+  bool has_windows = true;
 
   double distance_to(const SurfacePoint& target) const override;
   std::vector<SurfacePoint> path_to(const SurfacePoint& target) const override;
@@ -273,71 +364,156 @@ class FastField final : public DistanceField::Impl {
   };
   Best locate(const SurfacePoint& q) const;
   SurfacePoint vertex_point(int v) const;
-  SurfacePoint edge_point(int face, int edge, double x) const;
+  SurfacePoint edge_point(int he, double x) const;
 };
+
+/// The faces whose closure holds a (normalised) surface point, with the point's weights in each;
+/// a vertex point gets only its own face (its distance is the vertex's).
+struct PointFaces {
+  int count = 0;
+  std::array<int, 2> face{-1, -1};
+  std::array<Vec3, 2> weights;
+  int vertex = -1;
+};
+
+PointFaces point_faces(const FastMesh& m, const SurfacePoint& q) {
+  PointFaces out;
+  const int zeros = zero_weight_count(q);
+  if (zeros == 2) {
+    out.vertex = q.vertex(m.mesh);
+    return out;
+  }
+  out.count = 1;
+  out.face[0] = q.face;
+  out.weights[0] = q.barycentric;
+  if (zeros == 1) {
+    int e = 0;
+    for (int i = 0; i < 3; ++i)
+      if (q.barycentric[i] == 0.0) e = next3(i);  // the edge opposite the zero weight
+    const int twin = m.half[3 * q.face + e].twin;
+    if (twin >= 0) {
+      const int n = twin / 3, k = twin % 3;
+      out.face[1] = n;
+      out.weights[1] = Vec3::Zero();
+      out.weights[1][k] = q.barycentric[next3(e)];
+      out.weights[1][next3(k)] = q.barycentric[e];
+      out.count = 2;
+    }
+  }
+  return out;
+}
+
+/// The distance to q offered by window w (entering q's face f, q in the frame of w's edge), or
+/// +inf if q lies outside w's cone.
+inline double window_distance(const Window& w, const HalfEdge& h, double px, double py) {
+  const double x = py <= 0 ? px : w.sx + (px - w.sx) * (-w.sy) / (py - w.sy);
+  const double tol = kVisibilityTolerance * h.len;
+  if (x < w.b0 - tol || x > w.b1 + tol) return kInf;
+  return w.sigma + hyp(px - w.sx, py - w.sy);
+}
+
+/// q (weights w in face f) in the frame of each of f's half-edges.
+inline void point_in_frames(const FastMesh& m, int f, const Vec3& w, std::array<double, 3>& qx,
+                            std::array<double, 3>& qy) {
+  for (int e = 0; e < 3; ++e) {
+    const HalfEdge& h = m.half[3 * f + e];
+    qx[e] = w[next3(e)] * h.len + w[prev3(e)] * h.cx;
+    qy[e] = w[prev3(e)] * h.cy;
+  }
+}
 
 // ---------------------------------------------------------------------------------------------
 // Propagation
 
-/// Monotone priority queue: a radix heap over the bit patterns of non-negative doubles (ordered
-/// like the values). Entry k of bucket b differs from the last popped key first in bit b - 1;
-/// popping redistributes the lowest non-empty bucket around its minimum. Keys pushed must not be
-/// below the last key popped; rounding-level violations are clamped (they only reorder events
-/// equal up to rounding).
-class RadixHeap {
+/// Monotone priority queue of events (window or vertex ids) by key. Keys are bucketed by a fixed
+/// width (a fraction of the mean edge length); a bucket is sorted once, when it becomes the
+/// current one, and then popped in order, so pops come out in exact key order while pushes cost
+/// O(1) (children's keys exceed their parent's by about an edge crossing, so nearly all pushes
+/// land in later buckets; one into the current bucket is inserted in order). Keys pushed below
+/// the last key popped (rounding-level, children are never closer than their parent) are
+/// clamped to it: they only reorder events equal up to rounding.
+class EventQueue {
  public:
   struct Entry {
-    std::uint64_t key;
+    double key;
     int id;
   };
-  bool empty() const { return size_ == 0; }
-  void clear() {
-    for (auto& b : buckets_) b.clear();
-    high_mask_ = 0;
+  void reset(double width) {
+    inverse_width_ = 1.0 / width;
+    heads_.clear();
+    pool_.clear();
+    current_.clear();
+    bucket_ = 0;
     last_ = 0;
     size_ = 0;
   }
+  bool empty() const { return size_ == 0; }
   void push(double key, int id) {
-    std::uint64_t k = key > 0 ? std::bit_cast<std::uint64_t>(key) : 0;
-    if (k < last_) k = last_;
-    const int b = bucket(k);
-    buckets_[b].push_back({k, id});
-    if (b > 0) high_mask_ |= std::uint64_t{1} << (b - 1);
+    if (!(key > last_)) key = last_;
     ++size_;
+    const double scaled = key * inverse_width_;
+    const std::size_t b =
+        scaled < 1e15 ? static_cast<std::size_t>(scaled) : std::numeric_limits<std::size_t>::max();
+    if (b <= bucket_) {  // into the current run, kept sorted by descending key
+      auto it = std::upper_bound(current_.begin(), current_.end(), key,
+                                 [](double k, const Entry& e) { return k > e.key; });
+      current_.insert(it, Entry{key, id});
+      return;
+    }
+    if (b >= heads_.size()) {
+      if (b > (std::size_t{1} << 26)) {  // absurd spread of keys: keep them in the last bucket
+        overflow_.push_back(Entry{key, id});
+        return;
+      }
+      heads_.resize(std::max(b + 1, 2 * heads_.size()), -1);
+    }
+    pool_.push_back(Node{key, id, heads_[b]});
+    heads_[b] = static_cast<int>(pool_.size()) - 1;
   }
   Entry pop() {
-    if (buckets_[0].empty()) {
-      const int i = 1 + std::countr_zero(high_mask_);
-      std::vector<Entry>& from = buckets_[i];
-      std::uint64_t lowest = from[0].key;
-      for (const Entry& e : from) lowest = std::min(lowest, e.key);
-      last_ = lowest;
-      for (const Entry& e : from) {
-        const int b = bucket(e.key);
-        buckets_[b].push_back(e);
-        if (b > 0) high_mask_ |= std::uint64_t{1} << (b - 1);
-      }
-      from.clear();
-      high_mask_ &= ~(std::uint64_t{1} << (i - 1));
-    }
-    const Entry e = buckets_[0].back();
-    buckets_[0].pop_back();
+    while (current_.empty()) advance();
+    const Entry e = current_.back();
+    current_.pop_back();
+    last_ = e.key;
     --size_;
     return e;
   }
 
  private:
-  int bucket(std::uint64_t k) const { return k == last_ ? 0 : 64 - std::countl_zero(k ^ last_); }
-  std::array<std::vector<Entry>, 65> buckets_;
-  std::uint64_t high_mask_ = 0;  ///< bit b - 1 set iff bucket b (>= 1) is non-empty
-  std::uint64_t last_ = 0;
+  struct Node {
+    double key;
+    int id, next;
+  };
+  void advance() {
+    ++bucket_;
+    if (bucket_ >= heads_.size()) {  // only the overflow is left
+      current_.swap(overflow_);
+      std::sort(current_.begin(), current_.end(),
+                [](const Entry& a, const Entry& b) { return a.key > b.key; });
+      return;
+    }
+    for (int k = heads_[bucket_]; k >= 0; k = pool_[k].next)
+      current_.push_back(Entry{pool_[k].key, pool_[k].id});
+    heads_[bucket_] = -1;
+    std::sort(current_.begin(), current_.end(),
+              [](const Entry& a, const Entry& b) { return a.key > b.key; });
+  }
+  double inverse_width_ = 1;
+  std::vector<int> heads_;  ///< per bucket: the latest pushed node, -1 if empty
+  std::vector<Node> pool_;
+  std::vector<Entry> current_;  ///< the current bucket, sorted by descending key
+  std::vector<Entry> overflow_;
+  std::size_t bucket_ = 0;
+  double last_ = 0;
   std::size_t size_ = 0;
 };
 
-/// One entry of an edge's window array: the interval in the edge's own orientation.
+/// One entry of an edge's window list: the window's interval in the orientation of the
+/// undirected edge (so windows from both sides compare directly). Lists are sorted by lo.
 struct EdgeSlot {
   double lo, hi;
   int id;
+  int flip;  ///< the window's half-edge runs against the edge (it fills the padding)
 };
 
 struct EdgeList {
@@ -408,45 +584,75 @@ struct Scratch {
   std::vector<CornerRecord> corner;
   std::vector<EdgeList> lists;  ///< per undirected edge: its windows, in slots
   std::vector<EdgeSlot> slots;
-  RadixHeap heap;
+  std::vector<Window> windows;  ///< the windows of a solve that does not keep them
+  std::vector<char> target_face;
+  std::vector<int> target_windows;
+  EventQueue heap;
 };
 
 /// Scratch memory is kept for the next solve on the thread, unless it grew large (a big mesh).
 void release_if_large(Scratch& scratch) {
-  constexpr std::size_t kKeepBytes = std::size_t{32} << 20;
+  constexpr std::size_t kKeepBytes = std::size_t{64} << 20;
   if (scratch.slots.capacity() * sizeof(EdgeSlot) + scratch.lists.capacity() * sizeof(EdgeList) +
-          scratch.corner.capacity() * sizeof(CornerRecord) >
+          scratch.corner.capacity() * sizeof(CornerRecord) +
+          scratch.windows.capacity() * sizeof(Window) >
       kKeepBytes)
     scratch = Scratch{};
 }
 
 class Propagator {
  public:
-  Propagator(const FastMesh& m, FastField& out, const Progress& progress, Scratch& scratch)
+  Propagator(const FastMesh& m, FastField& out, std::vector<Window>& windows,
+             const SolveOptions& options, const Progress& progress, Scratch& scratch)
       : m_(m),
         out_(out),
+        options_(options),
         progress_(progress),
+        windows_(windows),
         dist_(out.distances),
         prov_(out.provenance),
         emitted_(scratch.emitted),
         corner_(scratch.corner),
         lists_(scratch.lists),
         slots_(scratch.slots),
+        target_face_(scratch.target_face),
+        target_windows_(scratch.target_windows),
         heap_(scratch.heap),
         margin_(m.margin) {
     const int nv = m.mesh.vertex_count();
     dist_.assign(nv, kInf);
     prov_.assign(nv, kFromSource);
     emitted_.assign(nv, 0);
-    corner_.assign(3 * m.faces.size(), CornerRecord{});
+    corner_.assign(m.half.size(), CornerRecord{});
     lists_.assign(m.edge_count, EdgeList{});
     slots_.clear();
-    heap_.clear();
-    out_.windows.reserve(m.window_hint.load(std::memory_order_relaxed));
+    heap_.reset(m.bucket_width);
+    windows_.clear();
+    windows_.reserve(m.window_hint.load(std::memory_order_relaxed));
+    target_windows_.clear();
+    // Windows entering the targets' faces are collected when the field keeps no index of them.
+    track_targets_ = !options.targets.empty() && !options.keep_windows;
+    if (track_targets_ || options.stop_at_targets) {
+      target_face_.assign(m.half.size() / 3, 0);
+      for (const SurfacePoint& t : options.targets) {
+        const PointFaces pf = point_faces(m, t);
+        for (int k = 0; k < pf.count; ++k) target_face_[pf.face[k]] = 1;
+        if (pf.vertex >= 0) stop_vertices_.push_back(pf.vertex);
+      }
+      for (int f = 0; f < static_cast<int>(target_face_.size()); ++f)
+        if (target_face_[f]) stop_faces_.push_back(f);
+      // A vertex target's closed faces: its whole fan (distance_to / path_to near it).
+      if (options.stop_at_targets)
+        for (int v : stop_vertices_)
+          for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k)
+            stop_faces_.push_back(m.vf_half[k] / 3);
+    }
   }
 
   void init(const SurfacePoint& s);
   void run();
+  /// Target distances from the collected windows (solves that keep no windows).
+  void evaluate_targets(const SurfacePoint& source);
 
  private:
   void relax(int v, double d, int provenance) {
@@ -456,55 +662,54 @@ class Propagator {
       if (m_.pseudo[v] && !emitted_[v]) heap_.push(d, -1 - v);
     }
   }
+  /// Upper bound on the distance anywhere in the faces the solve must finish (stop_at_targets).
+  double stop_bound() const;
+  double incoming_angle(int u) const;
   void emit_vertex(int u);
+  void emit_window(int h, double b0, double b1, double sigma, int root);
   void emit_from_point(const Vec3& s, int face, int skip_edge);
-  void add_window(Window& w);
+  void insert(Window& w);
   bool trim_by_endpoints(Window& w, double length, double da, double db, double& f0,
                          double& f1) const;
   void propagate(const Window& w, int id);
-  void insert_slot(int edge, double lo, double hi, int id);
-  /// w's interval in the orientation of its undirected edge.
-  void canonical(const Window& w, double& lo, double& hi) const {
-    if (m_.edge_side[3 * w.face + w.edge]) {
-      const double len = m_.faces[w.face].len[w.edge];
-      lo = len - w.b1;
-      hi = len - w.b0;
-    } else {
-      lo = w.b0;
-      hi = w.b1;
-    }
-  }
+  /// Inserts into the edge's sorted list; `hint` is an index at or after the insertion position.
+  void insert_slot(int edge, double lo, double hi, int id, int flip, int hint);
 
   const FastMesh& m_;
   FastField& out_;
+  const SolveOptions& options_;
   const Progress& progress_;
+  std::vector<Window>& windows_;
   std::vector<double>& dist_;
   std::vector<int>& prov_;
   std::vector<char>& emitted_;
   std::vector<CornerRecord>& corner_;
   std::vector<EdgeList>& lists_;
   std::vector<EdgeSlot>& slots_;
-  RadixHeap& heap_;
+  std::vector<char>& target_face_;
+  std::vector<int>& target_windows_;
+  EventQueue& heap_;
   const double margin_;
+  bool track_targets_ = false;
+  std::vector<int> stop_faces_, stop_vertices_;
 };
 
-void Propagator::insert_slot(int edge, double lo, double hi, int id) {
+void Propagator::insert_slot(int edge, double lo, double hi, int id, int flip, int hint) {
   EdgeList& list = lists_[edge];
-  if (list.count == list.capacity) {  // move the edge's array to the end of the arena, doubled
+  if (list.count == list.capacity) {  // move the edge's list to the end of the arena, doubled
     const int capacity = list.capacity ? 2 * list.capacity : 4;
     const int start = static_cast<int>(slots_.size());
     slots_.resize(slots_.size() + capacity);
-    std::copy(slots_.begin() + list.start, slots_.begin() + list.start + list.count,
-              slots_.begin() + start);
+    std::copy_n(slots_.data() + list.start, list.count, slots_.data() + start);
     list.start = start;
     list.capacity = capacity;
   }
   EdgeSlot* base = slots_.data() + list.start;
-  const EdgeSlot* pos = std::lower_bound(base, base + list.count, lo,
-                                         [](const EdgeSlot& s, double x) { return s.lo < x; });
-  const int k = static_cast<int>(pos - base);
+  // Before the first slot with start > lo (the hint is past it: the new window's range).
+  int k = std::min(hint, list.count);
+  while (k > 0 && base[k - 1].lo > lo) --k;
   std::copy_backward(base + k, base + list.count, base + list.count + 1);
-  base[k] = {lo, hi, id};
+  base[k] = {lo, hi, id, flip};
   ++list.count;
 }
 
@@ -544,10 +749,9 @@ bool Propagator::trim_by_endpoints(Window& w, double length, double da, double d
   return w.b1 > w.b0;
 }
 
-void Propagator::add_window(Window& w) {
-  const FaceGeom& f = m_.faces[w.face];
-  const int e = w.edge;
-  const double length = f.len[e];
+void Propagator::insert(Window& w) {
+  const HalfEdge& h = m_.half[w.he];
+  const double length = h.len;
   if (w.sy > 0) w.sy = 0;
   if (w.b0 < 0) w.b0 = 0;
   if (w.b1 > length) w.b1 = length;
@@ -555,28 +759,26 @@ void Propagator::add_window(Window& w) {
   const double yy = w.sy * w.sy;
   double f0 = w.sigma + std::sqrt((w.b0 - w.sx) * (w.b0 - w.sx) + yy);
   double f1 = w.sigma + std::sqrt((w.b1 - w.sx) * (w.b1 - w.sx) + yy);
-  if (!trim_by_endpoints(w, length, dist_[f.v[e]], dist_[f.v[next3(e)]], f0, f1)) return;
+  if (!trim_by_endpoints(w, length, dist_[h.va], dist_[h.vb], f0, f1)) return;
 
   // Rule (M), Mitchell-Mount-Papadimitriou trimming: compare with the windows already on this
   // edge (either side). Where an old window is better the new one is cut away (it may split in
   // pieces); where the new one is better at an end of the old one, the old one is shortened.
-  // Everything here is in the edge's own orientation ("canonical"); each edge keeps its windows
-  // sorted by start, and they are disjoint except where a new window beat an old one in the
+  // Everything here is in the edge's own orientation; each edge keeps its windows sorted by
+  // start (lists are long: ~50 windows on a busy edge of a 4k-vertex mesh, so a binary search
+  // beats a scan), and they are disjoint except where a new window beat an old one in the
   // middle (the old one is not split): a comparison missed because of such an overlap only
   // prunes less, it never makes the result wrong.
-  const int he = 3 * w.face + e;
-  const int eid = m_.edge_id[he];
-  const bool flip = m_.edge_side[he];
+  const bool flip = h.flip;
   const double nx = flip ? length - w.sx : w.sx;
   std::array<double, 2 * kMaxPieces> piece;
   int pieces = 1;
   piece[0] = flip ? length - w.b1 : w.b0;
   piece[1] = flip ? length - w.b0 : w.b1;
-  EdgeList& list = lists_[eid];
+  EdgeList& list = lists_[h.edge];
   EdgeSlot* base = slots_.data() + list.start;
-  int i = static_cast<int>(std::lower_bound(base, base + list.count, piece[0],
-                                            [](const EdgeSlot& s, double x) { return s.lo < x; }) -
-                           base);
+  // First slot that may overlap: by start, then back over long predecessors.
+  int i = count_below(base, list.count, piece[0]);
   while (i > 0 && base[i - 1].hi > piece[0]) --i;
   while (i < list.count && pieces > 0 && base[i].lo < piece[2 * pieces - 1]) {
     double olo = base[i].lo, ohi = base[i].hi;
@@ -584,8 +786,8 @@ void Propagator::add_window(Window& w) {
       ++i;
       continue;
     }
-    Window& o = out_.windows[base[i].id];
-    const bool oflip = m_.edge_side[3 * o.face + o.edge];
+    Window& o = windows_[base[i].id];
+    const bool oflip = base[i].flip;
     const double ox = oflip ? length - o.sx : o.sx, oyy = o.sy * o.sy;
     std::array<double, 2 * kMaxPieces> kept;
     int nk = 0;
@@ -628,13 +830,13 @@ void Propagator::add_window(Window& w) {
     pieces = nk;
     piece = kept;
     if (olo != base[i].lo || ohi != base[i].hi) {
-      // Shrink the old window (never beyond what it covers: a trim at its pop may be newer).
+      // Shrink the old window (never beyond what it covers: conversions round).
       const double b0 = oflip ? length - ohi : olo, b1 = oflip ? length - olo : ohi;
       o.b0 = std::max(o.b0, b0);
       o.b1 = std::min(o.b1, b1);
       if (!(o.b1 > o.b0) || !(ohi > olo)) {
         o.b1 = o.b0;  // emptied
-        std::copy(base + i + 1, base + list.count, base + i);
+        for (int k = i + 1; k < list.count; ++k) base[k - 1] = base[k];
         --list.count;
         continue;
       }
@@ -650,143 +852,252 @@ void Propagator::add_window(Window& w) {
       piece[2 * p + 1] = length - lo;
     }
 
-  const int vc = f.v[prev3(e)];
-  const double cx = f.cx[e], cy = f.cy[e];
+  const double cx = h.cx, cy = h.cy;
   const double tol = kVisibilityTolerance * length;
   const double x = (w.sx * cy - w.sy * cx) / (cy - w.sy);  // crossing of I->C with the edge
+  double dc = -1;
+  const int face = w.he / 3;
   for (int p = 0; p < pieces; ++p) {
     w.b0 = piece[2 * p];
     w.b1 = piece[2 * p + 1];
     if (!(w.b1 > w.b0)) continue;
-    double key = w.sigma - w.sy;
-    if (w.sx < w.b0) key = w.sigma + std::sqrt((w.b0 - w.sx) * (w.b0 - w.sx) + yy);
-    if (w.sx > w.b1) key = w.sigma + std::sqrt((w.b1 - w.sx) * (w.b1 - w.sx) + yy);
-    const int id = static_cast<int>(out_.windows.size());
+    const int id = static_cast<int>(windows_.size());
     // Corner C visible through the window: early distance bound and barrier record.
     if (x >= w.b0 - tol && x <= w.b1 + tol) {
-      const double dc = w.sigma + hyp(cx - w.sx, cy - w.sy);
-      CornerRecord& rec = corner_[he];
+      if (dc < 0) dc = w.sigma + hyp(cx - w.sx, cy - w.sy);
+      CornerRecord& rec = corner_[w.he];
       if (dc < rec.d) {
         rec.d = dc;
         rec.x = x;
       }
-      relax(vc, dc, id);
+      relax(h.vc, dc, id);
     }
-    out_.windows.push_back(w);
-    double lo, hi;
-    canonical(w, lo, hi);
-    insert_slot(eid, lo, hi, id);
+    windows_.push_back(w);
+    insert_slot(h.edge, flip ? length - w.b1 : w.b0, flip ? length - w.b0 : w.b1, id, flip, i);
+    ++i;
+    if (track_targets_ && target_face_[face]) target_windows_.push_back(id);
+    if (!h.has_exit) continue;  // no children: nothing to propagate
+    double key = w.sigma - w.sy;
+    if (w.sx < w.b0) key = w.sigma + std::sqrt((w.b0 - w.sx) * (w.b0 - w.sx) + yy);
+    if (w.sx > w.b1) key = w.sigma + std::sqrt((w.b1 - w.sx) * (w.b1 - w.sx) + yy);
     heap_.push(key, id);
   }
 }
 
 void Propagator::propagate(const Window& w, int id) {
-  const FaceGeom& f = m_.faces[w.face];
-  const int e = w.edge, e1 = next3(e), e2 = prev3(e);
-  const double length = f.len[e], cx = f.cx[e], cy = f.cy[e];
+  const HalfEdge& h = m_.half[w.he];
+  const int f3 = w.he - w.he % 3, e = w.he % 3;
+  const HalfEdge& left = m_.half[f3 + prev3(e)];   // C -> A
+  const HalfEdge& right = m_.half[f3 + next3(e)];  // B -> C
+  const double length = h.len, cx = h.cx, cy = h.cy;
   const double sx = w.sx, sy = w.sy;
-  // Crossing of the line I->C with the edge: entries left of it exit through C->A (edge e2),
-  // entries right of it through B->C (edge e1).
+  // Crossing of the line I->C with the edge: entries left of it exit through C->A, entries
+  // right of it through B->C.
   const double x = (sx * cy - sy * cx) / (cy - sy);
   double hi_left = std::min(w.b1, x), lo_right = std::max(w.b0, x);
-  const CornerRecord& rec = corner_[3 * w.face + e];
+  const CornerRecord& rec = corner_[w.he];
   if (rec.d < kInf && rec.d + margin_ < w.sigma + hyp(cx - sx, cy - sy)) {
     hi_left = std::min(hi_left, rec.x);  // barrier X1-C (rule B)
     lo_right = std::max(lo_right, rec.x);
   }
-  if (hi_left > w.b0 && f.nbr[e2] >= 0) {
+  if (hi_left > w.b0 && left.twin >= 0) {
     // Ray through (b,0) meets A + s (C - A) at s = b sy / ((b - sx) cy + sy cx).
-    const double l2 = f.len[e2];
+    const double l2 = left.len;
     const auto t_of = [&](double b) { return l2 * (b * sy) / ((b - sx) * cy + sy * cx); };
     Window c;
     c.b0 = t_of(w.b0);
     c.b1 = hi_left >= x ? l2 : t_of(hi_left);
-    const double ux = f.u2x[e], uy = f.u2y[e];
+    const double ux = h.u2x, uy = h.u2y;
     c.sx = sx * ux + sy * uy;
     c.sy = ux * sy - uy * sx;
     c.sigma = w.sigma;
-    c.face = f.nbr[e2];
-    c.edge = f.nbr_edge[e2];
+    c.he = left.twin;
     c.parent = id;
     c.root = w.root;
     c.exit = 2;
-    add_window(c);
+    insert(c);
   }
-  if (lo_right < w.b1 && f.nbr[e1] >= 0) {
+  if (lo_right < w.b1 && right.twin >= 0) {
     // Ray through (b,0) meets B + s (C - B) at s = sy (b - L) / ((b - sx) cy + sy (cx - L)).
-    const double l1 = f.len[e1];
+    const double l1 = right.len;
     const auto t_of = [&](double b) {
       return l1 * (1.0 - sy * (b - length) / ((b - sx) * cy + sy * (cx - length)));
     };
     Window c;
     c.b0 = lo_right <= x ? 0.0 : t_of(lo_right);
     c.b1 = t_of(w.b1);
-    const double ux = f.u1x[e], uy = f.u1y[e];
+    const double ux = h.u1x, uy = h.u1y;
     const double dx = sx - cx, dy = sy - cy;
     c.sx = dx * ux + dy * uy;
     c.sy = ux * dy - uy * dx;
     c.sigma = w.sigma;
-    c.face = f.nbr[e1];
-    c.edge = f.nbr_edge[e1];
+    c.he = right.twin;
     c.parent = id;
     c.root = w.root;
     c.exit = 1;
-    add_window(c);
+    insert(c);
   }
+}
+
+/// The direction, as an angle in u's fan coordinate, in which the shortest path found to the
+/// pseudo-source u arrives (pointing back along the path), or a negative value if unknown.
+double Propagator::incoming_angle(int u) const {
+  const int first = m_.fan_start[u], count = m_.fan_start[u + 1] - first;
+  if (count == 0) return -1;
+  const double* phi = m_.fan_angle.data() + first + u;
+  const int* fan = m_.fan_half.data() + first;
+  const int code = prov_[u];
+  if (code >= 0) {
+    // A window on half-edge AB sees u = C: u's slot is the half-edge of the same face starting
+    // at C (C -> A), which spans the directions from C->A to C->B.
+    const Window& w = windows_[code];
+    const HalfEdge& h = m_.half[w.he];
+    const int slot_half = w.he - w.he % 3 + prev3(w.he % 3);
+    for (int k = 0; k < count; ++k) {
+      if (fan[k] != slot_half) continue;
+      const double ax = -h.cx, ay = -h.cy;
+      const double ix = w.sx - h.cx, iy = w.sy - h.cy;
+      const double a = std::atan2(std::abs(ax * iy - ay * ix), ax * ix + ay * iy);
+      return phi[k] + std::clamp(a, 0.0, phi[k + 1] - phi[k]);
+    }
+    return -1;
+  }
+  if (code <= -2) {  // straight along the edge u - p from pseudo-source vertex p
+    const int p = -2 - code;
+    for (int k = 0; k < count; ++k)
+      if (m_.half[fan[k]].vb == p) return phi[k];
+    if (m_.half[fan[count - 1]].vc == p) return phi[count];  // the last edge of an open fan
+    return -1;
+  }
+  return -1;  // straight from the source: no restriction
+}
+
+void Propagator::emit_window(int h, double b0, double b1, double sigma, int root) {
+  const HalfEdge& g = m_.half[h];
+  Window w;
+  w.b0 = b0;
+  w.b1 = b1;
+  w.sx = g.ox;
+  w.sy = g.oy;
+  w.sigma = sigma;
+  w.he = h;
+  w.parent = -1;
+  w.root = root;
+  w.exit = 0;
+  insert(w);
 }
 
 void Propagator::emit_vertex(int u) {
   emitted_[u] = 1;
   const double du = dist_[u];
   for (int k = m_.vf_start[u]; k < m_.vf_start[u + 1]; ++k) {
-    const FaceGeom& g = m_.faces[m_.vf_face[k]];
-    const int i = m_.vf_local[k], j = next3(i);
-    relax(g.v[j], du + g.len[i], -2 - u);
-    relax(g.v[prev3(i)], du + g.len[prev3(i)], -2 - u);
-    const int n = g.nbr[j];
-    if (n < 0) continue;
-    const FaceGeom& nf = m_.faces[n];
-    const int ke = g.nbr_edge[j];
-    Window w;
-    w.b0 = 0;
-    w.b1 = nf.len[ke];
-    w.sx = nf.ox[ke];
-    w.sy = nf.oy[ke];
-    w.sigma = du;
-    w.face = n;
-    w.edge = static_cast<std::int8_t>(ke);
-    w.parent = -1;
-    w.root = u;
-    w.exit = 0;
-    add_window(w);
+    const HalfEdge& g = m_.half[m_.vf_half[k]];  // u -> v[i+1], C = v[i+2]
+    relax(g.vb, du + g.len, -2 - u);
+    relax(g.vc, du + m_.half[m_.vf_half[k] - m_.vf_half[k] % 3 + prev3(m_.vf_half[k] % 3)].len,
+          -2 - u);
+  }
+  // Rule (S): shortest paths bend at a vertex only with angles >= pi on both sides (on the
+  // surface side, at a boundary vertex); otherwise they could be shortened around it. Paths
+  // through u therefore leave it only in the directions at angle [pi, total - pi] from the
+  // incoming direction of (any) shortest path to u (for a boundary vertex: at least pi away
+  // within its fan), and u emits windows only into that cone, widened by kConeTolerance.
+  const double back = incoming_angle(u);
+  const int first = m_.fan_start[u], count = m_.fan_start[u + 1] - first;
+  if (back < 0 || count == 0) {
+    for (int k = m_.vf_start[u]; k < m_.vf_start[u + 1]; ++k) {
+      const int h = m_.vf_half[k];
+      const int opposite = m_.half[h - h % 3 + next3(h % 3)].twin;
+      if (opposite >= 0) emit_window(opposite, 0, m_.half[opposite].len, du, u);
+    }
+    return;
+  }
+  const double* phi = m_.fan_angle.data() + first + u;
+  const double total = phi[count];
+  // Allowed directions as up to two absolute ranges in [0, total] (a closed fan's cone may wrap).
+  std::array<double, 4> allowed;
+  int ranges = 0;
+  const auto add_range = [&](double lo, double hi) {
+    lo = std::max(lo, 0.0);
+    hi = std::min(hi, total);
+    if (hi >= lo && ranges < 2) {
+      allowed[2 * ranges] = lo;
+      allowed[2 * ranges + 1] = hi;
+      ++ranges;
+    }
+  };
+  if (m_.fan_closed[u]) {
+    const double lo = back + kPi - kConeTolerance, hi = back + total - kPi + kConeTolerance;
+    if (hi - lo >= total) {
+      add_range(0, total);
+    } else if (lo >= total) {
+      add_range(lo - total, hi - total);
+    } else {
+      add_range(lo, hi);
+      if (hi > total) add_range(0, hi - total);
+    }
+  } else {
+    add_range(0, back - kPi + kConeTolerance);
+    add_range(back + kPi - kConeTolerance, total);
+  }
+  const int* fan = m_.fan_half.data() + first;
+  for (int k = 0; k < count; ++k) {
+    const int h = fan[k];
+    const HalfEdge& g = m_.half[h];
+    const int opposite = m_.half[h - h % 3 + next3(h % 3)].twin;
+    if (opposite < 0) continue;
+    const double theta = phi[k + 1] - phi[k];
+    // Directions of this face allowed, as local angles [a0, a1] from u->v[i+1] (the hull of the
+    // allowed parts: a superset only prunes less).
+    double a0 = kInf, a1 = -kInf;
+    for (int r = 0; r < ranges; ++r) {
+      const double lo = std::max(allowed[2 * r], phi[k]),
+                   hi = std::min(allowed[2 * r + 1], phi[k + 1]);
+      if (hi >= lo) {
+        a0 = std::min(a0, lo - phi[k]);
+        a1 = std::max(a1, hi - phi[k]);
+      }
+    }
+    if (!(a1 >= a0)) continue;
+    // The ray at local angle a meets the opposite edge (v[i+1] -> v[i+2]) at the fraction
+    // s = dy L / (cy dx + (L - cx) dy) from v[i+1]; on the twin (from v[i+2]) at x = (1 - s) len.
+    const double L = g.len, cx = g.cx, cy = g.cy;
+    const auto s_of = [&](double a) {
+      const double dx = std::cos(a), dy = std::sin(a);
+      return std::clamp(dy * L / (cy * dx + (L - cx) * dy), 0.0, 1.0);
+    };
+    const double len = m_.half[opposite].len;
+    const double b0 = a1 < theta ? (1.0 - s_of(a1)) * len : 0.0;
+    const double b1 = a0 > 0 ? (1.0 - s_of(a0)) * len : len;
+    if (b1 > b0) emit_window(opposite, b0, b1, du, u);
   }
 }
 
 /// The source point s lies in face `face` (on its edge `skip_edge` if >= 0): straight segments
 /// to the face's corners, and windows onto its other edges.
 void Propagator::emit_from_point(const Vec3& s, int face, int skip_edge) {
-  const FaceGeom& g = m_.faces[face];
   const auto& P = m_.mesh.vertices;
-  for (int i = 0; i < 3; ++i) relax(g.v[i], (P[g.v[i]] - s).norm(), kFromSource);
+  for (int i = 0; i < 3; ++i) {
+    const int v = m_.half[3 * face + i].va;
+    relax(v, (P[v] - s).norm(), kFromSource);
+  }
   for (int j = 0; j < 3; ++j) {
-    if (j == skip_edge || g.nbr[j] < 0) continue;
-    const int n = g.nbr[j], ke = g.nbr_edge[j];
-    const FaceGeom& nf = m_.faces[n];
-    const Vec3& a = P[nf.v[ke]];
-    const Vec3 ex = (P[nf.v[next3(ke)]] - a) / nf.len[ke];
+    const int twin = m_.half[3 * face + j].twin;
+    if (j == skip_edge || twin < 0) continue;
+    const HalfEdge& n = m_.half[twin];
+    const Vec3& a = P[n.va];
+    const Vec3 ex = (P[n.vb] - a) / n.len;
     const Vec3 d = s - a;
     Window w;
     w.b0 = 0;
-    w.b1 = nf.len[ke];
+    w.b1 = n.len;
     w.sx = d.dot(ex);
     w.sy = -d.cross(ex).norm();
     w.sigma = 0;
-    w.face = n;
-    w.edge = static_cast<std::int8_t>(ke);
+    w.he = twin;
     w.parent = -1;
     w.root = -1;
     w.exit = 0;
-    add_window(w);
+    insert(w);
   }
 }
 
@@ -806,22 +1117,41 @@ void Propagator::init(const SurfacePoint& s) {
     int e = 0;
     for (int i = 0; i < 3; ++i)
       if (s.barycentric[i] == 0.0) e = next3(i);  // the edge opposite the zero weight
-    const FaceGeom& g = m_.faces[s.face];
-    out_.source_faces = {s.face, g.nbr[e]};
+    const int twin = m_.half[3 * s.face + e].twin;
+    out_.source_faces = {s.face, twin >= 0 ? twin / 3 : -1};
     emit_from_point(p, s.face, e);
-    if (g.nbr[e] >= 0) emit_from_point(p, g.nbr[e], g.nbr_edge[e]);
+    if (twin >= 0) emit_from_point(p, twin / 3, twin % 3);
   } else {
     out_.source_faces = {s.face, -1};
     emit_from_point(p, s.face, -1);
   }
 }
 
+double Propagator::stop_bound() const {
+  // Any point q of a face is within the face's longest edge of each corner V, so its distance is
+  // at most max_V d(V) + longest edge.
+  double bound = 0;
+  for (int f : stop_faces_) {
+    double corner = 0, longest = 0;
+    for (int e = 0; e < 3; ++e) {
+      const HalfEdge& h = m_.half[3 * f + e];
+      corner = std::max(corner, dist_[h.va]);
+      longest = std::max(longest, h.len);
+    }
+    bound = std::max(bound, corner + longest);
+  }
+  for (int v : stop_vertices_) bound = std::max(bound, dist_[v]);
+  return bound;
+}
+
 void Propagator::run() {
   const int nv = m_.mesh.vertex_count();
   std::uint64_t events = 0;
+  double bound = kInf;
+  const bool stop = options_.stop_at_targets;
   progress_.report("geodesic distances", 0.0);
   while (!heap_.empty()) {
-    const RadixHeap::Entry ev = heap_.pop();
+    const EventQueue::Entry ev = heap_.pop();
     if ((++events & 4095) == 0) {
       progress_.check();
       if ((events & 262143) == 0) {
@@ -830,49 +1160,100 @@ void Propagator::run() {
         progress_.report("geodesic distances", nv ? 0.99 * reached / nv : 0.0);
       }
     }
+    if (stop) {
+      // Every window or vertex event that could still lower a distance in the target faces has
+      // a key below that distance; once the keys pass the faces' bound, they are final.
+      const double key = ev.key;
+      if (key > bound || (events & 255) == 0) bound = stop_bound();
+      if (key > bound + margin_) break;
+    }
     if (ev.id < 0) {
       const int v = -1 - ev.id;
       if (!emitted_[v]) emit_vertex(v);
       continue;
     }
-    const Window w = out_.windows[ev.id];
+    const Window w = windows_[ev.id];
     if (!(w.b1 > w.b0)) continue;  // emptied by a better window meanwhile
     propagate(w, ev.id);
   }
   progress_.report("geodesic distances", 1.0);
 }
 
+void Propagator::evaluate_targets(const SurfacePoint& source) {
+  const TriangleMesh& mesh = m_.mesh;
+  std::vector<double>& out = out_.target_distances;
+  out.assign(options_.targets.size(), kInf);
+  // Collected windows bucketed by face (only target faces have any).
+  std::sort(target_windows_.begin(), target_windows_.end(),
+            [&](int a, int b) { return windows_[a].he / 3 < windows_[b].he / 3; });
+  const Vec3 s = source.position(mesh);
+  for (size_t t = 0; t < options_.targets.size(); ++t) {
+    const SurfacePoint& q = options_.targets[t];
+    const PointFaces pf = point_faces(m_, q);
+    if (pf.vertex >= 0) {
+      out[t] = dist_[pf.vertex];
+      continue;
+    }
+    const Vec3 qp = q.position(mesh);
+    double best = kInf;
+    for (int k = 0; k < pf.count; ++k) {
+      const int f = pf.face[k];
+      for (int e = 0; e < 3; ++e) {
+        const int v = m_.half[3 * f + e].va;
+        best = std::min(best, dist_[v] + (mesh.vertices[v] - qp).norm());
+      }
+      if (f == out_.source_faces[0] || f == out_.source_faces[1])
+        best = std::min(best, (s - qp).norm());
+      std::array<double, 3> qx, qy;
+      point_in_frames(m_, f, pf.weights[k], qx, qy);
+      auto it = std::lower_bound(target_windows_.begin(), target_windows_.end(), f,
+                                 [&](int id, int face) { return windows_[id].he / 3 < face; });
+      for (; it != target_windows_.end() && windows_[*it].he / 3 == f; ++it) {
+        const Window& w = windows_[*it];
+        if (!(w.b1 > w.b0)) continue;
+        const int e = w.he % 3;
+        best = std::min(best, window_distance(w, m_.half[w.he], qx[e], qy[e]));
+      }
+    }
+    out[t] = best;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Queries
 
 void FastField::build_index() {
-  const int nf = static_cast<int>(m->faces.size());
+  const int nf = static_cast<int>(m->half.size() / 3);
   face_start.assign(nf + 1, 0);
   for (const Window& w : windows)
-    if (w.b1 > w.b0) ++face_start[w.face + 1];
+    if (w.b1 > w.b0) ++face_start[w.he / 3 + 1];
   for (int f = 0; f < nf; ++f) face_start[f + 1] += face_start[f];
   face_window.resize(face_start[nf]);
   std::vector<int> fill(face_start.begin(), face_start.end() - 1);
   for (int i = 0; i < static_cast<int>(windows.size()); ++i)
-    if (windows[i].b1 > windows[i].b0) face_window[fill[windows[i].face]++] = i;
+    if (windows[i].b1 > windows[i].b0) face_window[fill[windows[i].he / 3]++] = i;
 }
 
 SurfacePoint FastField::vertex_point(int v) const {
+  const int h = m->vf_half[m->vf_start[v]];
   SurfacePoint p;
-  p.face = m->vf_face[m->vf_start[v]];
+  p.face = h / 3;
   p.barycentric = Vec3::Zero();
-  p.barycentric[m->vf_local[m->vf_start[v]]] = 1.0;
+  p.barycentric[h % 3] = 1.0;
   return p;
 }
 
-SurfacePoint FastField::edge_point(int face, int edge, double x) const {
-  const double s = x / m->faces[face].len[edge];
+SurfacePoint FastField::edge_point(int he, double x) const {
+  const int face = he / 3, edge = he % 3;
+  const double s = x / m->half[he].len;
   SurfacePoint p;
   p.face = face;
   p.barycentric = Vec3::Zero();
-  if (s <= 0) {
+  // A crossing within rounding distance of an end is that vertex (paths along a line of edges
+  // through flat vertices would otherwise report points a few ulps off the vertex).
+  if (s <= kSnapRelative) {
     p.barycentric[edge] = 1.0;
-  } else if (s >= 1) {
+  } else if (s >= 1 - kSnapRelative) {
     p.barycentric[next3(edge)] = 1.0;
   } else {
     p.barycentric[edge] = 1.0 - s;
@@ -883,43 +1264,29 @@ SurfacePoint FastField::edge_point(int face, int edge, double x) const {
 
 FastField::Best FastField::locate(const SurfacePoint& target) const {
   const TriangleMesh& mesh = m->mesh;
+  if (!has_windows)
+    throw InvalidInput(
+        "distance field was solved without windows (SolveOptions::keep_windows = false): it "
+        "answers vertex and target distances only");
   const SurfacePoint q = normalize_surface_point(mesh, target, "target");
   Best best;
-  const int zeros = zero_weight_count(q);
-  if (zeros == 2) {
-    const int v = q.vertex(mesh);
-    best.d = distances[v];
+  const PointFaces pf = point_faces(*m, q);
+  if (pf.vertex >= 0) {
+    best.d = distances[pf.vertex];
     best.kind = 1;
-    best.index = v;
+    best.index = pf.vertex;
     return best;
   }
   const Vec3 qp = q.position(mesh);
-  // The faces whose closure holds q, with q's weights in each.
-  std::array<int, 2> faces = {q.face, -1};
-  std::array<Vec3, 2> weights = {q.barycentric, Vec3::Zero()};
-  if (zeros == 1) {
-    int e = 0;
-    for (int i = 0; i < 3; ++i)
-      if (q.barycentric[i] == 0.0) e = next3(i);
-    const FaceGeom& g = m->faces[q.face];
-    if (g.nbr[e] >= 0) {
-      faces[1] = g.nbr[e];
-      const int k = g.nbr_edge[e];
-      weights[1][k] = q.barycentric[next3(e)];
-      weights[1][next3(k)] = q.barycentric[e];
-    }
-  }
-  for (int slot = 0; slot < 2; ++slot) {
-    const int f = faces[slot];
-    if (f < 0) continue;
-    const FaceGeom& g = m->faces[f];
-    const Vec3& w = weights[slot];
+  for (int slot = 0; slot < pf.count; ++slot) {
+    const int f = pf.face[slot];
     for (int i = 0; i < 3; ++i) {
-      const double d = distances[g.v[i]] + (mesh.vertices[g.v[i]] - qp).norm();
+      const int v = m->half[3 * f + i].va;
+      const double d = distances[v] + (mesh.vertices[v] - qp).norm();
       if (d < best.d) {
         best.d = d;
         best.kind = 1;
-        best.index = g.v[i];
+        best.index = v;
       }
     }
     if (f == source_faces[0] || f == source_faces[1]) {
@@ -930,24 +1297,17 @@ FastField::Best FastField::locate(const SurfacePoint& target) const {
       }
     }
     std::array<double, 3> qx, qy;  // q in the frame of each edge
-    for (int e = 0; e < 3; ++e) {
-      qx[e] = w[next3(e)] * g.len[e] + w[prev3(e)] * g.cx[e];
-      qy[e] = w[prev3(e)] * g.cy[e];
-    }
+    point_in_frames(*m, f, pf.weights[slot], qx, qy);
     for (int k = face_start[f]; k < face_start[f + 1]; ++k) {
       const Window& win = windows[face_window[k]];
-      const int e = win.edge;
-      const double px = qx[e], py = qy[e];
-      const double x = py <= 0 ? px : win.sx + (px - win.sx) * (-win.sy) / (py - win.sy);
-      const double tol = kVisibilityTolerance * g.len[e];
-      if (x < win.b0 - tol || x > win.b1 + tol) continue;
-      const double d = win.sigma + hyp(px - win.sx, py - win.sy);
+      const int e = win.he % 3;
+      const double d = window_distance(win, m->half[win.he], qx[e], qy[e]);
       if (d < best.d) {
         best.d = d;
         best.kind = 0;
         best.index = face_window[k];
-        best.qx = px;
-        best.qy = py;
+        best.qx = qx[e];
+        best.qy = qy[e];
       }
     }
   }
@@ -977,10 +1337,9 @@ std::vector<SurfacePoint> FastField::path_to(const SurfacePoint& target) const {
   for (size_t guard = 0; (window >= 0 || vertex >= 0) && guard < 4 * windows.size() + 16; ++guard) {
     if (window >= 0) {
       const Window& w = windows[window];
-      const FaceGeom& f = m->faces[w.face];
       double x = py <= 0 ? px : w.sx + (px - w.sx) * (-w.sy) / (py - w.sy);
       x = std::clamp(x, w.b0, w.b1);
-      out.push_back(edge_point(w.face, w.edge, x));
+      out.push_back(edge_point(w.he, x));
       if (w.parent < 0) {
         window = -1;
         vertex = w.root;
@@ -988,16 +1347,14 @@ std::vector<SurfacePoint> FastField::path_to(const SurfacePoint& target) const {
         continue;
       }
       const Window& p = windows[w.parent];
-      const FaceGeom& pf = m->faces[p.face];
-      const int pe = p.edge;
+      const HalfEdge& ph = m->half[p.he];
       if (w.exit == 2) {
-        px = x * pf.u2x[pe];
-        py = x * pf.u2y[pe];
+        px = x * ph.u2x;
+        py = x * ph.u2y;
       } else {
-        px = pf.cx[pe] + x * pf.u1x[pe];
-        py = pf.cy[pe] + x * pf.u1y[pe];
+        px = ph.cx + x * ph.u1x;
+        py = ph.cy + x * ph.u1y;
       }
-      (void)f;
       window = w.parent;
     } else {
       const int code = provenance[vertex];
@@ -1010,8 +1367,8 @@ std::vector<SurfacePoint> FastField::path_to(const SurfacePoint& target) const {
         window = code;
         vertex = -1;
         const Window& w = windows[window];
-        px = m->faces[w.face].cx[w.edge];
-        py = m->faces[w.face].cy[w.edge];
+        px = m->half[w.he].cx;
+        py = m->half[w.he].cy;
       }
     }
   }
@@ -1038,20 +1395,32 @@ class FastSolver final : public GeodesicSolver::Impl {
     this->mesh = mesh;
   }
 
-  DistanceField solve(const SurfacePoint& source, const Progress& progress) const override {
+  DistanceField solve(const SurfacePoint& source, const SolveOptions& options,
+                      const Progress& progress) const override {
     auto field = std::make_shared<FastField>();
     field->m = data_;
     field->source = source;
+    field->has_windows = options.keep_windows;
     thread_local Scratch scratch;
+    std::vector<Window>& windows = options.keep_windows ? field->windows : scratch.windows;
     {
-      Propagator run(*data_, *field, progress, scratch);
-      run.init(source);
+      Propagator run(*data_, *field, windows, options, progress, scratch);
+      run.init(field->source);
       run.run();
+      if (!options.keep_windows) run.evaluate_targets(field->source);
+    }
+    data_->window_hint.store(windows.size() + windows.size() / 4, std::memory_order_relaxed);
+    if (options.keep_windows) {
+      field->build_index();
+      field->target_distances.clear();
+      for (const SurfacePoint& t : options.targets)
+        field->target_distances.push_back(field->distance_to(t));
+    } else {
+      // The provenance codes refer to windows that are not kept.
+      field->provenance.clear();
+      field->provenance.shrink_to_fit();
     }
     release_if_large(scratch);
-    data_->window_hint.store(field->windows.size() + field->windows.size() / 4,
-                             std::memory_order_relaxed);
-    field->build_index();
     return DistanceField(std::move(field));
   }
 

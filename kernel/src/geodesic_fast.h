@@ -20,15 +20,18 @@ class DistanceField::Impl {
   virtual std::vector<SurfacePoint> path_to(const SurfacePoint& target) const = 0;
 
   SurfacePoint source;
-  std::vector<double> distances;  ///< per vertex, +inf if unreachable
+  std::vector<double> distances;         ///< per vertex, +inf if unreachable
+  std::vector<double> target_distances;  ///< per SolveOptions::targets
 };
 
 /// Per-mesh precomputation of one engine; `solve` must be const and thread-safe.
 class GeodesicSolver::Impl {
  public:
   virtual ~Impl() = default;
-  /// `source` has been validated by `normalize_surface_point`.
-  virtual DistanceField solve(const SurfacePoint& source, const Progress& progress) const = 0;
+  /// `source` and `options.targets` have been validated by `normalize_surface_point`; the field
+  /// returned has its `target_distances` filled.
+  virtual DistanceField solve(const SurfacePoint& source, const SolveOptions& options,
+                              const Progress& progress) const = 0;
 
   TriangleMesh mesh;
   GeodesicMethod method = GeodesicMethod::Fast;

@@ -76,7 +76,8 @@ class HeatSolver final : public GeodesicSolver::Impl {
     heat_ = std::make_unique<HeatMethod>(cgal_);
   }
 
-  DistanceField solve(const SurfacePoint& source, const Progress& progress) const override {
+  DistanceField solve(const SurfacePoint& source, const SolveOptions& options,
+                      const Progress& progress) const override {
     const int v = source.vertex(mesh);
     if (v < 0)
       throw InvalidInput(
@@ -93,6 +94,8 @@ class HeatSolver final : public GeodesicSolver::Impl {
       heat_->add_source(VertexIndex(v));
       heat_->estimate_geodesic_distances(DistanceMap{&field->distances});
     }
+    for (const SurfacePoint& t : options.targets)
+      field->target_distances.push_back(field->distance_to(t));
     progress.report("geodesic distances (heat)", 1.0);
     return DistanceField(std::move(field));
   }

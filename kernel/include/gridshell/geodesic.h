@@ -51,6 +51,26 @@ struct GeodesicOptions {
   GeodesicMethod method = GeodesicMethod::Fast;  // default: our exact engine
 };
 
+/// What one single-source solve must provide. The defaults give a complete field: exact
+/// distances to every vertex and to any surface point, and shortest paths. A caller that needs
+/// less can say so and pay less (fast engine; CGAL and heat honour `targets` and ignore the rest).
+struct SolveOptions {
+  /// Surface points whose exact distances the caller needs; DistanceField::target_distances()
+  /// lists them in this order. Default: none.
+  std::vector<SurfacePoint> targets;
+  /// false: the field keeps no propagation windows, so it answers vertex_distances() and
+  /// target_distances() only (distance_to and path_to throw InvalidInput). Saves the windows'
+  /// memory (~56 bytes each, about 50 per vertex on a 4k-vertex mesh) and the query index.
+  /// Default: true.
+  bool keep_windows = true;
+  /// true: the solve stops as soon as the distance field is final on every closed face that
+  /// contains a target, instead of covering the whole mesh. Then target_distances() are exact and,
+  /// with keep_windows, so are distance_to and path_to for points of those faces; all other
+  /// values are upper bounds (lengths of real paths, or +inf where not reached). Requires at
+  /// least one target. Default: false.
+  bool stop_at_targets = false;
+};
+
 /// Result of one single-source solve. Holds whatever the method needs to answer distance and
 /// path queries to arbitrary surface points afterwards (windows for the exact methods).
 class DistanceField {
@@ -65,6 +85,8 @@ class DistanceField {
   /// #V exact geodesic distances from the source to every vertex (+inf for vertices in another
   /// connected component).
   const std::vector<double>& vertex_distances() const;
+  /// Exact distances to SolveOptions::targets, in that order (empty without targets).
+  const std::vector<double>& target_distances() const;
   /// Exact geodesic distance from the source to an arbitrary surface point.
   double distance_to(const SurfacePoint& target) const;
   /// Exact shortest path from the source to `target` as a polyline of surface points, source
@@ -90,7 +112,11 @@ class GeodesicSolver {
 
   /// Single-source distance field. Thread-safe (const); cancellable through `progress`.
   DistanceField solve(const SurfacePoint& source, const Progress& progress = {}) const;
-  /// Shorthand: distances from `source` to all vertices.
+  /// Single-source distance field restricted to what `options` asks for (see SolveOptions).
+  /// Throws InvalidInput for invalid targets or stop_at_targets without targets.
+  DistanceField solve(const SurfacePoint& source, const SolveOptions& options,
+                      const Progress& progress = {}) const;
+  /// Shorthand: exact distances from `source` to all vertices (a solve without windows).
   std::vector<double> distances(const SurfacePoint& source, const Progress& progress = {}) const;
   /// Shorthand: exact shortest path between two surface points (see DistanceField::path_to).
   std::vector<SurfacePoint> shortest_path(const SurfacePoint& from, const SurfacePoint& to) const;
