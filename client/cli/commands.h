@@ -14,5 +14,6 @@ Command add_geodesic_command(CLI::App& app);
 Command add_design_command(CLI::App& app);
 Command add_examples_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
+Command add_health_command(CLI::App& app);
 
 }  // namespace gridshell::cli
