@@ -119,7 +119,8 @@ std::shared_ptr<Job> JobQueue::submit(JobRequest request) {
     std::lock_guard lock(mutex_);
     if (!accepting_) {
       refusal = {StatusCode::Unavailable, "the daemon is shutting down"};
-    } else if (static_cast<int>(waiting_.size()) >= options_.capacity) {
+    } else if (static_cast<int>(waiting_.size() + running_.size()) >=
+               options_.workers + options_.capacity) {
       refusal = {StatusCode::ResourceExhausted,
                  "the queue is full (" + std::to_string(waiting_.size()) + " waiting, " +
                      std::to_string(running_.size()) + " running); retry later"};
