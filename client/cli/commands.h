@@ -16,4 +16,10 @@ Command add_examples_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
 Command add_health_command(CLI::App& app);
 
+/// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client
+/// count; `write_section` replaces a marked section of the benchmarks file.
+using SectionWriter = void (*)(const std::string& path, const std::string& name,
+                               const std::string& body);
+int bench_service(const std::string& out, bool no_write, int repeats, SectionWriter write_section);
+
 }  // namespace gridshell::cli
