@@ -69,7 +69,11 @@ struct Daemon::Impl {
   void log(nlohmann::json line) {
     if (!options.log) return;
     line["time"] = utc_timestamp();
-    *options.log << line.dump() << '\n' << std::flush;
+    const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    if (queue)
+      queue->write_log(text);
+    else
+      *options.log << text << '\n' << std::flush;
   }
 };
 

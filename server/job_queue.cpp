@@ -276,9 +276,7 @@ void JobQueue::finish(const std::shared_ptr<Job>& job, Status status,
     for (const auto& [stage, ms] : job->stages()) stages[stage] = ms;
     line["stages_ms"] = stages;
     if (job->cancel_latency_ms) line["cancel_ms"] = *job->cancel_latency_ms;
-    const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
-    std::lock_guard lock(log_mutex_);
-    *options_.log << text << '\n' << std::flush;
+    write_log(line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   }
   job->request.sink->finish(status, std::move(result));
 }
@@ -327,6 +325,12 @@ void JobQueue::shutdown(std::chrono::milliseconds grace) {
   deadline_changed_.notify_all();
   for (std::thread& worker : workers_) worker.join();
   watchdog_.join();
+}
+
+void JobQueue::write_log(const std::string& line) {
+  if (!options_.log) return;
+  std::lock_guard lock(log_mutex_);
+  *options_.log << line << '\n' << std::flush;
 }
 
 JobQueue::Stats JobQueue::stats() const {

@@ -116,6 +116,9 @@ class JobQueue {
 
   Stats stats() const;
 
+  /// Writes one line to the log (if any), serialized with the queue's own lines.
+  void write_log(const std::string& line);
+
  private:
   void work();
   void watch_deadlines();

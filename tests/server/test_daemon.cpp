@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <thread>
 
 #include "gridshell/files.h"
@@ -241,6 +243,61 @@ TEST(Daemon, EveryBadInputIsInvalidArgumentWithItsMessage) {
   const auto stats = daemon.daemon().stats();
   EXPECT_EQ(stats.failed, testing::bad_inputs().size());
   EXPECT_EQ(stats.succeeded, 1u);
+}
+
+// Random but well-formed requests (arbitrary corners, holes punched into meshes, collapsed
+// vertices, options anywhere in their ranges): whatever the kernel makes of them, the answer is
+// a status of the caller's making (OK, INVALID_ARGUMENT, FAILED_PRECONDITION), never INTERNAL
+// and never a crash.
+TEST(Daemon, RandomRequestsNeverCrashOrFailInternally) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  std::mt19937 random(20261201);
+  auto uniform = [&](int n) { return static_cast<int>(random() % static_cast<unsigned>(n)); };
+  std::map<grpc::StatusCode, int> outcomes;
+  for (int i = 0; i < 40; ++i) {
+    const char* examples[] = {"plane", "hypar", "sphere", "cone"};
+    v1::DesignRequest request = testing::design_request(examples[uniform(4)], 12);
+    v1::Mesh& mesh = *request.mutable_mesh();
+    const int vertices = mesh.positions_size() / 3;
+    switch (uniform(4)) {
+      case 0:  // holes and pieces
+        for (int k = uniform(12) + 1; k > 0; --k) {
+          const int f = uniform(mesh.indices_size() / 3);
+          mesh.mutable_indices()->erase(mesh.indices().begin() + 3 * f,
+                                        mesh.indices().begin() + 3 * f + 3);
+        }
+        break;
+      case 1:  // collapsed vertices
+        for (int k = 0; k < 10; ++k) {
+          const int a = uniform(vertices), b = uniform(vertices);
+          for (int c = 0; c < 3; ++c) mesh.set_positions(3 * a + c, mesh.positions(3 * b + c));
+        }
+        break;
+      default:
+        break;
+    }
+    v1::Corners& corners = *request.mutable_corners();
+    if (uniform(2)) {
+      for (int c = 0; c < 4; ++c) corners.set_vertices(c, uniform(vertices));
+    } else if (uniform(2)) {
+      corners.clear_vertices();
+      for (int k = 0; k < 12; ++k) corners.add_points(uniform(160) - 80.0);
+    }
+    auto& options = *request.mutable_options();
+    if (uniform(3) == 0)
+      options.set_alpha(std::vector<std::string>{"max", "1.0", "45deg"}[uniform(3)]);
+    if (uniform(3) == 0) options.set_members_u(uniform(15));
+    if (uniform(3) == 0) options.set_lamella_width(std::vector<double>{0.01, 5, 500}[uniform(3)]);
+    const grpc::Status status = testing::call_design(*stub, request).status;
+    ++outcomes[status.error_code()];
+    EXPECT_TRUE(status.error_code() == grpc::StatusCode::OK ||
+                status.error_code() == grpc::StatusCode::INVALID_ARGUMENT ||
+                status.error_code() == grpc::StatusCode::FAILED_PRECONDITION)
+        << i << ": " << status.error_code() << " " << status.error_message();
+  }
+  for (const auto& [code, count] : outcomes) std::printf("status %d: %d\n", code, count);
+  EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
 }
 
 TEST(Daemon, InfeasibleDesignIsFailedPrecondition) {
