@@ -197,6 +197,23 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
   }
   const double rss_after = daemon.resident_mib();
 
+  // Control: the same work in-process on 1 and on 2 threads, no service involved, measured now.
+  // On a machine shared with other work this is the parallelism actually available, which
+  // bounds the service's scaling.
+  std::cerr << "bench service: in-process control (1 and 2 threads)\n";
+  auto in_process_rate = [&](int threads) {
+    const int per_thread = 4;
+    const auto start = Clock::now();
+    std::vector<std::thread> workers;
+    for (int t = 0; t < threads; ++t)
+      workers.emplace_back([&] {
+        for (int i = 0; i < per_thread; ++i) run_design(request, {}, {FieldNames::Request, 1});
+      });
+    for (auto& worker : workers) worker.join();
+    return threads * per_thread / seconds_since(start);
+  };
+  const double control_1 = in_process_rate(1), control_2 = in_process_rate(2);
+
   // Overhead: alternate in-process and remote runs of the same request, same kernel threads.
   std::cerr << "bench service: overhead (in-process vs remote, alternating)\n";
   std::vector<double> local_s, remote_s, remote_kernel_s;
@@ -264,6 +281,13 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
                   percentile(level.latencies, 99));
     table << line;
   }
+  std::snprintf(line, sizeof line,
+                "\nControl, measured in the same run without the service: `run_design` in "
+                "process on 2 threads at once gives %.2fx the rate of 1 thread (%.2f vs %.2f "
+                "designs/s): the parallelism the shared machine offered, which bounds the "
+                "service's scaling.\n",
+                control_2 / control_1, control_2, control_1);
+  table << line;
   std::snprintf(line, sizeof line,
                 "\nResident memory of gridshelld: %.1f MiB after warm-up, %.1f MiB after %d "
                 "requests (%+.1f MiB).\n",
