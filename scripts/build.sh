@@ -2,5 +2,6 @@
 # Configures and builds gridshell (optimized, Ninja, ccache) into ./build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DGRIDSHELL_BUILD_SERVER="${GRIDSHELL_BUILD_SERVER:-ON}" >/dev/null
 cmake --build build -j "$(nproc)"

@@ -5,7 +5,7 @@ PKGS=(
   build-essential cmake ninja-build ccache pkg-config clang-format
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev
   libceres-dev libsuitesparse-dev
-  libprotobuf-dev protobuf-compiler libgrpc++-dev protobuf-compiler-grpc
+  libprotobuf-dev protobuf-compiler libgrpc++-dev protobuf-compiler-grpc libssl-dev
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
 )
 missing=()

@@ -1,16 +1,18 @@
 #include "cli_support.h"
 
-#include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 
 #include "gridshell/errors.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/files.h"
+#include "gridshell/requests.h"
 
 namespace gridshell::cli {
 
@@ -104,14 +106,20 @@ void finish_progress() {
 }
 
 std::string to_json(const google::protobuf::Message& message, bool pretty) {
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.add_whitespace = pretty;
-  options.always_print_primitive_fields = true;
-  std::string json;
-  const auto status = google::protobuf::util::MessageToJsonString(message, &json, options);
-  if (!status.ok()) throw std::runtime_error("JSON conversion failed: " + status.ToString());
-  return json;
+  return gridshell::to_json(message, pretty);
+}
+
+v1::Mesh request_mesh(const InputMesh& input) {
+  v1::Mesh mesh = to_proto(input.mesh, std::filesystem::path(input.name).filename().string());
+  for (const std::string& warning : input.report.warnings) mesh.add_warnings(warning);
+  return mesh;
+}
+
+int file_vertex(const InputMesh& input, int mesh_vertex) {
+  if (mesh_vertex < 0) return -1;
+  const auto& map = input.report.vertex_of_file_vertex;
+  const auto it = std::find(map.begin(), map.end(), mesh_vertex);
+  return it == map.end() ? -1 : static_cast<int>(it - map.begin());
 }
 
 double median(std::vector<double> values) {

@@ -11,6 +11,7 @@
 #include "gridshell/mesh_io.h"
 #include "gridshell/patch.h"
 #include "gridshell/progress.h"
+#include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {
 
@@ -42,8 +43,16 @@ Progress make_progress(bool quiet);
 /// Ends the progress line.
 void finish_progress();
 
-/// Protobuf message as JSON with the proto field names (snake_case), pretty-printed.
+/// Protobuf message as JSON with the proto field names (snake_case), pretty-printed
+/// (gridshell::to_json, the format of every file).
 std::string to_json(const google::protobuf::Message& message, bool pretty = true);
+
+/// The loaded mesh as a request mesh: packed arrays as loaded (so vertex indices of the loaded
+/// mesh stay valid), named by the file name, with the loader's warnings.
+v1::Mesh request_mesh(const InputMesh& input);
+
+/// The file-order index of a loaded mesh vertex (the first, for welded duplicates), or -1.
+int file_vertex(const InputMesh& input, int mesh_vertex);
 
 /// Median of a list of numbers.
 double median(std::vector<double> values);

@@ -233,9 +233,9 @@ Command add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArguments>();
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
-  sub->add_option("WHAT", args->what, "geodesic | design | simulate")
+  sub->add_option("WHAT", args->what, "geodesic | design | simulate | service")
       ->required()
-      ->check(CLI::IsMember({"geodesic", "design", "simulate"}));
+      ->check(CLI::IsMember({"geodesic", "design", "simulate", "service"}));
   sub->add_option("--sizes", args->sizes, "target vertex counts")
       ->delimiter(',')
       ->capture_default_str();
@@ -254,6 +254,8 @@ Command add_bench_command(CLI::App& app) {
       if (s < 100 || s > 2000000) throw InvalidInput("--sizes: each size must be 100..2000000");
     if (args->repeats < 1) throw InvalidInput("--repeats: must be at least 1");
     if (args->what == "simulate") return bench_simulate(args->repeats, args->out, args->no_write);
+    if (args->what == "service")
+      return bench_service(args->out, args->no_write, args->repeats, write_section);
     return args->what == "design" ? bench_design(*args) : bench_geodesic(*args);
   };
 }

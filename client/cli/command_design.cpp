@@ -1,5 +1,5 @@
-// `gridshell design MESH --corners ... --out DIR`: the grid design of paper Section 4.
-#include <chrono>
+// `gridshell design MESH --corners ... --out DIR`: the grid design of paper Section 4, in
+// process or on a daemon (--server).
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -7,10 +7,9 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/convert.h"
-#include "gridshell/design.h"
-#include "gridshell/design_export.h"
-#include "gridshell/errors.h"
+#include "gridshell/files.h"
+#include "gridshell/requests.h"
+#include "remote.h"
 
 namespace gridshell::cli {
 namespace {
@@ -29,84 +28,54 @@ struct DesignArguments {
   double eta_max = 1.0015;
   int threads = 0;
   bool quiet = false;
+  RemoteOptions remote;
 };
 
 int run_design(const DesignArguments& args) {
-  const auto start = std::chrono::steady_clock::now();
   const InputMesh input = load_input(args.mesh);
   std::string corners_used;
   const CornerSpec spec = resolve_corners(input, args.corners, &corners_used);
-  DesignOptions options;
-  options.patch.cut.method = options.patch.coverability.method = parse_geodesic_method(args.method);
-  if (options.patch.cut.method == GeodesicMethod::Heat)
-    throw InvalidInput("--method: the design needs exact geodesics; use fast or cgal, not heat");
-  if (!(args.eta_max >= 1.0)) throw InvalidInput("--eta-max: must be >= 1");
-  options.patch.coverability.eta_max = args.eta_max;
-  parse_alpha(args.alpha, options);
-  if (args.members_u < 0) throw InvalidInput("--members-u: must be >= 0 (0 = automatic)");
-  if (args.members_v < 0) throw InvalidInput("--members-v: must be >= 0 (0 = automatic)");
-  if (!(args.lamella_width >= 0) || !std::isfinite(args.lamella_width))
-    throw InvalidInput("--lamella-width: must be positive (or 0 for 1% of the longest side)");
-  if (!(args.lamella_thickness >= 0) || !std::isfinite(args.lamella_thickness))
-    throw InvalidInput("--lamella-thickness: must be positive (or 0 for a tenth of the width)");
-  if (args.resolution != 0 && (args.resolution < 8 || args.resolution > 1000))
-    throw InvalidInput("--resolution: must be 0 (adaptive) or 8..1000");
-  options.members_g = args.members_u;
-  options.members_h = args.members_v;
-  options.members.lamella_width = args.lamella_width;
-  options.members.lamella_thickness = args.lamella_thickness;
-  options.maps.resolution = args.resolution;
-  options.maps.threads = options.grid.threads = args.threads;
+  v1::DesignRequest request;
+  *request.mutable_mesh() = request_mesh(input);
+  *request.mutable_corners() = to_proto(spec, corners_used);
+  v1::DesignRequest::Options& options = *request.mutable_options();
+  options.set_alpha(args.alpha);
+  options.set_members_u(args.members_u);
+  options.set_members_v(args.members_v);
+  options.set_lamella_width(args.lamella_width);
+  options.set_lamella_thickness(args.lamella_thickness);
+  options.set_resolution(args.resolution);
+  options.set_geodesic_method(args.method);
+  options.set_eta_max(args.eta_max);
 
-  std::filesystem::create_directories(args.out);
+  std::filesystem::create_directories(args.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.quiet);
-  const Design design = make_design(input.mesh, spec, options, progress);
+  v1::DesignResult result;
+  if (args.remote.remote()) {
+    prepare_design(request, FieldNames::CommandLine);  // the CLI's own messages for bad options
+    result = RemoteClient(args.remote).design(request, progress);
+  } else {
+    result = gridshell::run_design(request, progress, {FieldNames::CommandLine, args.threads});
+  }
   finish_progress();
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  write_files(design_files(result), args.out);
 
-  v1::DesignOptions used;
-  used.set_corners(corners_used);
-  used.set_alpha(args.alpha);
-  used.set_members_u(args.members_u);
-  used.set_members_v(args.members_v);
-  used.set_lamella_width(design.lamella_width);
-  used.set_lamella_thickness(design.lamella_thickness);
-  used.set_map_resolution(design.maps.g.resolution());
-  used.set_eta_max(args.eta_max);
-  used.set_max_smoothing_iterations(options.patch.coverability.max_smoothing_iterations);
-  used.set_k_min(options.cladding.k_min);
-  used.set_k_max(options.cladding.k_max);
-  used.set_max_spacing(options.members.max_spacing);
-  used.set_min_members(options.members.min_members);
-  used.set_max_members(options.members.max_members);
-  used.set_geodesic_method(args.method);
-  used.set_length_tolerance(options.grid.length_tolerance);
-  const std::string name = std::filesystem::path(args.mesh).filename().string();
-  const v1::Design message = to_proto(design, used, name);
-  const v1::DesignReport report = to_report(design, name, input.mesh.vertex_count(), seconds);
-
-  const std::filesystem::path out(args.out);
-  write_file_atomically((out / "design.json").string(), to_json(message) + "\n");
-  write_file_atomically((out / "report.json").string(), to_json(report) + "\n");
-  write_file_atomically((out / "planar.svg").string(), planar_svg(design, design.lamella_width));
-  write_file_atomically((out / "spatial.obj").string(), spatial_obj(design));
-  write_file_atomically((out / "maps.svg").string(), maps_svg(design));
-
+  const v1::Design& d = result.design();
+  const v1::DesignReport& r = result.report();
   const double deg = 180 / std::numbers::pi;
-  std::printf("design %s -> %s\n", args.mesh.c_str(), args.out.c_str());
+  std::printf("design %s -> %s%s\n", args.mesh.c_str(), args.out.c_str(),
+              args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
   std::printf("  patch           %d vertices, eta %.5f -> %.5f (%d smoothing iterations)\n",
-              design.target.patch.mesh.vertex_count(), design.target.smoothing.eta_before,
-              design.target.smoothing.eta_after, design.target.smoothing.iterations);
+              r.patch_vertices(), r.eta_before(), r.eta_after(), r.smoothing_iterations());
   std::printf("  alpha           %.2f deg on the surface; planar %.2f deg in [%.2f, %.2f]\n",
-              design.alpha * deg, design.alpha_bar * deg, design.alpha_range.min * deg,
-              design.alpha_range.max * deg);
-  std::printf("  members         %d g + %d h inner (+ 4 boundary), %d crossings, %zu anchors\n",
-              report.members_g(), report.members_h(), report.crossings(), design.anchors.size());
-  std::printf("  max notch       %.4g   max length mismatch %.2e\n", report.max_notch(),
-              report.max_length_mismatch());
-  std::printf("  time            %.3f s (t_smooth %.3f s, t_grid %.3f s)\n", seconds,
-              report.t_smooth(), report.t_grid());
+              d.alpha() * deg, d.alpha_bar() * deg, d.alpha_bar_range(0) * deg,
+              d.alpha_bar_range(1) * deg);
+  std::printf("  members         %d g + %d h inner (+ 4 boundary), %d crossings, %d anchors\n",
+              r.members_g(), r.members_h(), r.crossings(), d.anchors_size());
+  std::printf("  max notch       %.4g   max length mismatch %.2e\n", r.max_notch(),
+              r.max_length_mismatch());
+  std::printf("  time            %.3f s (t_smooth %.3f s, t_grid %.3f s)\n", r.seconds(),
+              r.t_smooth(), r.t_grid());
   std::printf("  wrote           design.json report.json planar.svg spatial.obj maps.svg\n");
   return 0;
 }
@@ -139,9 +108,10 @@ Command add_design_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--method", args->method, "geodesic engine: fast | cgal")->capture_default_str();
   sub->add_option("--eta-max", args->eta_max, "gap factor threshold")->capture_default_str();
-  sub->add_option("--threads", args->threads, "worker threads (0 = all cores)")
+  sub->add_option("--threads", args->threads, "worker threads, in-process only (0 = all cores)")
       ->capture_default_str();
   sub->add_flag("--quiet", args->quiet, "no progress line");
+  add_remote_options(sub, args->remote);
   return [args] { return run_design(*args); };
 }
 

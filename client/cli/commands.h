@@ -39,5 +39,12 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
 void write_deployment_files(const DeploymentJob& job, const std::string& out);
 void print_deployment_summary(const DeploymentJob& job, const std::string& input,
                               const std::string& out);
+Command add_health_command(CLI::App& app);
+
+/// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client
+/// count; `write_section` replaces a marked section of the benchmarks file.
+using SectionWriter = void (*)(const std::string& path, const std::string& name,
+                               const std::string& body);
+int bench_service(const std::string& out, bool no_write, int repeats, SectionWriter write_section);
 
 }  // namespace gridshell::cli

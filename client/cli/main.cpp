@@ -1,4 +1,4 @@
-// gridshell — command-line front end. Runs the kernel in-process.
+// gridshell — command-line front end. Runs the kernel in-process, or on gridshelld (--server).
 //
 // Exit codes (docs/decisions.md): 0 success, 1 internal error, 2 invalid input, 3 infeasible
 // design, 130 cancelled (Ctrl-C). Errors are one line on stderr starting with "error:".
@@ -9,6 +9,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/errors.h"
+#include "remote.h"
 
 namespace {
 std::atomic<bool> interrupted{false};
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
   add(cli::add_examples_command);
   add(cli::add_bench_command);
   add(cli::add_simulate_command);
+  add(cli::add_health_command);
 
   try {
     app.parse(argc, argv);
@@ -68,6 +70,10 @@ int main(int argc, char** argv) {
     cli::finish_progress();
     std::cerr << "error: cancelled\n";
     return 130;
+  } catch (const cli::RemoteError& e) {
+    cli::finish_progress();
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
   } catch (const std::exception& e) {
     cli::finish_progress();
     std::cerr << "error: internal: " << e.what() << "\n";

@@ -28,13 +28,15 @@ int interior_peak(const Patch& patch, const std::vector<double>& k) {
 
 }  // namespace
 
-GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver,
-                     const std::vector<double>& k) {
+GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver, const std::vector<double>& k,
+                     const Progress& progress) {
   GapFactor gap;
   gap.peak = interior_peak(patch, k);
   if (gap.peak < 0) return gap;  // no interior vertex: nothing can be uncovered
   const TriangleMesh& mesh = patch.mesh;
-  const std::vector<double> from_peak = solver.distances(SurfacePoint::at_vertex(mesh, gap.peak));
+  // The solves poll the cancellation flag (a daemon must stop within 200 ms, also on big meshes).
+  const std::vector<double> from_peak =
+      solver.distances(SurfacePoint::at_vertex(mesh, gap.peak), progress.checker());
   // p1: boundary vertex closest to the peak, and the sides it lies on.
   double best = std::numeric_limits<double>::infinity();
   for (const auto& side : patch.sides)
@@ -43,7 +45,8 @@ GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver,
         best = from_peak[v];
         gap.p1 = v;
       }
-  const std::vector<double> from_p1 = solver.distances(SurfacePoint::at_vertex(mesh, gap.p1));
+  const std::vector<double> from_p1 =
+      solver.distances(SurfacePoint::at_vertex(mesh, gap.p1), progress.checker());
   gap.eta = 1.0;
   for (int s = 0; s < 4; ++s) {
     if (std::find(patch.sides[s].begin(), patch.sides[s].end(), gap.p1) == patch.sides[s].end())
@@ -88,14 +91,15 @@ CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOp
     for (int i = 0; i < samples; ++i) {
       progress.report("coverability: member lengths", 0.1 + 0.8 * done++ / (2.0 * samples));
       const int v = from[static_cast<size_t>(std::lround(i * (from.size() - 1.0) / (samples - 1)))];
-      const std::vector<double> d = solver.distances(SurfacePoint::at_vertex(patch.mesh, v));
+      const std::vector<double> d =
+          solver.distances(SurfacePoint::at_vertex(patch.mesh, v), progress.checker());
       for (int q : to)
         report.longest_member_distance = std::max(report.longest_member_distance, d[q]);
     }
   }
   report.injectivity_ok = report.longest_member_distance < report.injectivity_bound;
   progress.report("coverability: gap factor", 0.9);
-  report.gap = gap_factor(patch, solver, k);
+  report.gap = gap_factor(patch, solver, k, progress);
   progress.report("coverability", 1.0);
   return report;
 }
@@ -180,7 +184,7 @@ SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& 
   for (int v = 0; v < patch.mesh.vertex_count(); ++v) fixed[v] = topology.is_boundary_vertex[v];
   auto eta_of = [&]() {
     GeodesicSolver solver(patch.mesh, GeodesicOptions{options.method});
-    return gap_factor(patch, solver, gaussian_curvature(patch.mesh)).eta;
+    return gap_factor(patch, solver, gaussian_curvature(patch.mesh), progress).eta;
   };
   result.eta_before = result.eta_after = eta_of();
   while (result.eta_after > options.eta_max) {

@@ -90,8 +90,9 @@ bool parse_integer(std::string_view s, long long& out) {
 
 struct RawMesh {
   std::string format;
-  int index_base = 0;  ///< how the file numbers vertices: 1 for OBJ, 0 otherwise
-  bool stl = false;    ///< vertices are facet corners
+  int index_base = 0;               ///< how the file numbers vertices: 1 for OBJ, 0 otherwise
+  bool stl = false;                 ///< vertices are facet corners
+  const char* source = "the file";  ///< how messages refer to the whole input
   std::vector<Vec3> vertices;
   std::vector<int> vertex_line;  ///< per vertex; 0 when the format has no lines (binary)
   std::vector<int> corners;      ///< polygon corners, flattened (file vertex indices, 0-based)
@@ -993,7 +994,7 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
   report.file_vertices = nv;
   report.file_faces = np;
   if (np == 0)
-    fail(path + ": no faces (the file defines " + count_of(nv, "vertex", "vertices") +
+    fail(path + ": no faces (" + raw.source + " defines " + count_of(nv, "vertex", "vertices") +
          " but no faces)");
 
   // Index range, then fan triangulation.
@@ -1006,8 +1007,8 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
       const int index = raw.corners[k];
       if (index < 0 || index >= nv)
         fail(face_where(path, raw, p) + "face vertex index " +
-             std::to_string(static_cast<long long>(index) + raw.index_base) +
-             " is out of range (the file has " + count_of(nv, "vertex", "vertices") + ")");
+             std::to_string(static_cast<long long>(index) + raw.index_base) + " is out of range (" +
+             raw.source + " has " + count_of(nv, "vertex", "vertices") + ")");
     }
     if (end - begin > 3) ++report.polygons_triangulated;
     for (size_t k = begin + 1; k + 1 < end; ++k) {
@@ -1216,7 +1217,32 @@ TriangleMesh load_mesh(const std::string& path, LoadReport* report,
   return finish(path, raw, out, options);
 }
 
-void save_obj(const TriangleMesh& mesh, const std::string& path) {
+TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& vertices,
+                              const std::vector<Face>& faces, LoadReport* report,
+                              const MeshLoadOptions& options) {
+  RawMesh raw;
+  raw.format = "arrays";
+  raw.source = "the mesh";
+  if (vertices.empty()) fail(name + ": no vertices");
+  raw.vertices.reserve(vertices.size());
+  for (size_t v = 0; v < vertices.size(); ++v) {
+    if (!vertices[v].allFinite())
+      fail(name + ": vertex " + std::to_string(v) + " has a non-finite coordinate " +
+           format_point(vertices[v]));
+    raw.add_vertex(vertices[v], 0);
+  }
+  raw.corners.reserve(3 * faces.size());
+  for (const Face& f : faces) {
+    raw.corners.insert(raw.corners.end(), f.begin(), f.end());
+    raw.end_polygon(0);
+  }
+  LoadReport local;
+  LoadReport& out = report ? *report : local;
+  out = LoadReport{};
+  return finish(name, raw, out, options);
+}
+
+std::string obj_text(const TriangleMesh& mesh) {
   std::string text = "# gridshell mesh: " + std::to_string(mesh.vertex_count()) + " vertices, " +
                      std::to_string(mesh.face_count()) + " faces\n";
   text.reserve(text.size() + mesh.vertices.size() * 60 + mesh.faces.size() * 24);
@@ -1226,7 +1252,11 @@ void save_obj(const TriangleMesh& mesh, const std::string& path) {
   for (const Face& f : mesh.faces)
     text += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " +
             std::to_string(f[2] + 1) + "\n";
-  write_file_atomically(path, text);
+  return text;
+}
+
+void save_obj(const TriangleMesh& mesh, const std::string& path) {
+  write_file_atomically(path, obj_text(mesh));
 }
 
 void write_file_atomically(const std::string& path, const std::string& contents) {

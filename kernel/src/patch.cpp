@@ -375,8 +375,9 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   std::array<std::vector<Location>, 4> paths;
   for (int i = 0; i < 4; ++i) {
     progress.report("patch: boundary geodesics", 0.1 + 0.2 * i);
-    const auto path = solver.shortest_path(SurfacePoint::at_vertex(mesh, corners[i]),
-                                           SurfacePoint::at_vertex(mesh, corners[(i + 1) % 4]));
+    // solve + path_to is shortest_path with the cancellation flag polled during the solve.
+    const auto path = solver.solve(SurfacePoint::at_vertex(mesh, corners[i]), progress.checker())
+                          .path_to(SurfacePoint::at_vertex(mesh, corners[(i + 1) % 4]));
     std::vector<Location> locations;
     for (const SurfacePoint& p : path) {
       Location loc = classify(mesh, p, snap);

@@ -103,6 +103,9 @@ v1::DesignReport to_report(const Design& design, const std::string& input_name, 
   }
   for (const auto& [stage, s] : st) (*report.mutable_stage_seconds())["patch_" + stage] = s;
   report.set_t_grid(t_grid);
+  report.set_eta_before(design.target.smoothing.eta_before);
+  report.set_eta_after(design.target.smoothing.eta_after);
+  report.set_smoothing_iterations(design.target.smoothing.iterations);
   return report;
 }
 

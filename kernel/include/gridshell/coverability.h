@@ -43,9 +43,9 @@ struct CoverabilityReport {
 
 /// The gap factor at the vertex of maximal Gaussian curvature. With the paper's notation:
 /// p1 = closest boundary vertex to p_max, q ranges over the side opposite p1 (both opposite
-/// sides if p1 is a corner; the larger eta is returned).
+/// sides if p1 is a corner; the larger eta is returned). Cancellable through `progress`.
 GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver,
-                     const std::vector<double>& gaussian_curvature);
+                     const std::vector<double>& gaussian_curvature, const Progress& progress = {});
 
 /// Curvature, injectivity bound, longest member distance and gap factor of the patch.
 CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOptions& options = {},

@@ -41,6 +41,17 @@ struct LoadReport {
 TriangleMesh load_mesh(const std::string& path, LoadReport* report = nullptr,
                        const MeshLoadOptions& options = {});
 
+/// A mesh given as arrays in memory (the daemon's packed arrays): the same repairs, checks and
+/// report as `load_mesh`, with messages starting with `name` ("mesh: face 7: ...") and vertices
+/// and faces numbered from 0 in the given order. Throws InvalidInput for no vertices, a
+/// non-finite coordinate, no faces, an out-of-range index and every topology problem.
+TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& vertices,
+                              const std::vector<Face>& faces, LoadReport* report = nullptr,
+                              const MeshLoadOptions& options = {});
+
+/// The mesh as Wavefront OBJ text (shortest round-trip decimal coordinates, 1-based faces).
+std::string obj_text(const TriangleMesh& mesh);
+
 /// Writes a Wavefront OBJ atomically (temporary file in the same folder, then rename).
 void save_obj(const TriangleMesh& mesh, const std::string& path);
 

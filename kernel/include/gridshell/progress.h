@@ -26,6 +26,9 @@ class Progress {
   Progress checker() const { return Progress(nullptr, cancel_); }
 
   bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
+  /// The cancellation flag itself (may be null), for a Progress that reports elsewhere but
+  /// must stop with this one.
+  const std::atomic<bool>* cancel_flag() const { return cancel_; }
   void check() const {
     if (cancelled()) throw Cancelled();
   }

@@ -1,0 +1,343 @@
+// `gridshell bench service`: gridshelld under load. Starts the daemon next to this executable on
+// an ephemeral loopback port and measures, on a paper-like example (double vault, default
+// options):
+//   - requests/s and p50/p99 latency of Design for 1, 2, 4 and 8 concurrent clients,
+//   - the daemon's resident memory before and after 200 requests,
+//   - the service overhead: remote minus in-process time of one Design (same kernel threads),
+//   - the daemon's own measured stop latency when requests are cancelled mid-way.
+// Writes a table into docs/benchmarks.md (section "service").
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "gridshell/errors.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/requests.h"
+#include "remote.h"
+
+namespace gridshell::cli {
+
+#ifdef GRIDSHELL_HAVE_GRPC
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kExample = "double-vault";
+constexpr int kMemoryRequests = 200;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Nearest-rank percentile.
+double percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  const size_t rank = static_cast<size_t>(std::ceil(p / 100 * values.size()));
+  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
+}
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// gridshelld as a child process, its log in a file.
+class Daemon {
+ public:
+  explicit Daemon(const std::string& log_path) : log_path_(log_path) {
+    std::error_code ec;
+    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+    const std::string binary = (self.parent_path() / "gridshelld").string();
+    if (ec || !fs::exists(binary))
+      throw InvalidInput("bench service: gridshelld not found next to " + self.string() +
+                         " (build with GRIDSHELL_BUILD_SERVER=ON)");
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(fd, STDERR_FILENO);
+      execl(binary.c_str(), binary.c_str(), "--listen", "127.0.0.1:0", "--no-http", "--queue", "64",
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    for (int i = 0; i < 3000 && address_.empty(); ++i) {
+      std::smatch match;
+      const std::string log = read_all(log_path_);
+      if (std::regex_search(log, match, std::regex("\"grpc\":\"([0-9.]+:[0-9]+)\"")))
+        address_ = match[1];
+      else
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (address_.empty())
+      throw std::runtime_error("gridshelld did not start: " + read_all(log_path_));
+  }
+  ~Daemon() {
+    if (pid_ <= 0) return;
+    kill(pid_, SIGTERM);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+  }
+  const std::string& address() const { return address_; }
+  /// VmRSS in MiB.
+  double resident_mib() const {
+    std::ifstream in("/proc/" + std::to_string(pid_) + "/status");
+    std::string line;
+    while (std::getline(in, line))
+      if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024;
+    return 0;
+  }
+  std::string log() const { return read_all(log_path_); }
+
+ private:
+  std::string log_path_;
+  std::string address_;
+  pid_t pid_ = -1;
+};
+
+v1::DesignRequest example_request() {
+  const ExampleSurface example = make_example(kExample);
+  v1::DesignRequest request;
+  *request.mutable_mesh() = to_proto(example.mesh, std::string("example:") + kExample);
+  CornerSpec corners;
+  corners.kind = CornerSpec::Kind::Vertices;
+  corners.vertices = example.corners;
+  *request.mutable_corners() = to_proto(corners, "example");
+  return request;
+}
+
+struct Level {
+  int clients = 0, requests = 0;
+  double wall = 0;
+  std::vector<double> latencies;
+};
+
+/// `requests` Design calls spread over `clients` threads, each with its own channel.
+Level run_level(const std::string& address, const v1::DesignRequest& request, int clients,
+                int requests) {
+  Level level;
+  level.clients = clients;
+  level.requests = requests;
+  std::vector<std::vector<double>> latencies(clients);
+  std::atomic<int> next{0};
+  std::atomic<int> failures{0};
+  const auto start = Clock::now();
+  std::vector<std::thread> threads;
+  for (int c = 0; c < clients; ++c)
+    threads.emplace_back([&, c] {
+      RemoteOptions options;
+      options.server = address;
+      RemoteClient client(options);
+      while (next++ < requests) {
+        const auto t0 = Clock::now();
+        try {
+          client.design(request);
+          latencies[c].push_back(seconds_since(t0));
+        } catch (const std::exception& e) {
+          std::cerr << "bench service: request failed: " << e.what() << "\n";
+          ++failures;
+        }
+      }
+    });
+  for (auto& thread : threads) thread.join();
+  level.wall = seconds_since(start);
+  for (const auto& l : latencies) level.latencies.insert(level.latencies.end(), l.begin(), l.end());
+  if (failures > 0)
+    throw std::runtime_error("bench service: " + std::to_string(failures.load()) +
+                             " requests failed");
+  return level;
+}
+
+}  // namespace
+
+int bench_service(const std::string& out, bool no_write, int repeats, SectionWriter write_section) {
+  const std::string dir =
+      (fs::temp_directory_path() / ("gridshell-bench-" + std::to_string(getpid()))).string();
+  fs::create_directories(dir);
+  Daemon daemon(dir + "/gridshelld.log");
+  const v1::DesignRequest request = example_request();
+  RemoteOptions options;
+  options.server = daemon.address();
+  RemoteClient client(options);
+  std::cerr << "bench service: gridshelld on " << daemon.address() << ", warming up\n";
+  // Warm-up with 8 clients, so every worker, connection and buffer exists before the first
+  // memory reading: what grows after it is growth, not start-up.
+  run_level(daemon.address(), request, 8, 8);
+  const double rss_before = daemon.resident_mib();
+  int served = 0;
+
+  // Throughput and latency for 1, 2, 4, 8 clients.
+  // Right before each level, the same designs in this process on as many threads as the
+  // daemon would use (no service involved): the parallelism the shared machine offers at that
+  // moment, which bounds what the service can reach.
+  const int workers = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  auto in_process_rate = [&](int threads) {
+    const int per_thread = 3;
+    const auto start = Clock::now();
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t)
+      pool.emplace_back([&] {
+        for (int i = 0; i < per_thread; ++i) run_design(request, {}, {FieldNames::Request, 1});
+      });
+    for (auto& thread : pool) thread.join();
+    return threads * per_thread / seconds_since(start);
+  };
+  std::vector<Level> levels;
+  std::vector<double> control;
+  for (int clients : {1, 2, 4, 8}) {
+    const int requests = std::max(repeats, 1) * (4 + 2 * clients);
+    std::cerr << "bench service: " << clients << " client(s), " << requests << " requests\n";
+    control.push_back(in_process_rate(std::min(clients, workers)));
+    levels.push_back(run_level(daemon.address(), request, clients, requests));
+    served += requests;
+  }
+  if (served < kMemoryRequests) {
+    std::cerr << "bench service: " << kMemoryRequests - served << " more requests for memory\n";
+    run_level(daemon.address(), request, 8, kMemoryRequests - served);
+    served = kMemoryRequests;
+  }
+  const double rss_after = daemon.resident_mib();
+
+  // Overhead: alternate in-process and remote runs of the same request, same kernel threads.
+  std::cerr << "bench service: overhead (in-process vs remote, alternating)\n";
+  std::vector<double> local_s, remote_s, remote_kernel_s;
+  const int pairs = 9;
+  for (int i = 0; i < pairs; ++i) {
+    auto t0 = Clock::now();
+    run_design(request, {}, {FieldNames::Request, 1});
+    local_s.push_back(seconds_since(t0));
+    t0 = Clock::now();
+    const v1::DesignResult result = client.design(request);
+    remote_s.push_back(seconds_since(t0));
+    remote_kernel_s.push_back(result.report().seconds());
+  }
+  const double local = median(local_s), remote = median(remote_s);
+  std::vector<double> transport;
+  for (int i = 0; i < pairs; ++i) transport.push_back(remote_s[i] - remote_kernel_s[i]);
+
+  // Cancellation: cancel designs at several points, read the daemon's own stop latency.
+  std::cerr << "bench service: cancellations\n";
+  const int cancels = 10;
+  for (int k = 0; k < cancels; ++k) {
+    std::atomic<bool> cancel{false};
+    const Progress progress(nullptr, &cancel);
+    std::thread stopper([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50 + 100 * k));
+      cancel = true;
+    });
+    try {
+      client.design(request, progress);
+    } catch (const Cancelled&) {
+    }
+    stopper.join();
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  std::vector<double> cancel_ms;
+  const std::string log = daemon.log();
+  const std::regex cancel_field("\"cancel_ms\":([0-9.eE+-]+)");
+  for (auto it = std::sregex_iterator(log.begin(), log.end(), cancel_field);
+       it != std::sregex_iterator(); ++it)
+    cancel_ms.push_back(std::stod((*it)[1]));
+
+  std::ostringstream table;
+  char line[512];
+  table << "## Service: gridshelld under load\n\n"
+        << "Measured " <<
+      [] {
+        const std::time_t now = std::time(nullptr);
+        char buffer[32];
+        std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::gmtime(&now));
+        return std::string(buffer);
+      }()
+        << ", " << std::thread::hardware_concurrency()
+        << " hardware threads (shared machine). `Design` of example `" << kExample
+        << "` (default options, R = 100) over gRPC on loopback; gridshelld with its defaults: "
+           "one worker per core, one kernel thread per request. Each client is a thread with "
+           "its own channel issuing requests back to back. Latency is per request as the "
+           "client sees it, in seconds.\n\n"
+        << "*In-process* is the same design run in the benchmark's own process on min(clients, "
+        << workers << ") threads right before each row, without the service: the parallelism "
+        << "the shared machine offered at that moment. *Service / in-process* near 1 means the "
+        << "daemon adds no serialization of its own.\n\n"
+        << "| clients | requests | requests/s | vs 1 client | in-process designs/s | service / "
+           "in-process | p50 latency s | p99 latency s |\n"
+        << "|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  const double base_rate = levels.front().requests / levels.front().wall;
+  for (size_t k = 0; k < levels.size(); ++k) {
+    const Level& level = levels[k];
+    const double rate = level.requests / level.wall;
+    std::snprintf(line, sizeof line, "| %d | %d | %.2f | %.2fx | %.2f | %.2f | %.3f | %.3f |\n",
+                  level.clients, level.requests, rate, rate / base_rate, control[k],
+                  rate / control[k], percentile(level.latencies, 50),
+                  percentile(level.latencies, 99));
+    table << line;
+  }
+  std::snprintf(line, sizeof line,
+                "\nResident memory of gridshelld: %.1f MiB after a warm-up with 8 clients, "
+                "%.1f MiB after %d more requests (%+.1f MiB).\n",
+                rss_before, rss_after, served, rss_after - rss_before);
+  table << line;
+  // Overhead per request: the client's wall time minus the kernel's own time in the daemon
+  // (run_design, the same function the in-process run calls). Unlike the difference of two
+  // separate runs, this is not swamped by the noise of a shared machine.
+  std::vector<double> kernel_s(remote_kernel_s);
+  const double kernel = median(kernel_s), overhead = median(transport);
+  std::snprintf(line, sizeof line,
+                "\nService overhead of one Design (single client, median of %d): %.1f ms = "
+                "%.2f%% of the kernel time (%.3f s), measured per request as the client's wall "
+                "time minus the daemon's time in `run_design` (the function the in-process run "
+                "calls): transport, queue and conversion to and from messages. Alternating "
+                "separate runs of the same request give in-process %.3f s, remote %.3f s "
+                "(%+.1f%%, within the noise of the shared machine).\n",
+                pairs, 1000 * overhead, 100 * overhead / kernel, kernel, local, remote,
+                100 * (remote - local) / local);
+  table << line;
+  if (!cancel_ms.empty()) {
+    std::snprintf(line, sizeof line,
+                  "\nCancellation: %zu designs cancelled by the client 50-950 ms after they "
+                  "started; the daemon measured %.1f ms median, %.1f ms max from the cancel "
+                  "to its worker being free.\n",
+                  cancel_ms.size(), median(cancel_ms),
+                  *std::max_element(cancel_ms.begin(), cancel_ms.end()));
+    table << line;
+  }
+  table << "\nCommand: `gridshell bench service`\n";
+  std::cout << table.str();
+  if (!no_write) {
+    write_section(out, "service", table.str());
+    std::cerr << "wrote " << out << "\n";
+  }
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+  return 0;
+}
+
+#else
+
+int bench_service(const std::string&, bool, int, SectionWriter) {
+  throw InvalidInput(
+      "bench service: this gridshell was built without gRPC "
+      "(GRIDSHELL_BUILD_SERVER=OFF)");
+}
+
+#endif
+
+}  // namespace gridshell::cli

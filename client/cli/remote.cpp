@@ -1,0 +1,220 @@
+// The gRPC client behind `--server`. Built only with GRIDSHELL_BUILD_SERVER (the default); without
+// it the options still parse and a remote run explains why it cannot happen.
+#include "remote.h"
+
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "gridshell/errors.h"
+
+#ifdef GRIDSHELL_HAVE_GRPC
+#include <grpcpp/grpcpp.h>
+
+#include "gridshell/v1/service.grpc.pb.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#endif
+
+namespace gridshell::cli {
+
+void add_remote_options(CLI::App* command, RemoteOptions& options) {
+  const char* group = "Remote (gridshelld)";
+  command->add_option("--server", options.server, "run on gridshelld at HOST:PORT")->group(group);
+  command->add_flag("--tls", options.tls, "connect with TLS (system CA roots)")->group(group);
+  command
+      ->add_option("--tls-ca", options.tls_ca,
+                   "PEM CA or self-signed certificate that verifies the daemon (implies --tls)")
+      ->group(group);
+  command->add_option("--token-file", options.token_file, "file holding the bearer token")
+      ->group(group);
+  command->add_option("--timeout", options.timeout, "deadline in seconds (0 = none)")->group(group);
+}
+
+RemoteError::RemoteError(const std::string& message) : std::runtime_error(message) {}
+
+#ifdef GRIDSHELL_HAVE_GRPC
+
+namespace {
+
+std::string read_whole_file(const std::string& path, const char* option) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InvalidInput(std::string(option) + ": cannot read " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string trimmed(std::string text) {
+  const auto first = text.find_first_not_of(" \t\r\n");
+  const auto last = text.find_last_not_of(" \t\r\n");
+  return first == std::string::npos ? "" : text.substr(first, last - first + 1);
+}
+
+}  // namespace
+
+struct RemoteClient::Impl {
+  RemoteOptions options;
+  std::string token;
+  std::shared_ptr<grpc::Channel> channel;
+  std::unique_ptr<v1::Gridshell::Stub> stub;
+
+  void prepare(grpc::ClientContext& context, double default_timeout = 0) const {
+    if (!token.empty()) context.AddMetadata("authorization", "Bearer " + token);
+    const double timeout = options.timeout > 0 ? options.timeout : default_timeout;
+    if (timeout > 0)
+      context.set_deadline(std::chrono::system_clock::now() +
+                           std::chrono::microseconds(static_cast<long long>(timeout * 1e6)));
+  }
+
+  [[noreturn]] void fail(const grpc::Status& status) const {
+    const std::string& message = status.error_message();
+    const std::string where = "gridshelld at " + options.server + ": ";
+    switch (status.error_code()) {
+      case grpc::StatusCode::INVALID_ARGUMENT:
+        throw InvalidInput(message);
+      case grpc::StatusCode::FAILED_PRECONDITION:
+        throw Infeasible(message);
+      case grpc::StatusCode::CANCELLED:
+        throw Cancelled();
+      case grpc::StatusCode::DEADLINE_EXCEEDED:
+        throw RemoteError(where + "deadline exceeded (--timeout " +
+                          std::to_string(options.timeout) + " s)");
+      case grpc::StatusCode::UNAUTHENTICATED:
+        throw RemoteError(where + "unauthenticated: " + message + " (see --token-file)");
+      case grpc::StatusCode::RESOURCE_EXHAUSTED:
+        throw RemoteError(where + "busy: " + message + "; retry later");
+      case grpc::StatusCode::UNAVAILABLE:
+        throw RemoteError(where + "unavailable: " + message);
+      case grpc::StatusCode::UNIMPLEMENTED:
+        throw RemoteError(where + "not implemented: " + message);
+      default:
+        throw RemoteError(where + "status " + std::to_string(status.error_code()) + ": " + message);
+    }
+  }
+
+  /// One server-streaming call: progress events go to `progress`, the result is returned. The
+  /// cancellation flag is watched while the call waits, so Ctrl-C cancels on the daemon too.
+  template <class Event, class Request>
+  auto call(std::unique_ptr<grpc::ClientReader<Event>> (v1::Gridshell::Stub::*method)(
+                grpc::ClientContext*, const Request&),
+            const Request& request, const Progress& progress) {
+    using Result = std::decay_t<decltype(std::declval<Event>().result())>;
+    grpc::ClientContext context;
+    prepare(context);
+    std::mutex mutex;
+    std::condition_variable wake;
+    bool done = false;
+    std::thread watcher([&] {
+      std::unique_lock lock(mutex);
+      while (!done) {
+        if (progress.cancelled()) {
+          context.TryCancel();
+          return;
+        }
+        wake.wait_for(lock, std::chrono::milliseconds(50));
+      }
+    });
+    auto stop_watcher = [&] {
+      {
+        std::lock_guard lock(mutex);
+        done = true;
+      }
+      wake.notify_all();
+      if (watcher.joinable()) watcher.join();
+    };
+    Result result;
+    bool have_result = false;
+    grpc::Status status;
+    try {
+      auto reader = (stub.get()->*method)(&context, request);
+      Event event;
+      while (reader->Read(&event)) {
+        if (event.has_result()) {
+          result = std::move(*event.mutable_result());
+          have_result = true;
+        } else if (event.has_progress()) {
+          try {
+            progress.report(event.progress().stage(), event.progress().fraction());
+          } catch (const Cancelled&) {
+            context.TryCancel();  // then drain the stream and finish it
+          }
+        }
+      }
+      status = reader->Finish();
+    } catch (...) {
+      stop_watcher();
+      throw;
+    }
+    stop_watcher();
+    if (progress.cancelled()) throw Cancelled();
+    if (!status.ok()) fail(status);
+    if (!have_result) throw RemoteError("gridshelld at " + options.server + ": no result");
+    return result;
+  }
+};
+
+RemoteClient::RemoteClient(const RemoteOptions& options) : impl_(std::make_unique<Impl>()) {
+  impl_->options = options;
+  if (options.server.find(':') == std::string::npos)
+    throw InvalidInput("--server: expected HOST:PORT, got '" + options.server + "'");
+  if (!options.token_file.empty()) {
+    impl_->token = trimmed(read_whole_file(options.token_file, "--token-file"));
+    if (impl_->token.empty())
+      throw InvalidInput("--token-file: " + options.token_file + " is empty");
+  }
+  std::shared_ptr<grpc::ChannelCredentials> credentials;
+  if (options.tls || !options.tls_ca.empty()) {
+    grpc::SslCredentialsOptions ssl;
+    if (!options.tls_ca.empty()) ssl.pem_root_certs = read_whole_file(options.tls_ca, "--tls-ca");
+    credentials = grpc::SslCredentials(ssl);
+  } else {
+    credentials = grpc::InsecureChannelCredentials();
+  }
+  grpc::ChannelArguments arguments;
+  arguments.SetMaxReceiveMessageSize(-1);  // results can be large; the daemon bounds them
+  arguments.SetMaxSendMessageSize(-1);
+  impl_->channel = grpc::CreateCustomChannel(options.server, credentials, arguments);
+  impl_->stub = v1::Gridshell::NewStub(impl_->channel);
+}
+
+RemoteClient::~RemoteClient() = default;
+
+v1::PatchResult RemoteClient::patch(const v1::PatchRequest& request, const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Patch, request, progress);
+}
+
+v1::DesignResult RemoteClient::design(const v1::DesignRequest& request, const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Design, request, progress);
+}
+
+std::string RemoteClient::health(const std::string& service) {
+  auto stub = grpc::health::v1::Health::NewStub(impl_->channel);
+  grpc::health::v1::HealthCheckRequest request;
+  request.set_service(service);
+  grpc::health::v1::HealthCheckResponse response;
+  grpc::ClientContext context;
+  impl_->prepare(context, 10.0);
+  const grpc::Status status = stub->Check(&context, request, &response);
+  if (status.error_code() == grpc::StatusCode::NOT_FOUND) return "SERVICE_UNKNOWN";
+  if (!status.ok()) impl_->fail(status);
+  return grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
+}
+
+#else  // built without gRPC
+
+struct RemoteClient::Impl {};
+
+RemoteClient::RemoteClient(const RemoteOptions&) {
+  throw InvalidInput(
+      "--server: this gridshell was built without gRPC (GRIDSHELL_BUILD_SERVER=OFF)");
+}
+RemoteClient::~RemoteClient() = default;
+v1::PatchResult RemoteClient::patch(const v1::PatchRequest&, const Progress&) { return {}; }
+v1::DesignResult RemoteClient::design(const v1::DesignRequest&, const Progress&) { return {}; }
+std::string RemoteClient::health(const std::string&) { return {}; }
+
+#endif
+
+}  // namespace gridshell::cli

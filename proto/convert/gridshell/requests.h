@@ -1,0 +1,85 @@
+// gridshell — the computations behind `gridshell patch|design` and the daemon's Patch and Design
+// RPCs: request message -> checked kernel inputs -> kernel -> result message.
+//
+// The CLI's in-process runs and gridshelld call the same functions, so a local and a remote run
+// produce the same result messages (and, through files.h, the same files). Nothing here knows
+// about gRPC or HTTP; a request is plain data and never names a file to open.
+//
+// Every field of a request is checked before the kernel runs: sizes, indices, NaN/Inf, counts,
+// option ranges. Problems throw InvalidInput with a message that starts with the field
+// ("mesh.positions[7]: ...", "options.eta_max: ..."); the kernel adds Infeasible and Cancelled.
+#pragma once
+
+#include <string>
+
+#include "gridshell/design.h"
+#include "gridshell/mesh_io.h"
+#include "gridshell/progress.h"
+#include "gridshell/target_patch.h"
+#include "gridshell/v1/requests.pb.h"
+
+namespace gridshell {
+
+/// How messages name a request's fields: by proto path ("options.eta_max", "corners.vertices[2]")
+/// for API callers, or by the CLI flag that filled it ("--eta-max", "--corners").
+enum class FieldNames { Request, CommandLine };
+
+struct RunSettings {
+  FieldNames names = FieldNames::Request;
+  /// Kernel worker threads inside one request; 0 = all cores. Results do not depend on it.
+  int threads = 0;
+};
+
+/// Packed arrays -> mesh, with the file loader's repairs and checks (mesh_from_arrays). `report`
+/// receives the repairs and the map from sent vertex index to mesh vertex.
+TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report,
+                     FieldNames names = FieldNames::Request);
+
+/// Mesh -> packed arrays.
+v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name);
+
+/// Corner spec of the loaded mesh (vertex indices translated through `load`).
+CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load,
+                          FieldNames names = FieldNames::Request);
+
+/// A Corners message for a spec on a mesh sent as is, with the label recorded in design.json.
+v1::Corners to_proto(const CornerSpec& spec, const std::string& label);
+
+// Patch ------------------------------------------------------------------------------------------
+
+/// A patch request checked and converted into kernel inputs.
+struct PatchInputs {
+  TriangleMesh mesh;
+  LoadReport load;
+  CornerSpec corners;
+  TargetPatchOptions options;
+};
+
+/// Checks every field; throws InvalidInput naming the first bad one.
+PatchInputs prepare_patch(const v1::PatchRequest& request, FieldNames names);
+
+/// The patch stage (make_target_patch) on a request: patch.json's report and the patch mesh.
+/// Corner `input_vertex` values are indices into the request's mesh.
+v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progress = {},
+                          const RunSettings& settings = {});
+
+// Design -----------------------------------------------------------------------------------------
+
+/// A design request checked and converted into kernel inputs.
+struct DesignInputs {
+  TriangleMesh mesh;
+  LoadReport load;
+  CornerSpec corners;
+  DesignOptions options;
+  v1::DesignOptions record;  ///< the options as recorded in design.json (completed after the run)
+};
+
+/// Checks every field; throws InvalidInput naming the first bad one.
+DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names);
+
+/// Patch stage and grid design (make_design) on a request: design.json, report.json and the
+/// SVG/OBJ views (planar.svg, spatial.obj, maps.svg).
+v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& progress = {},
+                            const RunSettings& settings = {});
+
+}  // namespace gridshell

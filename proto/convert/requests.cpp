@@ -1,0 +1,364 @@
+#include "gridshell/requests.h"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "gridshell/convert.h"
+#include "gridshell/design_export.h"
+#include "gridshell/errors.h"
+
+namespace gridshell {
+namespace {
+
+// Generous caps that keep one request from asking for unbounded work; far above every example.
+constexpr int kMaxMembers = 1000;
+constexpr int kMaxSmoothingIterations = 100000;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The name of a field in the caller's vocabulary.
+std::string field(FieldNames names, const char* request_path, const char* flag) {
+  return names == FieldNames::Request ? request_path : flag;
+}
+
+std::string indexed(const std::string& name, long long index) {
+  return name + "[" + std::to_string(index) + "]";
+}
+
+std::string shortest(double value) {
+  char buffer[32];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, end);
+}
+
+// The kernel names the CLI flags it was written for ("--corners: ...", "--alpha ..."); API
+// callers see the request fields instead.
+std::string to_request_names(const std::string& message) {
+  static const std::pair<std::string, std::string> kFlags[] = {{"--corners", "corners"},
+                                                               {"--alpha", "options.alpha"}};
+  for (const auto& [flag, path] : kFlags)
+    if (message.rfind(flag, 0) == 0) return path + message.substr(flag.size());
+  return message;
+}
+
+template <class Function>
+auto with_field_names(FieldNames names, Function&& function) {
+  if (names == FieldNames::CommandLine) return function();
+  try {
+    return function();
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(to_request_names(e.what()));
+  } catch (const Infeasible& e) {
+    throw Infeasible(to_request_names(e.what()));
+  }
+}
+
+GeodesicMethod exact_method(const std::string& text, const std::string& name, const char* what) {
+  GeodesicMethod method;
+  try {
+    method = parse_geodesic_method(text.empty() ? "fast" : text);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(name + ": " + e.what());
+  }
+  if (method == GeodesicMethod::Heat)
+    throw InvalidInput(name + ": " + what + " needs exact geodesics; use fast or cgal, not heat");
+  return method;
+}
+
+double eta_max_option(bool has, double value, const std::string& name, double fallback) {
+  if (!has) return fallback;
+  if (!(value >= 1.0)) throw InvalidInput(name + ": must be >= 1 (it is a ratio of path lengths)");
+  return value;
+}
+
+std::string corner_label(const v1::Corners& corners) {
+  if (!corners.label().empty()) return corners.label();
+  std::string label;
+  if (corners.vertices_size() > 0) {
+    for (int v : corners.vertices()) label += (label.empty() ? "" : ",") + std::to_string(v);
+  } else if (corners.points_size() > 0) {
+    for (int k = 0; k < corners.points_size(); ++k)
+      label += (k == 0 ? "" : k % 3 == 0 ? ";" : ",") + shortest(corners.points(k));
+  } else {
+    label = "auto";
+  }
+  return label;
+}
+
+/// Index of the sent vertex that became mesh vertex `v` (the first one, for welded duplicates).
+int sent_vertex(const LoadReport& load, int v) {
+  if (v < 0) return -1;
+  const auto& map = load.vertex_of_file_vertex;
+  const auto it = std::find(map.begin(), map.end(), v);
+  return it == map.end() ? -1 : static_cast<int>(it - map.begin());
+}
+
+}  // namespace
+
+TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report, FieldNames names) {
+  const int positions = mesh.positions_size(), indices = mesh.indices_size();
+  if (positions == 0) throw InvalidInput("mesh.positions: empty: the mesh has no vertices");
+  if (positions % 3 != 0)
+    throw InvalidInput("mesh.positions: " + std::to_string(positions) +
+                       " numbers is not a multiple of 3 (x, y, z per vertex)");
+  if (indices == 0) throw InvalidInput("mesh.indices: empty: the mesh has no faces");
+  if (indices % 3 != 0)
+    throw InvalidInput("mesh.indices: " + std::to_string(indices) +
+                       " numbers is not a multiple of 3 (three vertex indices per triangle)");
+  const int vertex_count = positions / 3;
+  std::vector<Vec3> vertices(vertex_count);
+  for (int k = 0; k < positions; ++k) {
+    const double value = mesh.positions(k);
+    if (!std::isfinite(value))
+      throw InvalidInput(indexed("mesh.positions", k) + ": " +
+                         (std::isnan(value) ? "NaN" : "infinite") + " coordinate (" + "xyz"[k % 3] +
+                         " of vertex " + std::to_string(k / 3) + ")");
+    vertices[k / 3][k % 3] = value;
+  }
+  std::vector<Face> faces(indices / 3);
+  for (int k = 0; k < indices; ++k) {
+    const int index = mesh.indices(k);
+    if (index < 0 || index >= vertex_count)
+      throw InvalidInput(indexed("mesh.indices", k) + ": vertex index " + std::to_string(index) +
+                         " is out of range (the mesh has " + std::to_string(vertex_count) +
+                         " vertices, numbered from 0)");
+    faces[k / 3][k % 3] = index;
+  }
+  return mesh_from_arrays("mesh", vertices, faces, report);
+}
+
+v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name) {
+  v1::Mesh out;
+  out.set_name(name);
+  out.mutable_positions()->Reserve(3 * mesh.vertex_count());
+  for (const Vec3& p : mesh.vertices)
+    for (int k = 0; k < 3; ++k) out.add_positions(p[k]);
+  out.mutable_indices()->Reserve(3 * mesh.face_count());
+  for (const Face& f : mesh.faces)
+    for (int v : f) out.add_indices(v);
+  return out;
+}
+
+CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load, FieldNames names) {
+  const std::string name = field(names, "corners", "--corners");
+  const std::string vertices_name = field(names, "corners.vertices", "--corners");
+  const std::string points_name = field(names, "corners.points", "--corners");
+  CornerSpec spec;
+  const bool vertices = corners.vertices_size() > 0, points = corners.points_size() > 0;
+  if (vertices && points) throw InvalidInput(name + ": give either vertices or points, not both");
+  if (vertices) {
+    if (corners.vertices_size() != 4)
+      throw InvalidInput(vertices_name + ": expected 4 vertex indices, got " +
+                         std::to_string(corners.vertices_size()));
+    const auto& map = load.vertex_of_file_vertex;
+    spec.kind = CornerSpec::Kind::Vertices;
+    for (int i = 0; i < 4; ++i) {
+      const int v = corners.vertices(i);
+      const std::string at = names == FieldNames::Request ? indexed(vertices_name, i) : name;
+      if (v < 0 || v >= static_cast<int>(map.size()))
+        throw InvalidInput(at + ": vertex index " + std::to_string(v) +
+                           " is out of range (the mesh has " + std::to_string(map.size()) +
+                           " vertices, numbered from 0)");
+      if (map[v] < 0)
+        throw InvalidInput(at + ": vertex " + std::to_string(v) +
+                           " was removed as an isolated vertex (no face uses it)");
+      spec.vertices[i] = map[v];
+    }
+  } else if (points) {
+    if (corners.points_size() != 12)
+      throw InvalidInput(points_name + ": expected 4 points (12 numbers x, y, z), got " +
+                         std::to_string(corners.points_size()) + " numbers");
+    spec.kind = CornerSpec::Kind::Points;
+    for (int k = 0; k < 12; ++k) {
+      const double value = corners.points(k);
+      if (!std::isfinite(value))
+        throw InvalidInput((names == FieldNames::Request ? indexed(points_name, k) : name) +
+                           ": not a finite number");
+      spec.points[k / 3][k % 3] = value;
+    }
+  } else {
+    spec.kind = CornerSpec::Kind::Auto;
+  }
+  return spec;
+}
+
+v1::Corners to_proto(const CornerSpec& spec, const std::string& label) {
+  v1::Corners out;
+  if (spec.kind == CornerSpec::Kind::Vertices)
+    for (int v : spec.vertices) out.add_vertices(v);
+  if (spec.kind == CornerSpec::Kind::Points)
+    for (const Vec3& p : spec.points)
+      for (int k = 0; k < 3; ++k) out.add_points(p[k]);
+  out.set_label(label);
+  return out;
+}
+
+// Patch ------------------------------------------------------------------------------------------
+
+PatchInputs prepare_patch(const v1::PatchRequest& request, FieldNames names) {
+  PatchInputs in;
+  in.mesh = to_mesh(request.mesh(), &in.load, names);
+  in.corners = to_corner_spec(request.corners(), in.load, names);
+  const v1::PatchRequest::Options& o = request.options();
+  in.options.cut.method = in.options.coverability.method = exact_method(
+      o.geodesic_method(), field(names, "options.geodesic_method", "--method"), "the patch");
+  in.options.coverability.eta_max =
+      eta_max_option(o.has_eta_max(), o.eta_max(), field(names, "options.eta_max", "--eta-max"),
+                     in.options.coverability.eta_max);
+  if (o.has_max_smoothing_iterations()) {
+    const int n = o.max_smoothing_iterations();
+    if (n < 0 || n > kMaxSmoothingIterations)
+      throw InvalidInput(
+          field(names, "options.max_smoothing_iterations", "--max-smoothing-iterations") +
+          ": must be between 0 and " + std::to_string(kMaxSmoothingIterations));
+    in.options.coverability.max_smoothing_iterations = n;
+  }
+  in.options.smooth = !o.no_smoothing();
+  return in;
+}
+
+v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progress,
+                          const RunSettings& settings) {
+  return with_field_names(settings.names, [&] {
+    const auto start = std::chrono::steady_clock::now();
+    const PatchInputs in = prepare_patch(request, settings.names);
+    const TargetPatch result = make_target_patch(in.mesh, in.corners, in.options, progress);
+
+    v1::PatchResult out;
+    v1::PatchReport& report = *out.mutable_report();
+    report.set_input(request.mesh().name());
+    report.set_input_vertex_count(in.mesh.vertex_count());
+    report.set_vertex_count(result.patch.mesh.vertex_count());
+    report.set_face_count(result.patch.mesh.face_count());
+    for (int i = 0; i < 4; ++i) {
+      v1::Corner* corner = report.add_corners();
+      const int pv = result.patch.corners[i];
+      const Vec3& p = result.patch.mesh.vertices[pv];
+      for (int k = 0; k < 3; ++k) corner->add_position(p[k]);
+      corner->set_patch_vertex(pv);
+      // Indices as sent, so the caller can pass them back as corners.
+      corner->set_input_vertex(sent_vertex(in.load, result.patch.input_vertex[pv]));
+      report.add_corner_angles(result.corner_angles[i]);
+      report.add_boundary_lengths(result.boundary_lengths[i]);
+    }
+    report.set_area(result.area);
+    const CoverabilityReport& cov = result.coverability;
+    report.set_gaussian_curvature_max(cov.gaussian_curvature_max);
+    report.set_gaussian_curvature_max_vertex(cov.gaussian_curvature_max_vertex);
+    report.set_injectivity_bound(cov.injectivity_bound);
+    report.set_longest_member_distance(cov.longest_member_distance);
+    report.set_injectivity_ok(cov.injectivity_ok);
+    report.set_eta_before(result.smoothing.eta_before);
+    report.set_eta_after(result.smoothing.eta_after);
+    report.set_eta_max(in.options.coverability.eta_max);
+    report.set_smoothing_iterations(result.smoothing.iterations);
+    report.set_max_smoothing_displacement(result.smoothing.max_displacement);
+    report.set_geodesic_method(to_string(in.options.cut.method));
+    for (const std::string& w : request.mesh().warnings()) report.add_warnings(w);
+    for (const std::string& w : in.load.warnings) report.add_warnings(w);
+    if (result.patch.corners_reversed)
+      report.add_warnings("corners were given clockwise; the patch uses them counter-clockwise");
+    if (!cov.injectivity_ok)
+      report.add_warnings("longest member distance exceeds the injectivity bound pi/sqrt(Kmax)");
+    for (int i = 0; i < 4; ++i) {
+      v1::Side* side = report.add_sides();
+      for (int v : result.patch.sides[i]) side->add_vertices(v);
+      side->set_length(result.boundary_lengths[i]);
+    }
+    for (const auto& [stage, s] : result.stage_seconds)
+      (*report.mutable_stage_seconds())[stage] = s;
+    *out.mutable_patch() = to_proto(result.patch.mesh, "patch");
+    report.set_seconds(seconds_since(start));
+    return out;
+  });
+}
+
+// Design -----------------------------------------------------------------------------------------
+
+DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names) {
+  DesignInputs in;
+  in.mesh = to_mesh(request.mesh(), &in.load, names);
+  in.corners = to_corner_spec(request.corners(), in.load, names);
+  const v1::DesignRequest::Options& o = request.options();
+  DesignOptions& options = in.options;
+  options.patch.cut.method = options.patch.coverability.method = exact_method(
+      o.geodesic_method(), field(names, "options.geodesic_method", "--method"), "the design");
+  options.patch.coverability.eta_max =
+      eta_max_option(o.has_eta_max(), o.eta_max(), field(names, "options.eta_max", "--eta-max"),
+                     options.patch.coverability.eta_max);
+  const std::string alpha = o.has_alpha() ? o.alpha() : "min";
+  parse_alpha(alpha, options);  // names --alpha; with_field_names translates
+  for (const auto& [count, request_path, flag] :
+       {std::tuple{o.members_u(), "options.members_u", "--members-u"},
+        std::tuple{o.members_v(), "options.members_v", "--members-v"}})
+    if (count < 0 || count > kMaxMembers)
+      throw InvalidInput(field(names, request_path, flag) + ": must be between 0 (automatic) and " +
+                         std::to_string(kMaxMembers));
+  options.members_g = o.members_u();
+  options.members_h = o.members_v();
+  if (!(o.lamella_width() >= 0) || !std::isfinite(o.lamella_width()))
+    throw InvalidInput(field(names, "options.lamella_width", "--lamella-width") +
+                       ": must be positive (or 0 for 1% of the longest side)");
+  if (!(o.lamella_thickness() >= 0) || !std::isfinite(o.lamella_thickness()))
+    throw InvalidInput(field(names, "options.lamella_thickness", "--lamella-thickness") +
+                       ": must be positive (or 0 for a tenth of the width)");
+  options.members.lamella_width = o.lamella_width();
+  options.members.lamella_thickness = o.lamella_thickness();
+  if (o.has_resolution()) {
+    const int r = o.resolution();
+    if (r != 0 && (r < 8 || r > 1000))
+      throw InvalidInput(field(names, "options.resolution", "--resolution") +
+                         ": must be 0 (adaptive) or 8..1000");
+    options.maps.resolution = r;
+  }
+
+  v1::DesignOptions& record = in.record;
+  record.set_corners(corner_label(request.corners()));
+  record.set_alpha(alpha);
+  record.set_members_u(o.members_u());
+  record.set_members_v(o.members_v());
+  record.set_eta_max(options.patch.coverability.eta_max);
+  record.set_max_smoothing_iterations(options.patch.coverability.max_smoothing_iterations);
+  record.set_k_min(options.cladding.k_min);
+  record.set_k_max(options.cladding.k_max);
+  record.set_max_spacing(options.members.max_spacing);
+  record.set_min_members(options.members.min_members);
+  record.set_max_members(options.members.max_members);
+  record.set_geodesic_method(to_string(options.patch.cut.method));
+  record.set_length_tolerance(options.grid.length_tolerance);
+  return in;
+}
+
+v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& progress,
+                            const RunSettings& settings) {
+  return with_field_names(settings.names, [&] {
+    const auto start = std::chrono::steady_clock::now();
+    DesignInputs in = prepare_design(request, settings.names);
+    in.options.maps.threads = in.options.grid.threads = settings.threads;
+    const Design design = make_design(in.mesh, in.corners, in.options, progress);
+    in.record.set_lamella_width(design.lamella_width);
+    in.record.set_lamella_thickness(design.lamella_thickness);
+    in.record.set_map_resolution(design.maps.g.resolution());
+
+    v1::DesignResult out;
+    const std::string& name = request.mesh().name();
+    *out.mutable_design() = to_proto(design, in.record, name);
+    auto add_view = [&](const char* file, std::string content) {
+      v1::File* view = out.add_views();
+      view->set_name(file);
+      view->set_content(std::move(content));
+    };
+    add_view("planar.svg", planar_svg(design, design.lamella_width));
+    add_view("spatial.obj", spatial_obj(design));
+    add_view("maps.svg", maps_svg(design));
+    *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
+    return out;
+  });
+}
+
+}  // namespace gridshell

@@ -1,0 +1,220 @@
+#include "daemon.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include <atomic>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "auth.h"
+#include "gridshell/errors.h"
+#include "grpc_service.h"
+#include "http_gateway.h"
+#include "methods.h"
+
+namespace gridshell::server {
+namespace {
+
+constexpr const char* kServiceName = "gridshell.v1.Gridshell";
+
+std::string host_of(const std::string& address) {
+  const auto colon = address.rfind(':');
+  std::string host = colon == std::string::npos ? address : address.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);
+  return host;
+}
+
+void check_address(const std::string& address, const char* option) {
+  const auto colon = address.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == address.size())
+    throw InvalidInput(std::string(option) + ": expected HOST:PORT, got '" + address + "'");
+  const std::string port = address.substr(colon + 1);
+  if (port.find_first_not_of("0123456789") != std::string::npos || port.size() > 5 ||
+      std::stoi(port) > 65535)
+    throw InvalidInput(std::string(option) + ": '" + port + "' is not a port number");
+}
+
+}  // namespace
+
+bool is_loopback_address(const std::string& address) {
+  const std::string host = host_of(address);
+  if (host == "localhost" || host == "::1") return true;
+  // 127.0.0.0/8, written as four decimal numbers.
+  int parts[4], used = 0;
+  if (std::sscanf(host.c_str(), "%d.%d.%d.%d%n", &parts[0], &parts[1], &parts[2], &parts[3],
+                  &used) == 4 &&
+      used == static_cast<int>(host.size()))
+    return parts[0] == 127 && parts[1] >= 0 && parts[1] <= 255 && parts[2] >= 0 &&
+           parts[2] <= 255 && parts[3] >= 0 && parts[3] <= 255;
+  return false;
+}
+
+struct Daemon::Impl {
+  DaemonOptions options;
+  std::string token, cert_pem, key_pem;
+  std::unique_ptr<JobQueue> queue;
+  Methods methods;
+  std::unique_ptr<GridshellService> service;
+  std::unique_ptr<grpc::Server> server;
+  std::unique_ptr<HttpGateway> gateway;
+  int grpc_port = 0;
+  std::atomic<bool> serving{false};
+  std::mutex shutdown_mutex;
+  bool started = false, stopped = false;
+
+  void log(nlohmann::json line) {
+    if (!options.log) return;
+    line["time"] = utc_timestamp();
+    const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    if (queue)
+      queue->write_log(text);
+    else
+      *options.log << text << '\n' << std::flush;
+  }
+};
+
+Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.options = std::move(options);
+  const DaemonOptions& o = d.options;
+  check_address(o.listen, "--listen");
+  if (!o.http.empty()) check_address(o.http, "--http");
+  if (o.tls_cert.empty() != o.tls_key.empty())
+    throw InvalidInput("--tls-cert and --tls-key: give both (certificate chain and its key)");
+  const bool tls = !o.tls_cert.empty();
+  for (const auto& [address, option] : {std::pair{o.listen, "--listen"}, {o.http, "--http"}}) {
+    if (address.empty() || is_loopback_address(address) || o.insecure) continue;
+    if (!tls || o.token_file.empty())
+      throw InvalidInput(std::string(option) + ": " + address +
+                         " is not a loopback address; serving it needs TLS and a token "
+                         "(--tls-cert, --tls-key, --token-file), or --insecure to serve it "
+                         "without them");
+  }
+  if (o.workers < 0 || o.workers > 1024) throw InvalidInput("--workers: must be 0..1024");
+  if (o.queue < 0 || o.queue > 100000) throw InvalidInput("--queue: must be 0..100000");
+  if (o.request_threads < 0 || o.request_threads > 1024)
+    throw InvalidInput("--request-threads: must be 0..1024");
+  if (o.max_message_mib < 1 || o.max_message_mib > 2047)
+    throw InvalidInput("--max-message-mib: must be 1..2047");
+  if (o.http_body_limit_mib < 1 || o.http_body_limit_mib > 4096)
+    throw InvalidInput("--http-body-limit-mib: must be 1..4096");
+  if (!(o.shutdown_grace_seconds >= 0)) throw InvalidInput("--shutdown-grace: must be >= 0");
+  if (tls) {
+    d.cert_pem = read_secret_file(o.tls_cert, "--tls-cert");
+    d.key_pem = read_secret_file(o.tls_key, "--tls-key");
+  }
+  if (!o.token_file.empty()) d.token = read_token_file(o.token_file);
+}
+
+Daemon::~Daemon() { shutdown(); }
+
+void Daemon::start() {
+  Impl& d = *impl_;
+  const DaemonOptions& o = d.options;
+  d.started = true;
+  d.queue = std::make_unique<JobQueue>(JobQueue::Options{o.workers, o.queue, o.log});
+  d.methods = make_methods({FieldNames::Request, o.request_threads});
+  d.service = std::make_unique<GridshellService>(*d.queue, d.methods, d.token);
+
+  static std::once_flag plugins;
+  std::call_once(plugins, [] {
+    grpc::EnableDefaultHealthCheckService(true);
+    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  });
+  std::shared_ptr<grpc::ServerCredentials> credentials;
+  if (!d.cert_pem.empty()) {
+    grpc::SslServerCredentialsOptions ssl;
+    ssl.pem_key_cert_pairs.push_back({d.key_pem, d.cert_pem});
+    credentials = grpc::SslServerCredentials(ssl);
+    if (!d.token.empty())
+      credentials->SetAuthMetadataProcessor(
+          make_token_processor(d.token, [&d](const std::string& method) {
+            d.log({{"method", method},
+                   {"transport", "grpc"},
+                   {"status", "UNAUTHENTICATED"},
+                   {"message", "missing or wrong bearer token"}});
+          }));
+  } else {
+    credentials = grpc::InsecureServerCredentials();
+  }
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(o.listen, credentials, &d.grpc_port);
+  const int max_message = o.max_message_mib * (1 << 20);
+  builder.SetMaxReceiveMessageSize(max_message);
+  builder.SetMaxSendMessageSize(max_message);
+  builder.RegisterService(d.service.get());
+  d.server = builder.BuildAndStart();
+  if (!d.server || d.grpc_port == 0)
+    throw InvalidInput("--listen: cannot listen on " + o.listen + " (address in use?)");
+
+  if (!o.http.empty()) {
+    HttpOptions http;
+    http.address = o.http;
+    http.body_limit = static_cast<std::size_t>(o.http_body_limit_mib) << 20;
+    http.static_dir = o.static_dir;
+    http.token = d.token;
+    http.tls_cert_pem = d.cert_pem;
+    http.tls_key_pem = d.key_pem;
+    d.gateway =
+        std::make_unique<HttpGateway>(http, *d.queue, d.methods, [&d] { return d.serving.load(); });
+    try {
+      d.gateway->start();
+    } catch (...) {
+      d.server->Shutdown();
+      throw;
+    }
+  }
+  auto* health = d.server->GetHealthCheckService();
+  health->SetServingStatus(true);
+  health->SetServingStatus(kServiceName, true);
+  d.serving = true;
+  d.log({{"event", "listening"},
+         {"grpc", host_of(o.listen) + ":" + std::to_string(d.grpc_port)},
+         {"http",
+          o.http.empty() ? std::string() : host_of(o.http) + ":" + std::to_string(http_port())},
+         {"tls", !d.cert_pem.empty()},
+         {"token", !d.token.empty()},
+         {"workers", d.queue->stats().workers},
+         {"queue", o.queue},
+         {"request_threads", o.request_threads}});
+}
+
+int Daemon::grpc_port() const { return impl_->grpc_port; }
+int Daemon::http_port() const { return impl_->gateway ? impl_->gateway->port() : 0; }
+bool Daemon::serving() const { return impl_->serving; }
+
+JobQueue::Stats Daemon::stats() const {
+  return impl_->queue ? impl_->queue->stats() : JobQueue::Stats{};
+}
+
+void Daemon::shutdown() {
+  Impl& d = *impl_;
+  std::lock_guard lock(d.shutdown_mutex);
+  if (!d.started || d.stopped) return;
+  d.stopped = true;
+  d.serving = false;
+  if (d.server) {
+    auto* health = d.server->GetHealthCheckService();
+    health->SetServingStatus(false);
+    health->SetServingStatus(kServiceName, false);
+  }
+  d.log({{"event", "shutting down"},
+         {"running", d.queue->stats().running},
+         {"queued", d.queue->stats().queued}});
+  d.queue->shutdown(
+      std::chrono::milliseconds(static_cast<long long>(d.options.shutdown_grace_seconds * 1000)));
+  if (d.server) d.server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  if (d.gateway) d.gateway->stop();
+  const JobQueue::Stats stats = d.queue->stats();
+  d.log({{"event", "stopped"},
+         {"succeeded", stats.succeeded},
+         {"failed", stats.failed},
+         {"cancelled", stats.cancelled},
+         {"rejected", stats.rejected}});
+}
+
+}  // namespace gridshell::server

@@ -1,0 +1,652 @@
+#include "http_gateway.h"
+
+#include <boost/asio.hpp>
+#include <boost/asio/ssl.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
+#include <condition_variable>
+#include <filesystem>
+#include <fstream>
+#include <list>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "auth.h"
+#include "gridshell/errors.h"
+#include "gridshell/files.h"
+
+namespace gridshell::server {
+namespace {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace ssl = net::ssl;
+namespace fs = std::filesystem;
+using tcp = net::ip::tcp;
+using JobFunction = decltype(JobRequest::run);
+
+constexpr auto kIdleTimeout = std::chrono::seconds(60);   // between requests on a connection
+constexpr auto kReadTimeout = std::chrono::seconds(300);  // to receive one request
+constexpr std::size_t kMaxSessions = 512;
+constexpr std::size_t kMaxStaticFile = 64u << 20;
+
+/// One POST /v1/NAME route: the RPC table entry behind it.
+struct Route {
+  std::string name;
+  bool implemented = false;
+  std::string unimplemented;
+  std::function<JobFunction(std::shared_ptr<const std::string>)> job;
+};
+
+template <class M>
+Route route(const M& method) {
+  return {method.name, static_cast<bool>(method.run), method.unimplemented,
+          [&method](std::shared_ptr<const std::string> body) -> JobFunction {
+            return job_function_from_json(method, std::move(body));
+          }};
+}
+
+std::string_view view(beast::string_view text) { return {text.data(), text.size()}; }
+
+std::string error_json(const Status& status) {
+  nlohmann::json body;
+  body["error"] = {{"code", static_cast<int>(status.code)},
+                   {"status", code_name(status.code)},
+                   {"message", status.message}};
+  return body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+const char* content_type(const fs::path& file) {
+  static const std::map<std::string, const char*> kTypes = {{".html", "text/html; charset=utf-8"},
+                                                            {".htm", "text/html; charset=utf-8"},
+                                                            {".js", "text/javascript"},
+                                                            {".mjs", "text/javascript"},
+                                                            {".css", "text/css"},
+                                                            {".json", "application/json"},
+                                                            {".svg", "image/svg+xml"},
+                                                            {".png", "image/png"},
+                                                            {".jpg", "image/jpeg"},
+                                                            {".ico", "image/x-icon"},
+                                                            {".wasm", "application/wasm"},
+                                                            {".txt", "text/plain; charset=utf-8"},
+                                                            {".obj", "text/plain; charset=utf-8"},
+                                                            {".map", "application/json"}};
+  const auto it = kTypes.find(lower(file.extension().string()));
+  return it == kTypes.end() ? "application/octet-stream" : it->second;
+}
+
+/// "%2F" -> "/", false for malformed escapes or a NUL.
+bool percent_decode(std::string_view in, std::string& out) {
+  out.clear();
+  for (size_t i = 0; i < in.size(); ++i) {
+    if (in[i] != '%') {
+      out += in[i];
+      continue;
+    }
+    if (i + 2 >= in.size() || !std::isxdigit(static_cast<unsigned char>(in[i + 1])) ||
+        !std::isxdigit(static_cast<unsigned char>(in[i + 2])))
+      return false;
+    out += static_cast<char>(std::stoi(std::string(in.substr(i + 1, 2)), nullptr, 16));
+    i += 2;
+  }
+  return out.find('\0') == std::string::npos;
+}
+
+std::pair<std::string, std::string> split_host_port(const std::string& address) {
+  const auto colon = address.rfind(':');
+  if (colon == std::string::npos || colon + 1 == address.size())
+    throw InvalidInput("--http: expected HOST:PORT, got '" + address + "'");
+  std::string host = address.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);
+  return {host, address.substr(colon + 1)};
+}
+
+}  // namespace
+
+struct HttpGateway::Impl {
+  HttpOptions options;
+  JobQueue& queue;
+  std::function<bool()> serving;
+  std::map<std::string, Route> routes;
+  fs::path static_root;  // canonical, empty = none
+
+  net::io_context io{1};
+  tcp::acceptor acceptor{io};
+  std::optional<ssl::context> tls;
+  std::thread thread;
+  int port = 0;
+  bool stopping = false;  // I/O thread only
+
+  struct SessionBase {
+    virtual ~SessionBase() = default;
+    virtual void stop() = 0;  // I/O thread
+  };
+  std::list<std::weak_ptr<SessionBase>> sessions;  // I/O thread only
+
+  std::mutex exit_mutex;
+  std::condition_variable exited_cv;
+  bool exited = false;
+  bool stopped = false;
+
+  Impl(HttpOptions o, JobQueue& q, const Methods& methods, std::function<bool()> s)
+      : options(std::move(o)), queue(q), serving(std::move(s)) {
+    routes["/v1/patch"] = route(methods.patch);
+    routes["/v1/design"] = route(methods.design);
+    routes["/v1/simulate"] = route(methods.simulate);
+    routes["/v1/run"] = route(methods.run);
+  }
+
+  template <class Stream>
+  class Session;
+
+  void accept();
+};
+
+/// One connection. Requests are read one at a time; an API call answers with "Connection: close"
+/// (the connection ends with its result), health checks and static files keep the connection.
+/// While a job runs the socket is watched, so a client that goes away cancels its job.
+template <class Stream>
+class HttpGateway::Impl::Session final : public SessionBase,
+                                         public std::enable_shared_from_this<Session<Stream>> {
+  static constexpr bool kTls = !std::is_same_v<Stream, beast::tcp_stream>;
+
+ public:
+  template <class... Args>
+  explicit Session(Impl& gateway, Args&&... args)
+      : gateway_(gateway), stream_(std::forward<Args>(args)...) {
+    beast::error_code ec;
+    const auto endpoint = beast::get_lowest_layer(stream_).socket().remote_endpoint(ec);
+    if (!ec)
+      peer_ = std::string(endpoint.address().is_v6() ? "ipv6:[" : "ipv4:") +
+              endpoint.address().to_string() + (endpoint.address().is_v6() ? "]:" : ":") +
+              std::to_string(endpoint.port());
+  }
+
+  void run() {
+    if constexpr (kTls) {
+      beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(30));
+      stream_.async_handshake(ssl::stream_base::server,
+                              [self = this->shared_from_this()](beast::error_code ec) {
+                                if (ec) return;  // not TLS, or gave up: drop the connection
+                                self->read_request();
+                              });
+    } else {
+      read_request();
+    }
+  }
+
+  void stop() override {
+    if (reading_ && !job_active_)
+      abort();  // idle between requests
+    else
+      stopping_ = true;  // close after the current response
+  }
+
+  // From the job's sink, on the I/O thread.
+  void on_progress(const v1::Progress& event) {
+    if (!sse_ || finished_) return;
+    if (!headers_sent_) {
+      // Headers go out with the first kernel progress: errors found while checking the request
+      // (before the kernel starts) still get their own HTTP status.
+      if (event.stage() == "queued") return;
+      send_sse_headers();
+    }
+    send_chunk("event: progress\ndata: " + to_json(event, false) + "\n\n");
+  }
+
+  void on_finish(const Status& status, const std::string& result_json) {
+    finished_ = true;
+    job_active_ = false;
+    if (sse_ && (headers_sent_ || status.ok())) {
+      if (!headers_sent_) send_sse_headers();
+      send_chunk(status.ok() ? "event: result\ndata: " + result_json + "\n\n"
+                             : "event: error\ndata: " + error_json(status) + "\n\n");
+      send("0\r\n\r\n", true);
+      return;
+    }
+    if (status.ok())
+      respond(http::status::ok, "application/json", result_json + "\n", false);
+    else
+      respond_error(status, false);
+  }
+
+ private:
+  /// Holds the session until the job is finished (a job always finishes, within 200 ms of a
+  /// cancellation), so the answer has somewhere to go; then lets go of it.
+  class Sink final : public JobSink, public std::enable_shared_from_this<Sink> {
+   public:
+    Sink(std::shared_ptr<Session> session, net::any_io_executor executor)
+        : session_(std::move(session)), executor_(std::move(executor)) {}
+
+    void progress(const v1::Progress& event) override {
+      {
+        std::lock_guard lock(mutex_);
+        if (!session_) return;
+        pending_ = event;
+        if (posted_) return;  // coalesce: the posted handler sends the latest
+        posted_ = true;
+      }
+      net::post(executor_, [self = this->shared_from_this()] {
+        v1::Progress event;
+        std::shared_ptr<Session> session;
+        {
+          std::lock_guard lock(self->mutex_);
+          event = std::move(self->pending_);
+          self->posted_ = false;
+          session = self->session_;
+        }
+        if (session) session->on_progress(event);
+      });
+    }
+
+    void finish(const Status& status, std::unique_ptr<google::protobuf::Message> result) override {
+      std::string json;
+      Status final = status;
+      if (result) {
+        try {
+          json = to_json(*result, false);  // on the worker, not the I/O thread
+        } catch (const std::exception& e) {
+          final = {StatusCode::Internal, e.what()};
+        }
+      }
+      std::shared_ptr<Session> session;
+      {
+        std::lock_guard lock(mutex_);
+        session = std::move(session_);
+      }
+      if (!session) return;
+      net::post(executor_,
+                [session, final, json = std::move(json)] { session->on_finish(final, json); });
+    }
+
+   private:
+    std::mutex mutex_;
+    std::shared_ptr<Session> session_;
+    net::any_io_executor executor_;
+    v1::Progress pending_;
+    bool posted_ = false;
+  };
+
+  void read_request() {
+    if (gateway_.stopping) return close();
+    reading_ = true;
+    parser_.emplace();
+    parser_->header_limit(64 * 1024);
+    parser_->body_limit(gateway_.options.body_limit);
+    beast::get_lowest_layer(stream_).expires_after(kIdleTimeout);
+    http::async_read_header(stream_, buffer_, *parser_,
+                            [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
+                              self->on_header(ec);
+                            });
+  }
+
+  void on_header(beast::error_code ec) {
+    reading_ = false;
+    if (ec) return fail_read(ec);
+    if (closed_) return abort();
+    auto& request = parser_->get();
+    const auto length = parser_->content_length();
+    if (length && *length > gateway_.options.body_limit)
+      return respond_error({StatusCode::ResourceExhausted, too_large_message()}, false, 413);
+    if (lower(std::string(view(request[http::field::expect]))) == "100-continue")
+      send("HTTP/1.1 100 Continue\r\n\r\n", false);
+    beast::get_lowest_layer(stream_).expires_after(kReadTimeout);
+    reading_ = true;
+    http::async_read(stream_, buffer_, *parser_,
+                     [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
+                       self->on_read(ec);
+                     });
+  }
+
+  void on_read(beast::error_code ec) {
+    if (ec) return fail_read(ec);
+    reading_ = false;
+    beast::get_lowest_layer(stream_).expires_never();
+    handle(parser_->release());
+  }
+
+  void fail_read(beast::error_code ec) {
+    reading_ = false;
+    if (closed_) return abort();
+    if (ec == http::error::body_limit)
+      return respond_error({StatusCode::ResourceExhausted, too_large_message()}, false, 413);
+    if (ec == http::error::end_of_stream || ec == net::error::eof || ec == beast::error::timeout ||
+        ec == net::error::operation_aborted || ec == net::error::connection_reset ||
+        ec.category() == net::error::get_ssl_category())
+      return close();
+    respond_error({StatusCode::InvalidArgument, "malformed HTTP request: " + ec.message()}, false,
+                  400);
+  }
+
+  std::string too_large_message() const {
+    return "request body larger than the limit of " + std::to_string(gateway_.options.body_limit) +
+           " bytes (--http-body-limit-mib)";
+  }
+
+  bool authorized(const http::request<http::string_body>& request) const {
+    return bearer_token_matches(view(request[http::field::authorization]), gateway_.options.token);
+  }
+
+  void handle(http::request<http::string_body> request) {
+    keep_alive_ = request.keep_alive() && !gateway_.stopping;
+    const std::string_view target(request.target().data(), request.target().size());
+    const std::string path(target.substr(0, target.find('?')));
+    const auto verb = request.method();
+
+    if (path == "/healthz") {
+      if (verb != http::verb::get && verb != http::verb::head)
+        return respond_error({StatusCode::Unimplemented, "use GET /healthz"}, keep_alive_, 405);
+      if (!authorized(request)) return unauthorized();
+      const bool serving = gateway_.serving();
+      return respond(serving ? http::status::ok : http::status::service_unavailable,
+                     "application/json",
+                     serving ? "{\"status\":\"SERVING\"}\n" : "{\"status\":\"NOT_SERVING\"}\n",
+                     keep_alive_, verb == http::verb::head);
+    }
+    if (path.rfind("/v1/", 0) == 0) {
+      const auto it = gateway_.routes.find(path);
+      if (it == gateway_.routes.end())
+        return respond_error({StatusCode::NotFound,
+                              "no such method: " + path + " (POST /v1/patch|design|simulate|run)"},
+                             keep_alive_);
+      if (verb != http::verb::post)
+        return respond_error({StatusCode::Unimplemented, "use POST " + path}, keep_alive_, 405);
+      if (!authorized(request)) return unauthorized();
+      return start_job(std::move(request), it->second);
+    }
+    if (verb == http::verb::get || verb == http::verb::head)
+      return serve_static(path, verb == http::verb::head);
+    respond_error({StatusCode::NotFound, "not found: " + path}, keep_alive_);
+  }
+
+  void unauthorized() {
+    respond_error({StatusCode::Unauthenticated,
+                   "missing or wrong bearer token (header Authorization: Bearer TOKEN)"},
+                  false);
+  }
+
+  void start_job(http::request<http::string_body> request, const Route& route) {
+    keep_alive_ = false;  // an API call's connection ends with its result
+    sse_ = view(request[http::field::accept]).find("text/event-stream") != std::string_view::npos;
+    JobRequest job;
+    job.id = gateway_.queue.next_id();
+    request_id_ = std::to_string(job.id);
+    job.method = route.name;
+    job.transport = "http";
+    job.peer = peer_;
+    job.sink = std::make_shared<Sink>(this->shared_from_this(), stream_.get_executor());
+    if (!route.implemented)
+      return gateway_.queue.refuse(std::move(job),
+                                   {StatusCode::Unimplemented, route.unimplemented});
+    const std::string timeout(view(request["X-Timeout-Ms"]));
+    if (!timeout.empty()) {
+      char* end = nullptr;
+      const double ms = std::strtod(timeout.c_str(), &end);
+      if (end == timeout.c_str() || *end != '\0' || !(ms > 0) || ms > 1e9)
+        return gateway_.queue.refuse(
+            std::move(job),
+            {StatusCode::InvalidArgument,
+             "X-Timeout-Ms: expected a positive number of milliseconds, got '" + timeout + "'"});
+      job.deadline = Clock::now() + std::chrono::microseconds(static_cast<long long>(ms * 1000));
+    }
+    job.run = route.job(std::make_shared<const std::string>(std::move(request.body())));
+    job_active_ = true;
+    watch_for_disconnect();
+    job_ = gateway_.queue.submit(std::move(job));  // null if refused: the sink already has it
+  }
+
+  /// A read while the job runs: the client sends nothing more, so the read ends only when the
+  /// connection does (or with stray bytes, which are ignored).
+  void watch_for_disconnect() {
+    watching_ = true;
+    stream_.async_read_some(net::buffer(watch_buffer_), [self = this->shared_from_this()](
+                                                            beast::error_code ec, std::size_t) {
+      self->watching_ = false;
+      if (self->closed_) return ec ? self->abort() : self->drain();
+      if (!ec) {
+        if (self->job_active_) self->watch_for_disconnect();
+        return;
+      }
+      if (self->job_active_ && self->job_)
+        self->gateway_.queue.cancel(self->job_, StatusCode::Cancelled, "the HTTP client went away");
+    });
+  }
+
+  void serve_static(const std::string& target, bool head) {
+    const Status not_found{StatusCode::NotFound, "not found: " + target};
+    if (gateway_.static_root.empty()) return respond_error(not_found, keep_alive_);
+    std::string path;
+    if (!percent_decode(target, path) || path.empty() || path[0] != '/' ||
+        path.find('\\') != std::string::npos)
+      return respond_error(not_found, keep_alive_);
+    if (path.back() == '/') path += "index.html";
+    // No "..", no "." and no hidden files: a request never leaves the static folder.
+    std::stringstream segments(path.substr(1));
+    std::string segment;
+    while (std::getline(segments, segment, '/'))
+      if (segment.empty() || segment[0] == '.') return respond_error(not_found, keep_alive_);
+    std::error_code ec;
+    const fs::path file = fs::canonical(gateway_.static_root / path.substr(1), ec);
+    const std::string root = gateway_.static_root.string() + "/";
+    if (ec || file.string().rfind(root, 0) != 0 || !fs::is_regular_file(file, ec) ||
+        fs::file_size(file, ec) > kMaxStaticFile)
+      return respond_error(not_found, keep_alive_);
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream contents;
+    contents << in.rdbuf();
+    respond(http::status::ok, content_type(file), contents.str(), keep_alive_, head);
+  }
+
+  void respond(http::status status, const char* type, std::string body, bool keep_alive,
+               bool head = false) {
+    http::response<http::string_body> response{status, 11};
+    response.set(http::field::server, "gridshelld");
+    response.set(http::field::content_type, type);
+    response.set(http::field::cache_control, "no-store");
+    if (!request_id_.empty()) response.set("X-Request-Id", request_id_);
+    if (status == http::status::unauthorized)
+      response.set(http::field::www_authenticate, "Bearer realm=\"gridshelld\"");
+    const std::size_t length = body.size();
+    if (!head) response.body() = std::move(body);
+    response.keep_alive(keep_alive);
+    response.content_length(length);
+    std::ostringstream text;
+    text << response;
+    send(text.str(), !keep_alive);
+  }
+
+  void respond_error(const Status& status, bool keep_alive, int http_code = 0) {
+    respond(static_cast<http::status>(http_code ? http_code : http_status(status.code)),
+            "application/json", error_json(status) + "\n", keep_alive);
+  }
+
+  void send_sse_headers() {
+    headers_sent_ = true;
+    std::string header =
+        "HTTP/1.1 200 OK\r\nServer: gridshelld\r\nContent-Type: text/event-stream\r\n"
+        "Cache-Control: no-store\r\nTransfer-Encoding: chunked\r\nConnection: close\r\n";
+    if (!request_id_.empty()) header += "X-Request-Id: " + request_id_ + "\r\n";
+    send(header + "\r\n", false);
+  }
+
+  void send_chunk(const std::string& data) {
+    std::ostringstream size;
+    size << std::hex << data.size();
+    send(size.str() + "\r\n" + data + "\r\n", false);
+  }
+
+  /// Queues bytes; `last`: close the connection once they are written (otherwise, when nothing
+  /// is left to write and no job is running, read the next request).
+  void send(std::string bytes, bool last) {
+    out_.push_back(std::move(bytes));
+    if (last) close_after_write_ = true;
+    if (!writing_) write_next();
+  }
+
+  void write_next() {
+    if (out_.empty()) {
+      if (close_after_write_ || (stopping_ && !job_active_)) return close();
+      if (!job_active_ && !reading_ && keep_alive_) read_request();
+      return;
+    }
+    writing_ = true;
+    net::async_write(stream_, net::buffer(out_.front()),
+                     [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
+                       self->writing_ = false;
+                       if (ec) {
+                         if (self->job_active_ && self->job_)
+                           self->gateway_.queue.cancel(self->job_, StatusCode::Cancelled,
+                                                       "the HTTP client went away");
+                         self->out_.clear();
+                         return self->close();
+                       }
+                       self->out_.pop_front();
+                       self->write_next();
+                     });
+  }
+
+  /// Ends the connection gracefully: no more sending, then read (and drop) until the client
+  /// closes too, so a close never resets the connection before the client has read everything.
+  void close() {
+    if (closed_) return;
+    closed_ = true;
+    beast::error_code ec;
+    beast::get_lowest_layer(stream_).socket().shutdown(tcp::socket::shutdown_send, ec);
+    beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(5));
+    if (!watching_ && !reading_) drain();  // a pending read ends with the connection and drains
+  }
+
+  void drain() {
+    beast::get_lowest_layer(stream_).async_read_some(
+        net::buffer(watch_buffer_),
+        [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
+          if (ec) return self->abort();
+          self->drain();
+        });
+  }
+
+  void abort() {
+    closed_ = true;
+    beast::error_code ignored;
+    beast::get_lowest_layer(stream_).socket().close(ignored);
+  }
+
+  Impl& gateway_;
+  Stream stream_;
+  std::string peer_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  std::deque<std::string> out_;
+  std::array<char, 512> watch_buffer_{};
+  std::shared_ptr<Job> job_;
+  std::string request_id_;
+  bool reading_ = false, writing_ = false, watching_ = false, closed_ = false, keep_alive_ = false;
+  bool close_after_write_ = false, stopping_ = false;
+  bool job_active_ = false, finished_ = false, sse_ = false, headers_sent_ = false;
+};
+
+void HttpGateway::Impl::accept() {
+  acceptor.async_accept([this](beast::error_code ec, tcp::socket socket) {
+    if (ec) {
+      if (acceptor.is_open() && !stopping) accept();
+      return;
+    }
+    sessions.remove_if([](const auto& weak) { return weak.expired(); });
+    if (sessions.size() >= kMaxSessions) {
+      beast::error_code ignored;
+      socket.close(ignored);  // too many connections: refuse this one
+    } else if (tls) {
+      auto session = std::make_shared<Session<beast::ssl_stream<beast::tcp_stream>>>(
+          *this, std::move(socket), *tls);
+      sessions.push_back(session);
+      session->run();
+    } else {
+      auto session = std::make_shared<Session<beast::tcp_stream>>(*this, std::move(socket));
+      sessions.push_back(session);
+      session->run();
+    }
+    accept();
+  });
+}
+
+HttpGateway::HttpGateway(HttpOptions options, JobQueue& queue, const Methods& methods,
+                         std::function<bool()> serving)
+    : impl_(std::make_unique<Impl>(std::move(options), queue, methods, std::move(serving))) {}
+
+HttpGateway::~HttpGateway() { stop(); }
+
+void HttpGateway::start() {
+  Impl& g = *impl_;
+  if (!g.options.static_dir.empty()) {
+    std::error_code ec;
+    g.static_root = fs::canonical(g.options.static_dir, ec);
+    if (ec || !fs::is_directory(g.static_root))
+      throw InvalidInput("--static: " + g.options.static_dir + " is not a folder");
+  }
+  if (!g.options.tls_cert_pem.empty()) {
+    g.tls.emplace(ssl::context::tls_server);
+    g.tls->set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 |
+                       ssl::context::no_sslv3 | ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1);
+    beast::error_code ec;
+    g.tls->use_certificate_chain(net::buffer(g.options.tls_cert_pem), ec);
+    if (ec) throw InvalidInput("--tls-cert: not a PEM certificate chain: " + ec.message());
+    g.tls->use_private_key(net::buffer(g.options.tls_key_pem), ssl::context::pem, ec);
+    if (ec)
+      throw InvalidInput("--tls-key: not a PEM private key for the certificate: " + ec.message());
+  }
+  const auto [host, port] = split_host_port(g.options.address);
+  beast::error_code ec;
+  tcp::resolver resolver(g.io);
+  const auto endpoints = resolver.resolve(host, port, tcp::resolver::passive, ec);
+  if (ec || endpoints.empty())
+    throw InvalidInput("--http: cannot resolve " + g.options.address + ": " + ec.message());
+  const tcp::endpoint endpoint = *endpoints.begin();
+  g.acceptor.open(endpoint.protocol(), ec);
+  if (!ec) g.acceptor.set_option(net::socket_base::reuse_address(true), ec);
+  if (!ec) g.acceptor.bind(endpoint, ec);
+  if (!ec) g.acceptor.listen(net::socket_base::max_listen_connections, ec);
+  if (ec) throw InvalidInput("--http: cannot listen on " + g.options.address + ": " + ec.message());
+  g.port = g.acceptor.local_endpoint().port();
+  g.accept();
+  g.thread = std::thread([&g] {
+    g.io.run();
+    std::lock_guard lock(g.exit_mutex);
+    g.exited = true;
+    g.exited_cv.notify_all();
+  });
+}
+
+int HttpGateway::port() const { return impl_->port; }
+
+void HttpGateway::stop() {
+  Impl& g = *impl_;
+  {
+    std::lock_guard lock(g.exit_mutex);
+    if (g.stopped) return;
+    g.stopped = true;
+  }
+  if (!g.thread.joinable()) return;
+  net::post(g.io, [&g] {
+    g.stopping = true;
+    beast::error_code ignored;
+    g.acceptor.close(ignored);
+    for (const auto& weak : g.sessions)
+      if (auto session = weak.lock()) session->stop();
+  });
+  std::unique_lock lock(g.exit_mutex);
+  if (!g.exited_cv.wait_for(lock, std::chrono::seconds(3), [&] { return g.exited; })) g.io.stop();
+  lock.unlock();
+  g.thread.join();
+}
+
+}  // namespace gridshell::server

@@ -1,0 +1,49 @@
+#include "methods.h"
+
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/reflection.h>
+
+namespace gridshell::server {
+
+Methods make_methods(const RunSettings& settings) {
+  Methods methods;
+  methods.patch = {"Patch", [settings](const v1::PatchRequest& request, const Progress& progress) {
+                     return run_patch(request, progress, settings);
+                   }};
+  methods.design = {"Design",
+                    [settings](const v1::DesignRequest& request, const Progress& progress) {
+                      return run_design(request, progress, settings);
+                    }};
+  methods.simulate = {"Simulate", nullptr,
+                      "Simulate is not implemented yet: the deployment simulation is still being "
+                      "written; use Design"};
+  methods.run = {"Run", nullptr,
+                 "Run is not implemented yet: it needs the deployment simulation; use Design"};
+  return methods;
+}
+
+namespace {
+
+const v1::Mesh* find_mesh(const google::protobuf::Message& message, int depth) {
+  if (const auto* mesh = dynamic_cast<const v1::Mesh*>(&message)) return mesh;
+  if (depth == 0) return nullptr;
+  const google::protobuf::Reflection* reflection = message.GetReflection();
+  std::vector<const google::protobuf::FieldDescriptor*> fields;
+  reflection->ListFields(message, &fields);
+  for (const auto* field : fields)
+    if (field->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE &&
+        !field->is_repeated())
+      if (const v1::Mesh* mesh = find_mesh(reflection->GetMessage(message, field), depth - 1))
+        return mesh;
+  return nullptr;
+}
+
+}  // namespace
+
+std::pair<int, int> mesh_size(const google::protobuf::Message& request) {
+  const v1::Mesh* mesh = find_mesh(request, 3);
+  if (!mesh) return {0, 0};
+  return {mesh->positions_size() / 3, mesh->indices_size() / 3};
+}
+
+}  // namespace gridshell::server

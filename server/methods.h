@@ -1,0 +1,84 @@
+// gridshelld — the RPC table. One RPC is one entry here: its name and its request -> kernel ->
+// result function. Queueing, streaming, cancellation, deadlines, logging and the HTTP route are
+// generic (job_queue.h, grpc_service.cpp, http_gateway.cpp) and need nothing per method.
+//
+// To implement Simulate or Run: write `v1::SimulateResult run_simulate(const v1::SimulateRequest&,
+// const Progress&, const RunSettings&)` next to run_design in proto/convert/requests.cpp and set
+// `methods.simulate.run` to it in make_methods (methods.cpp). That is all.
+#pragma once
+
+#include <google/protobuf/util/json_util.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "gridshell/errors.h"
+#include "gridshell/progress.h"
+#include "gridshell/requests.h"
+#include "gridshell/v1/requests.pb.h"
+#include "job_queue.h"
+
+namespace gridshell::server {
+
+template <class RequestMessage, class ResultMessage>
+struct Method {
+  using Request = RequestMessage;
+  using Result = ResultMessage;
+  std::string name;  ///< gRPC method name ("Design"); the HTTP route is /v1/ + lower case
+  /// Request -> kernel -> result; throws the kernel's errors (InvalidInput, Infeasible,
+  /// Cancelled). Empty: the method answers UNIMPLEMENTED with `unimplemented` as its message.
+  std::function<Result(const Request&, const Progress&)> run;
+  std::string unimplemented;
+};
+
+struct Methods {
+  Method<v1::PatchRequest, v1::PatchResult> patch;
+  Method<v1::DesignRequest, v1::DesignResult> design;
+  Method<v1::SimulateRequest, v1::SimulateResult> simulate;
+  Method<v1::RunRequest, v1::RunResult> run;
+};
+
+/// The table; `settings` (kernel threads per request) applies to every method.
+Methods make_methods(const RunSettings& settings);
+
+/// Vertices and faces of the first gridshell.v1.Mesh in a request (searched through nested
+/// messages), for the log line; {0, 0} if it has none.
+std::pair<int, int> mesh_size(const google::protobuf::Message& request);
+
+/// The job body for a request the transport holds (gRPC: valid until the call is finished, which
+/// happens only after the job finished).
+template <class M>
+auto job_function(const M& method, const typename M::Request* request) {
+  return [&method, request](const Progress& progress,
+                            JobInfo& info) -> std::unique_ptr<google::protobuf::Message> {
+    const auto [vertices, faces] = mesh_size(*request);
+    info.vertices = vertices;
+    info.faces = faces;
+    return std::make_unique<typename M::Result>(method.run(*request, progress));
+  };
+}
+
+/// The job body for a request in protobuf's JSON mapping (HTTP): parsed on the worker, so a large
+/// body does not hold up the gateway. Unknown fields and malformed JSON are INVALID_ARGUMENT.
+template <class M>
+auto job_function_from_json(const M& method, std::shared_ptr<const std::string> body) {
+  return [&method, body](const Progress& progress,
+                         JobInfo& info) -> std::unique_ptr<google::protobuf::Message> {
+    typename M::Request request;
+    google::protobuf::util::JsonParseOptions options;
+    options.ignore_unknown_fields = false;
+    const auto status = google::protobuf::util::JsonStringToMessage(*body, &request, options);
+    if (!status.ok())
+      throw InvalidInput("request body: not a " + request.GetTypeName() +
+                         " in JSON: " + std::string(status.message()));
+    progress.check();
+    const auto [vertices, faces] = mesh_size(request);
+    info.vertices = vertices;
+    info.faces = faces;
+    return std::make_unique<typename M::Result>(method.run(request, progress));
+  };
+}
+
+}  // namespace gridshell::server

@@ -1,0 +1,446 @@
+// gridshelld over gRPC, in-process on ephemeral loopback ports: results identical to in-process
+// runs, concurrency, cancellation and deadlines, the bounded queue, status codes for every bad
+// input, health checking, reflection, the log line and shutdown.
+#include <grpcpp/generic/generic_stub.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <thread>
+
+#include "gridshell/files.h"
+#include "gridshell/requests.h"
+#include "server_support.h"
+
+namespace gridshell {
+namespace {
+
+using testing::TestDaemon;
+
+// Cancellation must stop the kernel within 200 ms (issue 5). The machine these tests run on is
+// shared and noisy, so the assertion allows five times that; the measured values are printed
+// and the benchmark reports them.
+constexpr double kCancelMarginMs = 1000;
+
+// A request that runs for seconds on one core: long enough to cancel in the middle.
+v1::DesignRequest long_request() { return testing::design_request("waves-bump"); }
+
+/// Runs a design call on its own thread; cancels it on request.
+class BackgroundCall {
+ public:
+  BackgroundCall(v1::Gridshell::Stub& stub, v1::DesignRequest request,
+                 std::chrono::milliseconds deadline = std::chrono::milliseconds(0)) {
+    if (deadline.count() > 0) context_.set_deadline(std::chrono::system_clock::now() + deadline);
+    thread_ = std::thread([this, &stub, request = std::move(request)] {
+      auto reader = stub.Design(&context_, request);
+      v1::DesignEvent event;
+      while (reader->Read(&event)) {
+        if (event.has_progress() && event.progress().stage() != "queued") working_ = true;
+        if (event.has_result()) got_result_ = true;
+      }
+      status_ = reader->Finish();
+      done_ = true;
+    });
+  }
+  ~BackgroundCall() {
+    context_.TryCancel();
+    thread_.join();
+  }
+  /// Waits until the kernel reports progress (the job runs on a worker).
+  bool wait_working(double seconds = 60) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (!working_ && !done_ && std::chrono::steady_clock::now() < end)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    return working_;
+  }
+  void cancel() { context_.TryCancel(); }
+  grpc::Status finish() {
+    thread_.join();
+    thread_ = std::thread([] {});
+    return status_;
+  }
+  bool got_result() const { return got_result_; }
+
+ private:
+  grpc::ClientContext context_;
+  std::thread thread_;
+  std::atomic<bool> working_{false}, done_{false}, got_result_{false};
+  grpc::Status status_;
+};
+
+TEST(Daemon, RemoteDesignIsByteIdenticalToInProcess) {
+  TestDaemon daemon;
+  const v1::DesignRequest request = testing::design_request("double-vault");
+  const FileBundle local = design_files(run_design(request, {}, {FieldNames::Request, 1}));
+  const auto remote = testing::call_design(*daemon.stub(), request);
+  ASSERT_TRUE(remote.status.ok()) << remote.status.error_message();
+  ASSERT_TRUE(remote.result);
+  const FileBundle files = design_files(*remote.result);
+  for (const char* name : {"design.json", "planar.svg", "spatial.obj", "maps.svg"}) {
+    ASSERT_TRUE(files.count(name)) << name;
+    EXPECT_EQ(files.at(name), local.at(name)) << name;
+  }
+  EXPECT_FALSE(remote.progress.empty());
+  // report.json: same numbers except the timings.
+  auto report = nlohmann::json::parse(files.at("report.json"));
+  auto local_report = nlohmann::json::parse(local.at("report.json"));
+  for (const char* key : {"seconds", "t_smooth", "t_grid", "stage_seconds"})
+    report.erase(key), local_report.erase(key);
+  EXPECT_EQ(report, local_report);
+}
+
+TEST(Daemon, RemotePatchIsIdenticalToInProcess) {
+  TestDaemon daemon;
+  const v1::PatchRequest request = testing::patch_request("sphere");
+  const FileBundle local = patch_files(run_patch(request));
+  const auto remote = testing::call_patch(*daemon.stub(), request);
+  ASSERT_TRUE(remote.status.ok()) << remote.status.error_message();
+  const FileBundle files = patch_files(*remote.result);
+  EXPECT_EQ(files.at("patch.obj"), local.at("patch.obj"));
+  auto report = nlohmann::json::parse(files.at("patch.json"));
+  auto local_report = nlohmann::json::parse(local.at("patch.json"));
+  for (const char* key : {"seconds", "stage_seconds"}) report.erase(key), local_report.erase(key);
+  EXPECT_EQ(report, local_report);
+}
+
+TEST(Daemon, EightConcurrentClientsAllGetCorrectResults) {
+  TestDaemon daemon(testing::test_options(2, 8));
+  const v1::DesignRequest request = testing::design_request("double-vault", 32);
+  const std::string expected =
+      design_files(run_design(request, {}, {FieldNames::Request, 1})).at("design.json");
+  std::vector<std::thread> clients;
+  std::vector<grpc::Status> statuses(8);
+  std::vector<std::string> designs(8);
+  for (int c = 0; c < 8; ++c)
+    clients.emplace_back([&, c] {
+      auto stub = daemon.stub();  // a channel per client, as separate processes would have
+      const auto result = testing::call_design(*stub, request);
+      statuses[c] = result.status;
+      if (result.result) designs[c] = design_files(*result.result).at("design.json");
+    });
+  for (auto& client : clients) client.join();
+  for (int c = 0; c < 8; ++c) {
+    EXPECT_TRUE(statuses[c].ok()) << c << ": " << statuses[c].error_message();
+    EXPECT_EQ(designs[c], expected) << c;
+  }
+  const auto stats = daemon.daemon().stats();
+  EXPECT_EQ(stats.succeeded, 8u);
+  EXPECT_EQ(stats.rejected, 0u);
+}
+
+TEST(Daemon, CancelledRequestStopsWorkAndTheDaemonKeepsServing) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  {
+    BackgroundCall call(*stub, long_request());
+    ASSERT_TRUE(call.wait_working());
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // into the distance maps
+    call.cancel();
+    EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::CANCELLED);
+    EXPECT_FALSE(call.got_result());
+  }
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.cancelled == 1 && s.running == 0; }));
+  const auto stats = daemon.daemon().stats();
+  EXPECT_EQ(stats.succeeded, 0u);  // the work stopped before completion
+  ASSERT_EQ(stats.cancel_latency_ms.size(), 1u);
+  std::printf("cancellation latency (server): %.1f ms\n", stats.cancel_latency_ms[0]);
+  EXPECT_LT(stats.cancel_latency_ms[0], kCancelMarginMs);
+  EXPECT_NE(daemon.log().find("\"status\":\"CANCELLED\""), std::string::npos) << daemon.log();
+  EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
+}
+
+TEST(Daemon, DeadlineStopsWorkAndTheDaemonKeepsServing) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  {
+    BackgroundCall call(*stub, long_request(), std::chrono::milliseconds(700));
+    EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
+  }
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.cancelled == 1 && s.running == 0; }));
+  const auto stats = daemon.daemon().stats();
+  EXPECT_EQ(stats.succeeded, 0u);
+  ASSERT_EQ(stats.cancel_latency_ms.size(), 1u);
+  std::printf("deadline stop latency (server): %.1f ms\n", stats.cancel_latency_ms[0]);
+  EXPECT_LT(stats.cancel_latency_ms[0], kCancelMarginMs);
+  EXPECT_NE(daemon.log().find("\"status\":\"DEADLINE_EXCEEDED\""), std::string::npos);
+  EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
+}
+
+// Cancels at several points of a design (patch stage, distance maps, cladding, grid) and reports
+// the server's stop latency at each: the kernel polls its flag in every stage.
+TEST(Daemon, CancellationLatencyAcrossTheStages) {
+  TestDaemon daemon(testing::test_options(1, 4));
+  auto stub = daemon.stub();
+  const v1::DesignRequest request = testing::design_request("archway");
+  double worst = 0;
+  int cancelled = 0;
+  for (int delay_ms : {0, 30, 100, 250, 500, 800, 1200, 1800}) {
+    BackgroundCall call(*stub, request);
+    ASSERT_TRUE(call.wait_working());
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    call.cancel();
+    const grpc::Status status = call.finish();
+    ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.running == 0; }));
+    if (status.ok()) break;  // the design finished first: later delays would too
+    ++cancelled;
+    const auto latencies = daemon.daemon().stats().cancel_latency_ms;
+    ASSERT_EQ(static_cast<int>(latencies.size()), cancelled);
+    std::printf("cancel after %4d ms: stopped in %.1f ms\n", delay_ms, latencies.back());
+    worst = std::max(worst, latencies.back());
+  }
+  EXPECT_GE(cancelled, 3);
+  std::printf("worst cancellation latency: %.1f ms over %d cancellations\n", worst, cancelled);
+  EXPECT_LT(worst, kCancelMarginMs);
+}
+
+TEST(Daemon, FullQueueAnswersResourceExhaustedAtOnce) {
+  TestDaemon daemon(testing::test_options(1, 1));
+  auto stub = daemon.stub();
+  BackgroundCall running(*stub, long_request());
+  ASSERT_TRUE(running.wait_working());
+  BackgroundCall waiting(*stub, long_request());
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.running == 1 && s.queued == 1; }));
+  const auto start = std::chrono::steady_clock::now();
+  const auto refused = testing::call_design(*stub, long_request());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(refused.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(refused.status.error_message().find("queue is full"), std::string::npos);
+  EXPECT_LT(seconds, 5.0);  // not after the running job (which takes many seconds)
+  // The waiting job is cancelled without ever running.
+  waiting.cancel();
+  EXPECT_EQ(waiting.finish().error_code(), grpc::StatusCode::CANCELLED);
+  running.cancel();
+  EXPECT_EQ(running.finish().error_code(), grpc::StatusCode::CANCELLED);
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.running == 0 && s.cancelled == 2; }));
+  EXPECT_EQ(daemon.daemon().stats().cancel_latency_ms.size(), 1u);  // only one had started
+  EXPECT_EQ(daemon.daemon().stats().rejected, 1u);
+}
+
+TEST(Daemon, EveryBadInputIsInvalidArgumentWithItsMessage) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  for (const testing::BadInput& bad : testing::bad_inputs()) {
+    SCOPED_TRACE(bad.name);
+    grpc::Status status;
+    if (bad.method == "Patch") {
+      v1::PatchRequest request;
+      ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
+      status = testing::call_patch(*stub, request).status;
+    } else {
+      v1::DesignRequest request;
+      ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
+      status = testing::call_design(*stub, request).status;
+    }
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+    EXPECT_NE(status.error_message().find(bad.expected), std::string::npos)
+        << "'" << bad.expected << "' not in: " << status.error_message();
+  }
+  // Still serving, and every failure was counted as one.
+  EXPECT_TRUE(testing::call_design(*stub, testing::design_request("plane", 16)).status.ok());
+  const auto stats = daemon.daemon().stats();
+  EXPECT_EQ(stats.failed, testing::bad_inputs().size());
+  EXPECT_EQ(stats.succeeded, 1u);
+}
+
+// Random but well-formed requests (arbitrary corners, holes punched into meshes, collapsed
+// vertices, options anywhere in their ranges): whatever the kernel makes of them, the answer is
+// a status of the caller's making (OK, INVALID_ARGUMENT, FAILED_PRECONDITION), never INTERNAL
+// and never a crash.
+TEST(Daemon, RandomRequestsNeverCrashOrFailInternally) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  std::mt19937 random(20261201);
+  auto uniform = [&](int n) { return static_cast<int>(random() % static_cast<unsigned>(n)); };
+  std::map<grpc::StatusCode, int> outcomes;
+  for (int i = 0; i < 40; ++i) {
+    const char* examples[] = {"plane", "hypar", "sphere", "cone"};
+    v1::DesignRequest request = testing::design_request(examples[uniform(4)], 12);
+    v1::Mesh& mesh = *request.mutable_mesh();
+    const int vertices = mesh.positions_size() / 3;
+    switch (uniform(4)) {
+      case 0:  // holes and pieces
+        for (int k = uniform(12) + 1; k > 0; --k) {
+          const int f = uniform(mesh.indices_size() / 3);
+          mesh.mutable_indices()->erase(mesh.indices().begin() + 3 * f,
+                                        mesh.indices().begin() + 3 * f + 3);
+        }
+        break;
+      case 1:  // collapsed vertices
+        for (int k = 0; k < 10; ++k) {
+          const int a = uniform(vertices), b = uniform(vertices);
+          for (int c = 0; c < 3; ++c) mesh.set_positions(3 * a + c, mesh.positions(3 * b + c));
+        }
+        break;
+      default:
+        break;
+    }
+    v1::Corners& corners = *request.mutable_corners();
+    if (uniform(2)) {
+      for (int c = 0; c < 4; ++c) corners.set_vertices(c, uniform(vertices));
+    } else if (uniform(2)) {
+      corners.clear_vertices();
+      for (int k = 0; k < 12; ++k) corners.add_points(uniform(160) - 80.0);
+    }
+    auto& options = *request.mutable_options();
+    if (uniform(3) == 0)
+      options.set_alpha(std::vector<std::string>{"max", "1.0", "45deg"}[uniform(3)]);
+    if (uniform(3) == 0) options.set_members_u(uniform(15));
+    if (uniform(3) == 0) options.set_lamella_width(std::vector<double>{0.01, 5, 500}[uniform(3)]);
+    const grpc::Status status = testing::call_design(*stub, request).status;
+    ++outcomes[status.error_code()];
+    EXPECT_TRUE(status.error_code() == grpc::StatusCode::OK ||
+                status.error_code() == grpc::StatusCode::INVALID_ARGUMENT ||
+                status.error_code() == grpc::StatusCode::FAILED_PRECONDITION)
+        << i << ": " << status.error_code() << " " << status.error_message();
+  }
+  for (const auto& [code, count] : outcomes) std::printf("status %d: %d\n", code, count);
+  EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
+}
+
+TEST(Daemon, InfeasibleDesignIsFailedPrecondition) {
+  TestDaemon daemon;
+  v1::DesignRequest request = testing::design_request("plane", 16);
+  request.mutable_corners()->clear_vertices();
+  for (double p : {-40.0, -30.0, 0.0, 40.0, -30.0, 0.0, 0.0, -10.0, 0.0, -40.0, 30.0, 0.0})
+    request.mutable_corners()->add_points(p);  // a dart: reflex corner at c2
+  const auto result = testing::call_design(*daemon.stub(), request);
+  EXPECT_EQ(result.status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(result.status.error_message().find("criterion iv"), std::string::npos)
+      << result.status.error_message();
+}
+
+TEST(Daemon, SimulateAndRunAnswerUnimplemented) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  for (int method = 0; method < 2; ++method) {
+    grpc::ClientContext context;
+    grpc::Status status;
+    if (method == 0) {
+      auto reader = stub->Simulate(&context, v1::SimulateRequest());
+      v1::SimulateEvent event;
+      while (reader->Read(&event)) {
+      }
+      status = reader->Finish();
+    } else {
+      auto reader = stub->Run(&context, v1::RunRequest());
+      v1::RunEvent event;
+      while (reader->Read(&event)) {
+      }
+      status = reader->Finish();
+    }
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::UNIMPLEMENTED);
+    EXPECT_NE(status.error_message().find("not implemented yet"), std::string::npos);
+  }
+}
+
+TEST(Daemon, HealthCheckAndReflectionListTheService) {
+  TestDaemon daemon;
+  auto channel = daemon.channel();
+  grpc::GenericStub generic(channel);
+  // grpc.health.v1.Health/Check {service: "gridshell.v1.Gridshell"}; reply {status: SERVING}.
+  {
+    const std::string service = "gridshell.v1.Gridshell";
+    const std::string bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
+    grpc::Slice slice(bytes);
+    grpc::ByteBuffer request(&slice, 1), response;
+    grpc::ClientContext context;
+    grpc::CompletionQueue queue;
+    std::unique_ptr<grpc::GenericClientAsyncResponseReader> call =
+        generic.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &queue);
+    call->StartCall();
+    grpc::Status status;
+    call->Finish(&response, &status, reinterpret_cast<void*>(1));
+    void* tag;
+    bool ok;
+    ASSERT_TRUE(queue.Next(&tag, &ok));
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    std::vector<grpc::Slice> slices;
+    ASSERT_TRUE(response.Dump(&slices).ok());
+    std::string reply;
+    for (const auto& s : slices) reply.append(reinterpret_cast<const char*>(s.begin()), s.size());
+    EXPECT_EQ(reply, std::string("\x08\x01", 2));  // status = SERVING
+  }
+  // grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo {list_services: ""}.
+  {
+    grpc::ClientContext context;
+    grpc::CompletionQueue queue;
+    auto call = generic.PrepareCall(
+        &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &queue);
+    void* tag;
+    bool ok;
+    call->StartCall(reinterpret_cast<void*>(1));
+    ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
+    grpc::Slice slice(std::string("\x3a\x00", 2));
+    grpc::ByteBuffer request(&slice, 1), response;
+    call->WriteLast(request, grpc::WriteOptions(), reinterpret_cast<void*>(2));
+    ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
+    call->Read(&response, reinterpret_cast<void*>(3));
+    ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
+    std::vector<grpc::Slice> slices;
+    ASSERT_TRUE(response.Dump(&slices).ok());
+    std::string reply;
+    for (const auto& s : slices) reply.append(reinterpret_cast<const char*>(s.begin()), s.size());
+    EXPECT_NE(reply.find("gridshell.v1.Gridshell"), std::string::npos);
+    EXPECT_NE(reply.find("grpc.health.v1.Health"), std::string::npos);
+    grpc::Status status;
+    call->Finish(&status, reinterpret_cast<void*>(4));
+    ASSERT_TRUE(queue.Next(&tag, &ok));
+  }
+}
+
+TEST(Daemon, OneStructuredLogLinePerRequest) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  ASSERT_TRUE(testing::call_design(*stub, testing::design_request("double-vault", 24)).status.ok());
+  v1::PatchRequest bad = testing::patch_request("plane");
+  bad.mutable_options()->set_eta_max(0);
+  ASSERT_FALSE(testing::call_patch(*stub, bad).status.ok());
+  std::vector<nlohmann::json> requests;
+  std::istringstream lines(daemon.log());
+  for (std::string line; std::getline(lines, line);) {
+    const auto entry = nlohmann::json::parse(line);  // every line is JSON
+    if (entry.contains("method")) requests.push_back(entry);
+  }
+  ASSERT_EQ(requests.size(), 2u) << daemon.log();
+  const auto& design = requests[0];
+  EXPECT_EQ(design["method"], "Design");
+  EXPECT_EQ(design["status"], "OK");
+  EXPECT_EQ(design["vertices"], 561);
+  EXPECT_GT(design["faces"].get<int>(), 0);
+  EXPECT_TRUE(design["id"].is_number());
+  for (const char* stage : {"patch", "distance maps", "cladding", "grid"})
+    EXPECT_TRUE(design["stages_ms"].contains(stage)) << stage << " in " << design.dump();
+  EXPECT_EQ(requests[1]["status"], "INVALID_ARGUMENT");
+  EXPECT_NE(requests[1]["message"].get<std::string>().find("options.eta_max"), std::string::npos);
+}
+
+TEST(Daemon, ShutdownLetsRunningWorkFinishAndRefusesNewCalls) {
+  auto options = testing::test_options(1, 4);
+  options.shutdown_grace_seconds = 60;
+  TestDaemon daemon(options);
+  auto stub = daemon.stub();
+  BackgroundCall call(*stub, testing::design_request("double-vault", 32));
+  ASSERT_TRUE(call.wait_working());
+  std::thread stopper([&] { daemon.daemon().shutdown(); });
+  ASSERT_TRUE(daemon.wait_for([&](const auto&) { return !daemon.daemon().serving(); }));
+  EXPECT_TRUE(call.finish().ok());  // finished within the grace period
+  EXPECT_TRUE(call.got_result());
+  stopper.join();
+  EXPECT_NE(daemon.log().find("\"event\":\"stopped\""), std::string::npos);
+}
+
+TEST(Daemon, ShutdownWithoutGraceCancelsRunningWork) {
+  TestDaemon daemon(testing::test_options(1, 4));  // grace 0
+  auto stub = daemon.stub();
+  BackgroundCall call(*stub, long_request());
+  ASSERT_TRUE(call.wait_working());
+  daemon.daemon().shutdown();
+  EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(daemon.daemon().stats().cancel_latency_ms.size(), 1u);
+}
+
+}  // namespace
+}  // namespace gridshell

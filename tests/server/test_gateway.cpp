@@ -1,0 +1,225 @@
+// The HTTP/JSON gateway of gridshelld: the same results as gRPC in protobuf's JSON mapping,
+// Server-Sent Events, status codes (docs/api.md), limits, cancellation on disconnect and static
+// files that never leave their folder.
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <boost/asio.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "gridshell/files.h"
+#include "gridshell/requests.h"
+#include "server_support.h"
+#include "support.h"
+
+namespace gridshell {
+namespace {
+
+using testing::http_request;
+using testing::TestDaemon;
+
+const std::map<std::string, std::string> kJson = {{"Content-Type", "application/json"}};
+
+std::string error_message(const std::string& body) {
+  return nlohmann::json::parse(body)["error"]["message"].get<std::string>();
+}
+
+TEST(Gateway, DesignAsJsonMatchesTheInProcessFiles) {
+  TestDaemon daemon;
+  const v1::DesignRequest request = testing::design_request("double-vault", 48);
+  const auto reply =
+      http_request(daemon.http_port(), "POST", "/v1/design", to_json(request, false), kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  EXPECT_EQ(reply.headers.at("content-type"), "application/json");
+  EXPECT_TRUE(reply.headers.count("x-request-id"));
+  v1::DesignResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  const FileBundle local = design_files(run_design(request, {}, {FieldNames::Request, 1}));
+  const FileBundle remote = design_files(result);
+  for (const char* name : {"design.json", "planar.svg", "spatial.obj", "maps.svg"})
+    EXPECT_EQ(remote.at(name), local.at(name)) << name;
+}
+
+TEST(Gateway, ServerSentEventsStreamProgressThenTheResult) {
+  TestDaemon daemon;
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/patch",
+                                  to_json(testing::patch_request("sphere"), false),
+                                  {{"Accept", "text/event-stream"}});
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  EXPECT_EQ(reply.headers.at("content-type"), "text/event-stream");
+  std::vector<std::pair<std::string, std::string>> events;  // (event, data)
+  std::istringstream lines(reply.body);
+  std::string event;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("event: ", 0) == 0) event = line.substr(7);
+    if (line.rfind("data: ", 0) == 0) events.emplace_back(event, line.substr(6));
+  }
+  ASSERT_GE(events.size(), 3u) << reply.body;
+  EXPECT_EQ(events.back().first, "result");
+  for (size_t i = 0; i + 1 < events.size(); ++i) {
+    EXPECT_EQ(events[i].first, "progress");
+    const auto progress = nlohmann::json::parse(events[i].second);
+    EXPECT_TRUE(progress.contains("stage") && progress.contains("fraction"));
+  }
+  v1::PatchResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(events.back().second, &result).ok());
+  EXPECT_EQ(result.report().vertex_count(), result.patch().positions_size() / 3);
+}
+
+TEST(Gateway, EveryBadInputIs400WithItsMessage) {
+  TestDaemon daemon;
+  auto bad = testing::bad_inputs();
+  // Only HTTP can send these.
+  bad.push_back({"MalformedJson", "Patch", "{\"mesh\": {", "request body: not a"});
+  bad.push_back({"UnknownField", "Design", "{\"meshes\": {}}", "meshes"});
+  bad.push_back({"WrongType", "Patch", "{\"mesh\": {\"positions\": \"abc\"}}", "request body"});
+  bad.push_back({"EmptyBody", "Design", "", "request body"});
+  int sse_400 = 0;
+  for (const testing::BadInput& input : bad) {
+    SCOPED_TRACE(input.name);
+    const std::string target = input.method == "Patch" ? "/v1/patch" : "/v1/design";
+    const auto reply = http_request(daemon.http_port(), "POST", target, input.json, kJson);
+    EXPECT_EQ(reply.status, 400) << reply.body;
+    const auto body = nlohmann::json::parse(reply.body);
+    EXPECT_EQ(body["error"]["status"], "INVALID_ARGUMENT");
+    EXPECT_EQ(body["error"]["code"], 3);
+    EXPECT_NE(error_message(reply.body).find(input.expected), std::string::npos)
+        << "'" << input.expected << "' not in: " << reply.body;
+    // With SSE, errors found while checking the request keep their status; the few the kernel
+    // finds after its first progress event arrive as an error event with the same content.
+    const auto sse = http_request(daemon.http_port(), "POST", target, input.json,
+                                  {{"Accept", "text/event-stream"}});
+    if (sse.status == 200) {
+      const auto at = sse.body.rfind("event: error\ndata: ");
+      ASSERT_NE(at, std::string::npos) << sse.body;
+      const std::string data = sse.body.substr(at + 19, sse.body.find('\n', at + 19) - at - 19);
+      EXPECT_EQ(nlohmann::json::parse(data)["error"]["status"], "INVALID_ARGUMENT");
+      EXPECT_NE(error_message(data).find(input.expected), std::string::npos) << sse.body;
+    } else {
+      EXPECT_EQ(sse.status, 400) << sse.body;
+      ++sse_400;
+    }
+  }
+  EXPECT_GE(sse_400, static_cast<int>(bad.size()) - 2);  // all but coincident corners
+  EXPECT_EQ(http_request(daemon.http_port(), "GET", "/healthz").status, 200);
+  EXPECT_TRUE(testing::call_patch(*daemon.stub(), testing::patch_request("plane")).status.ok());
+}
+
+TEST(Gateway, StatusCodesForInfeasibleUnimplementedAndUnknownCalls) {
+  TestDaemon daemon;
+  const int port = daemon.http_port();
+  v1::DesignRequest dart = testing::design_request("plane", 16);
+  dart.mutable_corners()->clear_vertices();
+  for (double p : {-40.0, -30.0, 0.0, 40.0, -30.0, 0.0, 0.0, -10.0, 0.0, -40.0, 30.0, 0.0})
+    dart.mutable_corners()->add_points(p);
+  auto reply = http_request(port, "POST", "/v1/design", to_json(dart, false), kJson);
+  EXPECT_EQ(reply.status, 422) << reply.body;
+  EXPECT_NE(error_message(reply.body).find("criterion iv"), std::string::npos);
+  reply = http_request(port, "POST", "/v1/simulate", "{}", kJson);
+  EXPECT_EQ(reply.status, 501) << reply.body;
+  EXPECT_NE(error_message(reply.body).find("not implemented yet"), std::string::npos);
+  EXPECT_EQ(http_request(port, "POST", "/v1/run", "{}", kJson).status, 501);
+  EXPECT_EQ(http_request(port, "POST", "/v1/frobnicate", "{}", kJson).status, 404);
+  EXPECT_EQ(http_request(port, "GET", "/v1/design").status, 405);
+  EXPECT_EQ(http_request(port, "DELETE", "/healthz").status, 405);
+  EXPECT_EQ(http_request(port, "GET", "/index.html").status, 404);  // no static folder
+  const auto health = http_request(port, "GET", "/healthz");
+  EXPECT_EQ(health.status, 200);
+  EXPECT_EQ(nlohmann::json::parse(health.body)["status"], "SERVING");
+}
+
+TEST(Gateway, BodyLargerThanTheLimitIs413) {
+  auto options = testing::test_options();
+  options.http_body_limit_mib = 1;
+  TestDaemon daemon(options);
+  const std::string big(3u << 20, ' ');
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/design", big, kJson);
+  EXPECT_EQ(reply.status, 413) << reply.body;
+  EXPECT_NE(error_message(reply.body).find("limit"), std::string::npos);
+  EXPECT_EQ(http_request(daemon.http_port(), "GET", "/healthz").status, 200);
+}
+
+TEST(Gateway, DeadlineHeaderGives504AndStopsWork) {
+  TestDaemon daemon;
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/design",
+                                  to_json(testing::design_request("waves-bump"), false),
+                                  {{"Content-Type", "application/json"}, {"X-Timeout-Ms", "500"}});
+  EXPECT_EQ(reply.status, 504) << reply.body;
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.cancelled == 1 && s.running == 0; }));
+  EXPECT_EQ(daemon.daemon().stats().succeeded, 0u);
+  EXPECT_EQ(http_request(daemon.http_port(), "POST", "/v1/design", "{}", {{"X-Timeout-Ms", "soon"}})
+                .status,
+            400);
+}
+
+TEST(Gateway, ClientThatGoesAwayCancelsItsJob) {
+  TestDaemon daemon;
+  const std::string body = to_json(testing::design_request("waves-bump"), false);
+  {
+    boost::asio::io_context io;
+    boost::asio::ip::tcp::socket socket(io);
+    socket.connect({boost::asio::ip::make_address("127.0.0.1"),
+                    static_cast<unsigned short>(daemon.http_port())});
+    const std::string request =
+        "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Length: " + std::to_string(body.size()) +
+        "\r\n\r\n" + body;
+    boost::asio::write(socket, boost::asio::buffer(request));
+    ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.running == 1; }));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }  // closed
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.cancelled == 1 && s.running == 0; }));
+  const auto stats = daemon.daemon().stats();
+  EXPECT_EQ(stats.succeeded, 0u);
+  ASSERT_EQ(stats.cancel_latency_ms.size(), 1u);
+  std::printf("HTTP disconnect -> stopped in %.1f ms\n", stats.cancel_latency_ms[0]);
+  EXPECT_LT(stats.cancel_latency_ms[0], 1000.0);
+}
+
+TEST(Gateway, FullQueueIs429) {
+  TestDaemon daemon(testing::test_options(1, 0));
+  const std::string body = to_json(testing::design_request("waves-bump"), false);
+  std::jthread first([&] {
+    http_request(daemon.http_port(), "POST", "/v1/design", body,
+                 {{"Content-Type", "application/json"}, {"X-Timeout-Ms", "20000"}});
+  });
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.running == 1; }));
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/design", body, kJson);
+  EXPECT_EQ(reply.status, 429) << reply.body;
+  EXPECT_NE(error_message(reply.body).find("queue is full"), std::string::npos);
+  daemon.daemon().shutdown();  // cancels the first
+}
+
+TEST(Gateway, StaticFilesNeverLeaveTheirFolder) {
+  namespace fs = std::filesystem;
+  const fs::path root = testing::temp_dir();
+  const fs::path site = root / "site";
+  fs::create_directories(site / "js");
+  std::ofstream(site / "index.html") << "<h1>gridshell</h1>";
+  std::ofstream(site / "js" / "app.js") << "console.log(1);";
+  std::ofstream(site / ".secret") << "hidden";
+  std::ofstream(root / "outside.txt") << "outside";
+  fs::create_symlink(root / "outside.txt", site / "link.txt");
+  auto options = testing::test_options();
+  options.static_dir = site.string();
+  TestDaemon daemon(options);
+  const int port = daemon.http_port();
+  auto reply = http_request(port, "GET", "/");
+  EXPECT_EQ(reply.status, 200);
+  EXPECT_EQ(reply.body, "<h1>gridshell</h1>");
+  EXPECT_EQ(reply.headers.at("content-type"), "text/html; charset=utf-8");
+  reply = http_request(port, "GET", "/js/app.js?v=3");
+  EXPECT_EQ(reply.status, 200);
+  EXPECT_EQ(reply.headers.at("content-type"), "text/javascript");
+  EXPECT_EQ(http_request(port, "HEAD", "/index.html").status, 200);
+  for (const char* target : {"/../outside.txt", "/js/../../outside.txt", "/%2e%2e/outside.txt",
+                             "/js/%2E%2E/%2E%2E/outside.txt", "/.secret", "/link.txt",
+                             "/nothing.html", "/js", "/%zz", "//etc/passwd"})
+    EXPECT_EQ(http_request(port, "GET", target).status, 404) << target;
+}
+
+}  // namespace
+}  // namespace gridshell

@@ -1,0 +1,137 @@
+// Security of gridshelld: loopback by default, TLS and a bearer token for anything else, the
+// token checked on every gRPC call (health included) and every HTTP API call.
+#include <grpcpp/generic/generic_stub.h>
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "gridshell/errors.h"
+#include "gridshell/files.h"
+#include "server_support.h"
+#include "support.h"
+
+namespace gridshell {
+namespace {
+
+using testing::TestDaemon;
+
+constexpr const char* kToken = "s3cret-token-42";
+
+struct SecureDaemon {
+  testing::Certificate certificate = testing::make_self_signed_certificate();
+  std::unique_ptr<TestDaemon> daemon;
+  SecureDaemon() {
+    const std::string dir = testing::temp_dir();
+    auto options = testing::test_options();
+    options.tls_cert = testing::write_text(dir, "cert.pem", certificate.cert_pem);
+    options.tls_key = testing::write_text(dir, "key.pem", certificate.key_pem);
+    options.token_file = testing::write_text(dir, "token", std::string(kToken) + "\n");
+    daemon = std::make_unique<TestDaemon>(options);
+  }
+};
+
+grpc::Status patch_with(const SecureDaemon& secure, const std::string& authorization) {
+  auto stub = secure.daemon->stub(secure.certificate.cert_pem);
+  grpc::ClientContext context;
+  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
+  return testing::call_patch(*stub, testing::patch_request("plane"), &context).status;
+}
+
+TEST(Security, GrpcCallsWithoutTheTokenAreUnauthenticated) {
+  SecureDaemon secure;
+  for (const std::string& header : {std::string(), std::string("Bearer wrong"),
+                                    std::string("Basic ") + kToken, std::string(kToken)}) {
+    const grpc::Status status = patch_with(secure, header);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAUTHENTICATED) << header;
+  }
+  EXPECT_TRUE(patch_with(secure, std::string("Bearer ") + kToken).ok());
+  EXPECT_EQ(secure.daemon->daemon().stats().succeeded, 1u);  // nothing else ran
+}
+
+TEST(Security, HealthAndReflectionNeedTheTokenToo) {
+  SecureDaemon secure;
+  grpc::GenericStub generic(secure.daemon->channel(secure.certificate.cert_pem));
+  for (const bool with_token : {false, true}) {
+    grpc::Slice slice{std::string()};
+    grpc::ByteBuffer request(&slice, 1), response;
+    grpc::ClientContext context;
+    if (with_token) context.AddMetadata("authorization", std::string("Bearer ") + kToken);
+    grpc::CompletionQueue queue;
+    auto call = generic.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &queue);
+    call->StartCall();
+    grpc::Status status;
+    call->Finish(&response, &status, reinterpret_cast<void*>(1));
+    void* tag;
+    bool ok;
+    ASSERT_TRUE(queue.Next(&tag, &ok));
+    EXPECT_EQ(status.error_code(),
+              with_token ? grpc::StatusCode::OK : grpc::StatusCode::UNAUTHENTICATED);
+  }
+}
+
+TEST(Security, PlaintextClientCannotTalkToTheTlsPort) {
+  SecureDaemon secure;
+  auto stub = secure.daemon->stub();  // no TLS
+  grpc::ClientContext context;
+  context.AddMetadata("authorization", std::string("Bearer ") + kToken);
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  const auto status = testing::call_patch(*stub, testing::patch_request("plane"), &context).status;
+  EXPECT_FALSE(status.ok());
+  EXPECT_EQ(secure.daemon->daemon().stats().succeeded, 0u);
+}
+
+TEST(Security, HttpsCallsWithoutTheTokenAre401) {
+  SecureDaemon secure;
+  const int port = secure.daemon->http_port();
+  const std::string& ca = secure.certificate.cert_pem;
+  const std::string body = to_json(testing::patch_request("plane"), false);
+  auto reply = testing::http_request(port, "POST", "/v1/patch", body, {}, ca);
+  EXPECT_EQ(reply.status, 401) << reply.body;
+  EXPECT_EQ(reply.headers["www-authenticate"], "Bearer realm=\"gridshelld\"");
+  EXPECT_EQ(nlohmann::json::parse(reply.body)["error"]["status"], "UNAUTHENTICATED");
+  reply = testing::http_request(port, "POST", "/v1/patch", body, {{"Authorization", "Bearer nope"}},
+                                ca);
+  EXPECT_EQ(reply.status, 401);
+  EXPECT_EQ(testing::http_request(port, "GET", "/healthz", "", {}, ca).status, 401);
+  reply = testing::http_request(port, "POST", "/v1/patch", body,
+                                {{"Authorization", std::string("Bearer ") + kToken}}, ca);
+  EXPECT_EQ(reply.status, 200) << reply.body;
+  EXPECT_EQ(testing::http_request(port, "GET", "/healthz", "",
+                                  {{"Authorization", std::string("Bearer ") + kToken}}, ca)
+                .status,
+            200);
+}
+
+TEST(Security, NonLoopbackAddressesNeedTlsAndATokenOrInsecure) {
+  for (const char* address : {"0.0.0.0:0", "192.168.1.20:50051", "[::]:0", "example.org:1"}) {
+    auto options = testing::test_options();
+    options.listen = address;
+    try {
+      server::Daemon daemon(options);
+      ADD_FAILURE() << address << " was accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("--insecure"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("--tls-cert"), std::string::npos) << e.what();
+    }
+    options.insecure = true;
+    EXPECT_NO_THROW(server::Daemon{options}) << address;  // constructed, never started
+  }
+  auto options = testing::test_options();
+  options.http = "0.0.0.0:8080";
+  EXPECT_THROW(server::Daemon{options}, InvalidInput);
+  options.tls_cert = "/nonexistent/cert.pem";
+  options.tls_key = "/nonexistent/key.pem";
+  options.token_file = "/nonexistent/token";
+  EXPECT_THROW(server::Daemon{options}, InvalidInput);  // unreadable files
+}
+
+TEST(Security, LoopbackAddresses) {
+  for (const char* address : {"127.0.0.1:1", "127.10.0.3:80", "localhost:50051", "[::1]:50051"})
+    EXPECT_TRUE(server::is_loopback_address(address)) << address;
+  for (const char* address : {"0.0.0.0:1", "10.0.0.1:80", "[::]:1", "128.0.0.1:1", "127.0.0.1x:1",
+                              "localhost.example.org:1", "1.2.3.4:5"})
+    EXPECT_FALSE(server::is_loopback_address(address)) << address;
+}
+
+}  // namespace
+}  // namespace gridshell
