@@ -183,7 +183,9 @@ TEST(Simulation, NotchSlidesTowardsLowerEnergyAndStopsAtItsLimit) {
   const DeploymentRun free = simulate_deployment(q.grid, q.anchors, plate(10), 0.1, 0.01, options);
   ASSERT_TRUE(free.converged) << free.termination;
   for (const SimulatedConnection& c : free.connections)
-    if (c.g == 1 && c.h == 1) EXPECT_NEAR(c.slide_g, 1.0, 0.05);
+    if (c.g == 1 && c.h == 1) {
+      EXPECT_NEAR(c.slide_g, 1.0, 0.05);
+    }
   EXPECT_LT(elastic_energy(free), 0.2 * elastic_energy(with));
 }
 
@@ -297,7 +299,9 @@ TEST_P(ExampleDeployment, ConvergesAndNotchesReduceTheDeviation) {
   EXPECT_LE(with.gradient_norm, options.gradient_tolerance);
   EXPECT_LT(without.iterations, options.max_iterations);
   EXPECT_LT(with.iterations, options.max_iterations);
-  if (c.notches_help) EXPECT_LT(with.rms, without.rms);
+  if (c.notches_help) {
+    EXPECT_LT(with.rms, without.rms);
+  }
   // Connections stay closed: gaps far below the lamella thickness.
   for (const SimulatedConnection& x : with.connections)
     EXPECT_LT(x.gap, 0.01 * design.lamella_thickness);

@@ -402,17 +402,6 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
             std::abs(hit[1] - distinct.back()[1]) > merge)
           distinct.push_back(hit);
       if (distinct.size() != 1) {
-        if (std::getenv("GRIDSHELL_DEBUG_GRID")) {
-          for (const Member* m : {&g, &h}) {
-            std::fprintf(stderr, "member %d:\n", m->index);
-            for (size_t k = 0; k < m->surface_path.size(); ++k) {
-              const SurfacePoint& p = m->surface_path[k];
-              std::fprintf(stderr, "  f%d (%.17g %.17g %.17g) zeros %d  %g %g %g\n", p.face,
-                           p.barycentric[0], p.barycentric[1], p.barycentric[2], zero_count(p),
-                           m->surface[k].x(), m->surface[k].y(), m->surface[k].z());
-            }
-          }
-        }
         std::ostringstream msg;
         msg << "members g" << i << " and h" << j << " cross " << distinct.size()
             << " times on the surface instead of once (criterion iii)";

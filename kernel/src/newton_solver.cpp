@@ -357,10 +357,6 @@ NewtonSolver::StepResult NewtonSolver::step() {
         result.relative_step = (step * d.array().abs() / (1 + x0.array().abs())).maxCoeff();
         return result;
       }
-      static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
-      if (trace)
-        std::fprintf(stderr, "   reject lambda %.1e step %.3g pred %.3e trial %.12e ok %d\n",
-                     lambda_, step, predicted, trial, ok);
     }
     write(x0);
     lambda_ = std::max(lambda_ * nu_, 1e-8);

@@ -72,11 +72,6 @@ class NewtonSolver {
   /// residual block cannot be evaluated there.
   bool evaluate();
   double cost() const { return cost_; }
-  /// The cost at the current parameters by a plain residual evaluation (a consistency check).
-  double recompute_cost() const {
-    double c = 0;
-    return evaluate_cost(&c) ? c : -1;
-  }
   /// Max-norm of the gradient from the last evaluate().
   double gradient_max_norm() const;
   /// One damped Newton step from the last evaluate(): tries (H + lambda D) d = -g until the

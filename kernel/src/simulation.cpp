@@ -55,7 +55,7 @@ Material material_by_name(const std::string& name) {
     if (m.name == name) return m;
     known += (known.empty() ? "" : ", ") + m.name;
   }
-  throw InvalidInput("--material: unknown material '" + name + "' (known: " + known + ")");
+  throw InvalidInput("material: unknown material '" + name + "' (known: " + known + ")");
 }
 
 namespace {
@@ -657,10 +657,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
         std::log(first / std::max(run.gradient_norm, tolerance)) / std::log(first / tolerance);
     best = std::clamp(std::max(best, fraction), 0.0, 0.99);
     progress.report(stage, best);
-    static const double below = std::getenv("GRIDSHELL_SIM_BELOW")
-                                    ? std::atof(std::getenv("GRIDSHELL_SIM_BELOW"))
-                                    : options_.exact_hessian_below;
-    if (!exact && run.gradient_norm < below) {
+    if (!exact && run.gradient_norm < options_.exact_hessian_below) {
       exact = true;
       newton->set_exact_hessian(true);
       if (!newton->evaluate())
@@ -675,11 +672,6 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) + ")";
       return;
     }
-    static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
-    if (trace)
-      std::fprintf(stderr, "it %4d cost %.12e (recomputed %.12e) |g| %.3e lambda %.1e moves %d\n",
-                   run.iterations, newton->cost(), newton->recompute_cost(), run.gradient_norm,
-                   newton->lambda(), moves_);
     const NewtonSolver::StepResult step = newton->step();
     run.iterations += step.trials;
     lambda = newton->lambda();
@@ -739,11 +731,6 @@ void Deployment::solve_ceres(const Progress& progress, const std::string& stage,
     run.iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);
     ++run.outer_iterations;
     run.termination = summary.message;
-    static const bool trace = std::getenv("GRIDSHELL_SIM_TRACE") != nullptr;
-    if (trace)
-      std::fprintf(stderr, "ceres outer %d: %d its, %s, |g| %.3e\n", run.outer_iterations,
-                   static_cast<int>(summary.iterations.size()) - 1, summary.message.c_str(),
-                   summary.iterations.back().gradient_max_norm / force_reference_);
     if (summary.termination_type == ceres::FAILURE)
       throw std::runtime_error("simulation: the solver failed: " + summary.message);
     update_frames();

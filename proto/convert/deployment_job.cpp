@@ -111,9 +111,6 @@ SimulationOptions kernel_simulation_options(const v1::SimulationOptions& o, bool
   k.gradient_tolerance = o.gradient_tolerance();
   k.max_iterations = o.max_iterations();
   k.unit_in_meters = o.unit_in_meters();
-  if (const char* v = std::getenv("GRIDSHELL_SIM_VERTEX_STEP")) k.max_vertex_step = std::atof(v);
-  if (const char* v = std::getenv("GRIDSHELL_SIM_TWIST_STEP")) k.max_twist_step = std::atof(v);
-  if (const char* v = std::getenv("GRIDSHELL_SIM_BELOW")) k.exact_hessian_below = std::atof(v);
   return k;
 }
 
