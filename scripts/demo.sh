@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The main job on a built-in example: set up, build, and run the pipeline on the double vault.
+# The main job on a built-in example: set up, build, then patch, design and simulate the double
+# vault; results in out/double-vault/, a Table 1-like summary on stdout.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-./build/gridshell design example:double-vault --out out/double-vault
+./build/gridshell run example:double-vault --out out/double-vault

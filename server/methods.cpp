@@ -14,11 +14,13 @@ Methods make_methods(const RunSettings& settings) {
                     [settings](const v1::DesignRequest& request, const Progress& progress) {
                       return run_design(request, progress, settings);
                     }};
-  methods.simulate = {"Simulate", nullptr,
-                      "Simulate is not implemented yet: the deployment simulation is still being "
-                      "written; use Design"};
-  methods.run = {"Run", nullptr,
-                 "Run is not implemented yet: it needs the deployment simulation; use Design"};
+  methods.simulate = {"Simulate",
+                      [settings](const v1::SimulateRequest& request, const Progress& progress) {
+                        return run_simulate(request, progress, settings);
+                      }};
+  methods.run = {"Run", [settings](const v1::RunRequest& request, const Progress& progress) {
+                   return run_run(request, progress, settings);
+                 }};
   return methods;
 }
 

@@ -111,5 +111,54 @@ TEST(CliSimulate, BadInputsNameTheProblem) {
   }
 }
 
+TEST(CliRun, DesignsSimulatesAndPrintsTheTable) {
+  const std::string out = testing::temp_dir() + "/run";
+  const auto result = run_cli(
+      "run example:hypar --quiet --resolution 16 --members-u 7 "
+      "--members-v 7 --notches on --out '" +
+      out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  for (const char* file : {"design.json", "report.json", "planar.svg", "spatial.obj", "maps.svg",
+                           "deployment.json", "deployed.obj", "deviation.ply"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + file)) << file;
+  EXPECT_FALSE(std::filesystem::exists(out + "/deployed_without_notches.obj"));
+  // The summary table carries the numbers of the files.
+  const json d = json::parse(testing::read_text(out + "/deployment.json"));
+  EXPECT_TRUE(d["converged"].get<bool>());
+  EXPECT_FALSE(d.contains("rms_without_notches"));
+  char rms2[32];
+  std::snprintf(rms2, sizeof rms2, "%.3f", d["rms_with_notches"].get<double>());
+  EXPECT_NE(result.out.find("RMS2 (notches)"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find(rms2), std::string::npos) << result.out;
+  EXPECT_EQ(result.out.find("paper"), std::string::npos);  // hypar is not one of the paper's
+  // Its design is the one `gridshell design` writes with the same options.
+  const std::string design = testing::temp_dir() + "/design";
+  ASSERT_EQ(run_cli("design example:hypar --quiet --resolution 16 --members-u 7 --members-v 7 "
+                    "--out '" +
+                    design + "'")
+                .exit_code,
+            0);
+  EXPECT_EQ(testing::read_text(design + "/design.json"), testing::read_text(out + "/design.json"));
+}
+
+TEST(CliRun, BadInputsStopBeforeAnyWork) {
+  const std::string dir = testing::temp_dir();
+  struct Case {
+    std::string arguments, expected;
+  } cases[] = {{"example:hypar --material balsa", "--material: unknown material 'balsa'"},
+               {"example:hypar --young -5", "--young"},
+               {"example:hypar --eta-max 0.5", "--eta-max"},
+               {"example:nothing", "nothing"},
+               {"example:hypar --corners 1,2,3", "--corners"}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.arguments);
+    const auto result = run_cli("run " + c.arguments + " --quiet --out '" + dir + "/x'");
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_NE(result.err.find("error: "), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find(c.expected), std::string::npos) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/x/design.json"));
+  }
+}
+
 }  // namespace
 }  // namespace gridshell

@@ -14,24 +14,9 @@
 #include "gridshell/design.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/simulation.h"
+#include "paper_table1.h"
 
 namespace gridshell::cli {
-namespace {
-
-struct PaperSimulationRow {
-  const char* name;
-  int grid_vertices;
-  double rms1, rms2, t1, t2;
-};
-
-// Pillwein et al. 2020, Table 1 (simulation in C++ on a Xeon E5-2687W v4).
-constexpr PaperSimulationRow kTable1[] = {
-    {"torus-wide", 767, 1.17, 0.27, 1.92, 6.48},  {"waves-bump", 388, 1.47, 0.78, 12.60, 57.22},
-    {"sphere", 414, 1.09, 0.58, 6.05, 4.25},      {"double-vault", 300, 0.69, 0.31, 2.25, 4.05},
-    {"waves", 328, 0.59, 0.43, 3.03, 9.56},       {"archway", 625, 0.63, 0.42, 37.74, 85.43},
-    {"triple-vault", 494, 0.69, 0.46, 3.50, 5.80}};
-
-}  // namespace
 
 int bench_simulate(int repeats, const std::string& out, bool no_write) {
   std::ostringstream table;
@@ -52,7 +37,7 @@ int bench_simulate(int repeats, const std::string& out, bool no_write) {
         << "| example | \\|G_V\\| (paper) | RMS1 (paper) | RMS2 (paper) | t1 s (paper) | t2 s "
            "(paper) | iterations 1 / 2 | converged |\n"
         << "|---|---:|---:|---:|---:|---:|---:|---|\n";
-  for (const PaperSimulationRow& row : kTable1) {
+  for (const PaperModel& row : kPaperTable1) {
     std::cerr << "bench simulate: " << row.name << ": design\n";
     const ExampleSurface example = make_example(row.name);
     CornerSpec corners;

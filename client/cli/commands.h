@@ -7,7 +7,8 @@
 #include <optional>
 #include <string>
 
-#include "gridshell/deployment_job.h"
+#include "gridshell/v1/deployment.pb.h"
+#include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {
 
@@ -19,8 +20,27 @@ Command add_design_command(CLI::App& app);
 Command add_examples_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
 Command add_simulate_command(CLI::App& app);
+Command add_run_command(CLI::App& app);
 
-/// Simulation options shared by `simulate` and `run`.
+/// Design flags shared by `design` and `run` (MESH, --corners, --alpha, ...).
+struct DesignFlags {
+  std::string mesh;
+  std::string corners;
+  std::string alpha = "min";
+  int members_u = 0;
+  int members_v = 0;
+  double lamella_width = 0;      // 0 = 1% of the longest patch side
+  double lamella_thickness = 0;  // 0 = width / 10
+  int resolution = 100;
+  std::string method = "fast";
+  double eta_max = 1.0015;
+};
+void add_design_flags(CLI::App* sub, DesignFlags& flags);
+/// Loads the mesh and builds the request (InvalidInput names the flag).
+v1::DesignRequest design_request(const DesignFlags& flags);
+void print_design_summary(const v1::DesignResult& result);
+
+/// Simulation flags shared by `simulate` and `run`.
 struct SimulationFlags {
   std::string notches = "both";
   std::string material;  // empty: lime-wood, or custom when --young/--shear are given
@@ -30,15 +50,12 @@ struct SimulationFlags {
   double edges_per_interval = 2;
   int max_iterations = 2000;
   std::string solver = "newton";
-  int threads = 0;
 };
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
 /// Resolved and validated (InvalidInput names the flag).
 v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags);
-/// deployment.json, deployed.obj, deviation.ply (+ the without-notches views), atomically.
-void write_deployment_files(const DeploymentJob& job, const std::string& out);
-void print_deployment_summary(const DeploymentJob& job, const std::string& input,
-                              const std::string& out);
+void print_deployment_summary(const v1::Deployment& deployment);
+
 Command add_health_command(CLI::App& app);
 
 /// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client

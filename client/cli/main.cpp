@@ -37,6 +37,7 @@ int main(int argc, char** argv) {
   add(cli::add_examples_command);
   add(cli::add_bench_command);
   add(cli::add_simulate_command);
+  add(cli::add_run_command);
   add(cli::add_health_command);
 
   try {

@@ -189,6 +189,15 @@ v1::DesignResult RemoteClient::design(const v1::DesignRequest& request, const Pr
   return impl_->call(&v1::Gridshell::Stub::Design, request, progress);
 }
 
+v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest& request,
+                                          const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Simulate, request, progress);
+}
+
+v1::RunResult RemoteClient::run(const v1::RunRequest& request, const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Run, request, progress);
+}
+
 std::string RemoteClient::health(const std::string& service) {
   auto stub = grpc::health::v1::Health::NewStub(impl_->channel);
   grpc::health::v1::HealthCheckRequest request;
@@ -213,6 +222,10 @@ RemoteClient::RemoteClient(const RemoteOptions&) {
 RemoteClient::~RemoteClient() = default;
 v1::PatchResult RemoteClient::patch(const v1::PatchRequest&, const Progress&) { return {}; }
 v1::DesignResult RemoteClient::design(const v1::DesignRequest&, const Progress&) { return {}; }
+v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest&, const Progress&) {
+  return {};
+}
+v1::RunResult RemoteClient::run(const v1::RunRequest&, const Progress&) { return {}; }
 std::string RemoteClient::health(const std::string&) { return {}; }
 
 #endif

@@ -11,7 +11,7 @@ namespace {
 using google::protobuf::ListValue;
 
 [[noreturn]] void fail(const std::string& field, const std::string& problem) {
-  throw InvalidInput("design: " + field + ": " + problem);
+  throw InvalidInput("design." + field + ": " + problem);
 }
 
 double number(const google::protobuf::Value& value, const std::string& field) {

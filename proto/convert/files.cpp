@@ -30,6 +30,18 @@ FileBundle design_files(const v1::DesignResult& result) {
   return files;
 }
 
+FileBundle simulate_files(const v1::SimulateResult& result) {
+  FileBundle files{{"deployment.json", to_json(result.deployment()) + "\n"}};
+  for (const v1::File& view : result.views()) files[view.name()] = view.content();
+  return files;
+}
+
+FileBundle run_files(const v1::RunResult& result) {
+  FileBundle files = design_files(result.design());
+  for (auto& [name, contents] : simulate_files(result.simulation())) files[name] = contents;
+  return files;
+}
+
 void write_files(const FileBundle& files, const std::string& dir) {
   namespace fs = std::filesystem;
   std::error_code ec;

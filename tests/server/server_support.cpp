@@ -153,6 +153,22 @@ CallResult<v1::DesignResult> call_design(v1::Gridshell::Stub& stub,
   return call(&v1::Gridshell::Stub::Design, stub, request, context);
 }
 
+CallResult<v1::SimulateResult> call_simulate(v1::Gridshell::Stub& stub,
+                                             const v1::SimulateRequest& request,
+                                             grpc::ClientContext* context) {
+  return call(&v1::Gridshell::Stub::Simulate, stub, request, context);
+}
+
+CallResult<v1::RunResult> call_run(v1::Gridshell::Stub& stub, const v1::RunRequest& request,
+                                   grpc::ClientContext* context) {
+  return call(&v1::Gridshell::Stub::Run, stub, request, context);
+}
+
+const v1::Design& small_design() {
+  static const v1::Design design = run_design(design_request("plane", 16)).design();
+  return design;
+}
+
 // HTTP ---------------------------------------------------------------------------------------
 
 namespace {
@@ -401,6 +417,78 @@ std::vector<BadInput> bad_inputs() {
     set.push_back({"NegativeSmoothingIterations", "Patch", to_json(request, false),
                    "options.max_smoothing_iterations: must be between 0"});
   }
+
+  // Simulate: options, and designs that are not what Design returns.
+  v1::SimulateRequest simulate;
+  *simulate.mutable_design() = small_design();
+  simulate.mutable_options()->set_notches("on");
+  auto simulate_case = [&](std::string name, const std::function<void(v1::SimulateRequest&)>& edit,
+                           std::string expected) {
+    v1::SimulateRequest request = simulate;
+    edit(request);
+    set.push_back({std::move(name), "Simulate", to_json(request, false), std::move(expected)});
+  };
+  simulate_case(
+      "NoDesign", [](auto& r) { r.clear_design(); }, "design.");
+  simulate_case(
+      "NotchesSometimes", [](auto& r) { r.mutable_options()->set_notches("sometimes"); },
+      "options.notches");
+  simulate_case(
+      "UnknownMaterial", [](auto& r) { r.mutable_options()->set_material("balsa"); },
+      "options.material: unknown material 'balsa'");
+  simulate_case(
+      "NegativeYoungModulus", [](auto& r) { r.mutable_options()->set_young_modulus(-1e9); },
+      "options.young_modulus");
+  simulate_case(
+      "NanFriction", [&](auto& r) { r.mutable_options()->set_friction_mu(nan); },
+      "options.friction_mu");
+  simulate_case(
+      "TooManyEdgesPerInterval", [](auto& r) { r.mutable_options()->set_edges_per_interval(500); },
+      "options.edges_per_interval");
+  simulate_case(
+      "NegativeIterationCap", [](auto& r) { r.mutable_options()->set_max_iterations(-5); },
+      "options.max_iterations");
+  simulate_case(
+      "UnknownUnit", [](auto& r) { r.mutable_options()->set_unit("furlong"); }, "options.unit");
+  simulate_case(
+      "UnknownSolver", [](auto& r) { r.mutable_options()->set_solver("guess"); }, "options.solver");
+  simulate_case(
+      "CrossingOutOfRange", [](auto& r) { r.mutable_design()->mutable_crossings(3)->set_h(999); },
+      "design.crossings[3].h");
+  simulate_case(
+      "NoMembers", [](auto& r) { r.mutable_design()->clear_members(); }, "design.members");
+  simulate_case(
+      "NoPatch", [](auto& r) { r.mutable_design()->clear_patch(); }, "design.patch");
+  simulate_case(
+      "TextInSurfacePoint",
+      [](auto& r) {
+        auto* point = r.mutable_design()->mutable_members(2)->mutable_surface()->mutable_values(1);
+        point->mutable_list_value()->mutable_values(0)->set_string_value("x");
+      },
+      "design.members[2].surface");
+
+  // Run: the design request inside, and the simulation options.
+  v1::RunRequest run;
+  *run.mutable_design() = base;
+  auto run_case = [&](std::string name, const std::function<void(v1::RunRequest&)>& edit,
+                      std::string expected) {
+    v1::RunRequest request = run;
+    edit(request);
+    set.push_back({std::move(name), "Run", to_json(request, false), std::move(expected)});
+  };
+  run_case(
+      "RunWithoutMesh", [](auto& r) { r.mutable_design()->clear_mesh(); },
+      "design.mesh.positions: empty");
+  run_case(
+      "RunCornerOutOfRange",
+      [](auto& r) { r.mutable_design()->mutable_corners()->set_vertices(1, -2); },
+      "design.corners.vertices[1]: vertex index -2 is out of range");
+  run_case(
+      "RunNotchesSometimes", [](auto& r) { r.mutable_simulation()->set_notches("sometimes"); },
+      "simulation.notches");
+  run_case(
+      "RunUnknownMaterial", [](auto& r) { r.mutable_simulation()->set_material("balsa"); },
+      "simulation.material: unknown material");
   return set;
 }
 

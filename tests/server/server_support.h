@@ -61,6 +61,14 @@ CallResult<v1::PatchResult> call_patch(v1::Gridshell::Stub& stub, const v1::Patc
 CallResult<v1::DesignResult> call_design(v1::Gridshell::Stub& stub,
                                          const v1::DesignRequest& request,
                                          grpc::ClientContext* context = nullptr);
+CallResult<v1::SimulateResult> call_simulate(v1::Gridshell::Stub& stub,
+                                             const v1::SimulateRequest& request,
+                                             grpc::ClientContext* context = nullptr);
+CallResult<v1::RunResult> call_run(v1::Gridshell::Stub& stub, const v1::RunRequest& request,
+                                   grpc::ClientContext* context = nullptr);
+
+/// A small design (plane, resolution 16) to simulate, made in process once.
+const v1::Design& small_design();
 
 /// A plain HTTP/1.1 exchange with the gateway (TLS if `ca_pem` is set).
 struct HttpReply {
@@ -77,7 +85,7 @@ HttpReply http_request(int port, const std::string& method, const std::string& t
 /// request the daemon must answer with INVALID_ARGUMENT / 400, and a part of the message.
 struct BadInput {
   std::string name;
-  std::string method;    ///< "Patch" or "Design"
+  std::string method;    ///< "Patch", "Design", "Simulate" or "Run"
   std::string json;      ///< the request in JSON (what the HTTP gateway receives)
   std::string expected;  ///< must appear in the error message
 };

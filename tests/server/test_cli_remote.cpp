@@ -45,6 +45,44 @@ TEST(CliRemote, DesignWritesByteIdenticalFiles) {
             without_timings(read_text(local + "/report.json")));
 }
 
+TEST(CliRemote, SimulateAndRunWriteTheSameFiles) {
+  TestDaemon daemon;
+  const std::string design = testing::temp_dir();
+  ASSERT_EQ(run_cli("design example:hypar --quiet --resolution 16 --members-u 7 --members-v 7 "
+                    "--out '" +
+                    design + "'")
+                .exit_code,
+            0);
+  auto strip = [](const std::string& text) {
+    auto json = nlohmann::json::parse(text);
+    for (const char* key : {"seconds_without_notches", "seconds_with_notches"}) json.erase(key);
+    for (const char* run : {"with_notches", "without_notches"})
+      if (json.contains(run)) json[run].erase("seconds");
+    return json;
+  };
+  for (const std::string command :
+       {"simulate '" + design + "/design.json' --notches on",
+        std::string(
+            "run example:hypar --resolution 16 --members-u 7 --members-v 7 --notches on")}) {
+    SCOPED_TRACE(command);
+    const std::string local = testing::temp_dir(), remote = testing::temp_dir();
+    auto result = run_cli(command + " --quiet --out '" + local + "'");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    result =
+        run_cli(command + " --quiet --server " + daemon.grpc_address() + " --out '" + remote + "'");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(read_text(remote + "/deployed.obj"), read_text(local + "/deployed.obj"));
+    EXPECT_EQ(read_text(remote + "/deviation.ply"), read_text(local + "/deviation.ply"));
+    EXPECT_EQ(strip(read_text(remote + "/deployment.json")),
+              strip(read_text(local + "/deployment.json")));
+  }
+  // A bad option is found by the daemon and keeps its exit code and its flag name.
+  const auto result = run_cli("simulate '" + design + "/design.json' --quiet --young -1 --server " +
+                              daemon.grpc_address() + " --out '" + testing::temp_dir() + "'");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--young"), std::string::npos) << result.err;
+}
+
 TEST(CliRemote, PatchOfAFileWithRepairsWritesTheSameFiles) {
   // An isolated vertex first: file order and mesh order differ, corners are file indices.
   const ExampleSurface plane = make_example("plane");

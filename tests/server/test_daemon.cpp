@@ -8,6 +8,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "gridshell/files.h"
@@ -229,10 +230,18 @@ TEST(Daemon, EveryBadInputIsInvalidArgumentWithItsMessage) {
       v1::PatchRequest request;
       ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
       status = testing::call_patch(*stub, request).status;
-    } else {
+    } else if (bad.method == "Design") {
       v1::DesignRequest request;
       ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
       status = testing::call_design(*stub, request).status;
+    } else if (bad.method == "Simulate") {
+      v1::SimulateRequest request;
+      ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
+      status = testing::call_simulate(*stub, request).status;
+    } else {
+      v1::RunRequest request;
+      ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
+      status = testing::call_run(*stub, request).status;
     }
     EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
     EXPECT_NE(status.error_message().find(bad.expected), std::string::npos)
@@ -312,28 +321,90 @@ TEST(Daemon, InfeasibleDesignIsFailedPrecondition) {
       << result.status.error_message();
 }
 
-TEST(Daemon, SimulateAndRunAnswerUnimplemented) {
+/// deployment.json without the fields that are wall-clock times.
+nlohmann::json deployment_without_timings(const std::string& text) {
+  auto json = nlohmann::json::parse(text);
+  for (const char* key : {"seconds", "seconds_without_notches", "seconds_with_notches"})
+    json.erase(key);
+  for (const char* run : {"with_notches", "without_notches"})
+    if (json.contains(run)) json[run].erase("seconds");
+  return json;
+}
+
+v1::SimulateRequest simulate_request(const std::string& notches) {
+  v1::SimulateRequest request;
+  v1::DesignRequest design = testing::design_request("double-vault", 32);
+  design.mutable_options()->set_members_u(7);
+  design.mutable_options()->set_members_v(7);
+  *request.mutable_design() = run_design(design).design();
+  request.mutable_options()->set_notches(notches);
+  request.mutable_options()->set_unit("cm");
+  request.set_design_name("double-vault.json");
+  return request;
+}
+
+TEST(Daemon, RemoteSimulateEqualsInProcess) {
+  TestDaemon daemon;
+  const v1::SimulateRequest request = simulate_request("both");
+  const FileBundle local = simulate_files(run_simulate(request, {}, {FieldNames::Request, 1}));
+  const auto remote = testing::call_simulate(*daemon.stub(), request);
+  ASSERT_TRUE(remote.status.ok()) << remote.status.error_message();
+  ASSERT_TRUE(remote.result);
+  EXPECT_FALSE(remote.progress.empty());
+  const FileBundle files = simulate_files(*remote.result);
+  for (const char* name : {"deployed.obj", "deviation.ply", "deployed_without_notches.obj",
+                           "deviation_without_notches.ply"}) {
+    ASSERT_TRUE(files.count(name)) << name;
+    EXPECT_EQ(files.at(name), local.at(name)) << name;  // results do not depend on threads
+  }
+  ASSERT_TRUE(files.count("deployment.json"));
+  const auto deployment = deployment_without_timings(files.at("deployment.json"));
+  EXPECT_EQ(deployment, deployment_without_timings(local.at("deployment.json")));
+  EXPECT_TRUE(deployment["converged"].get<bool>());
+  EXPECT_LT(deployment["rms_with_notches"].get<double>(),
+            deployment["rms_without_notches"].get<double>());
+  EXPECT_EQ(deployment["rods"].size(), 7u + 7u + 4u);
+  EXPECT_NE(daemon.log().find("\"method\":\"Simulate\""), std::string::npos) << daemon.log();
+}
+
+TEST(Daemon, RemoteRunEqualsInProcessDesignThenSimulate) {
+  TestDaemon daemon;
+  v1::RunRequest request;
+  *request.mutable_design() = testing::design_request("hypar", 16);
+  request.mutable_simulation()->set_notches("on");
+  const v1::RunResult local = run_run(request, {}, {FieldNames::Request, 1});
+  const auto remote = testing::call_run(*daemon.stub(), request);
+  ASSERT_TRUE(remote.status.ok()) << remote.status.error_message();
+  ASSERT_TRUE(remote.result);
+  // The run's design is the Design call's design; its simulation is Simulate on that design.
+  const FileBundle design = design_files(remote.result->design());
+  EXPECT_EQ(design.at("design.json"), design_files(local.design()).at("design.json"));
+  EXPECT_EQ(design.at("design.json"), design_files(run_design(request.design())).at("design.json"));
+  const FileBundle files = run_files(*remote.result);
+  for (const char* name : {"design.json", "planar.svg", "deployed.obj", "deviation.ply"})
+    EXPECT_TRUE(files.count(name)) << name;
+  EXPECT_EQ(deployment_without_timings(files.at("deployment.json")),
+            deployment_without_timings(run_files(local).at("deployment.json")));
+  std::set<std::string> stages;
+  for (const v1::Progress& p : remote.progress) stages.insert(p.stage());
+  EXPECT_GE(stages.size(), 3u);  // patch/design stages and the simulation
+}
+
+TEST(Daemon, SimulateDeadlineStopsTheSolverAndTheDaemonKeepsServing) {
   TestDaemon daemon;
   auto stub = daemon.stub();
-  for (int method = 0; method < 2; ++method) {
-    grpc::ClientContext context;
-    grpc::Status status;
-    if (method == 0) {
-      auto reader = stub->Simulate(&context, v1::SimulateRequest());
-      v1::SimulateEvent event;
-      while (reader->Read(&event)) {
-      }
-      status = reader->Finish();
-    } else {
-      auto reader = stub->Run(&context, v1::RunRequest());
-      v1::RunEvent event;
-      while (reader->Read(&event)) {
-      }
-      status = reader->Finish();
-    }
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::UNIMPLEMENTED);
-    EXPECT_NE(status.error_message().find("not implemented yet"), std::string::npos);
-  }
+  const v1::SimulateRequest request = simulate_request("both");
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(400));
+  EXPECT_EQ(testing::call_simulate(*stub, request, &context).status.error_code(),
+            grpc::StatusCode::DEADLINE_EXCEEDED);
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.cancelled == 1 && s.running == 0; }));
+  const auto stats = daemon.daemon().stats();
+  EXPECT_EQ(stats.succeeded, 0u);
+  ASSERT_EQ(stats.cancel_latency_ms.size(), 1u);
+  std::printf("simulate deadline stop latency (server): %.1f ms\n", stats.cancel_latency_ms[0]);
+  EXPECT_LT(stats.cancel_latency_ms[0], kCancelMarginMs);
+  EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
 }
 
 TEST(Daemon, HealthCheckAndReflectionListTheService) {

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <boost/asio.hpp>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -42,6 +43,28 @@ TEST(Gateway, DesignAsJsonMatchesTheInProcessFiles) {
   const FileBundle remote = design_files(result);
   for (const char* name : {"design.json", "planar.svg", "spatial.obj", "maps.svg"})
     EXPECT_EQ(remote.at(name), local.at(name)) << name;
+}
+
+TEST(Gateway, SimulateAsJsonAndAsServerSentEvents) {
+  TestDaemon daemon;
+  v1::SimulateRequest request;
+  *request.mutable_design() = testing::small_design();
+  request.mutable_options()->set_notches("on");
+  const std::string body = to_json(request, false);
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/simulate", body, kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body.substr(0, 500);
+  v1::SimulateResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  const v1::SimulateResult local = run_simulate(request, {}, {FieldNames::Request, 1});
+  EXPECT_EQ(simulate_files(result).at("deployed.obj"), simulate_files(local).at("deployed.obj"));
+  EXPECT_TRUE(result.deployment().converged());
+  EXPECT_EQ(result.deployment().rms_with_notches(), local.deployment().rms_with_notches());
+  const auto sse = http_request(daemon.http_port(), "POST", "/v1/simulate", body,
+                                {{"Accept", "text/event-stream"}});
+  ASSERT_EQ(sse.status, 200);
+  EXPECT_NE(sse.body.find("event: progress"), std::string::npos);
+  EXPECT_NE(sse.body.find("simulat"), std::string::npos) << sse.body.substr(0, 800);
+  EXPECT_NE(sse.body.find("event: result"), std::string::npos);
 }
 
 TEST(Gateway, ServerSentEventsStreamProgressThenTheResult) {
@@ -81,7 +104,8 @@ TEST(Gateway, EveryBadInputIs400WithItsMessage) {
   int sse_400 = 0;
   for (const testing::BadInput& input : bad) {
     SCOPED_TRACE(input.name);
-    const std::string target = input.method == "Patch" ? "/v1/patch" : "/v1/design";
+    std::string target = "/v1/" + input.method;
+    for (char& c : target) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     const auto reply = http_request(daemon.http_port(), "POST", target, input.json, kJson);
     EXPECT_EQ(reply.status, 400) << reply.body;
     const auto body = nlohmann::json::parse(reply.body);
@@ -109,7 +133,7 @@ TEST(Gateway, EveryBadInputIs400WithItsMessage) {
   EXPECT_TRUE(testing::call_patch(*daemon.stub(), testing::patch_request("plane")).status.ok());
 }
 
-TEST(Gateway, StatusCodesForInfeasibleUnimplementedAndUnknownCalls) {
+TEST(Gateway, StatusCodesForInfeasibleAndUnknownCalls) {
   TestDaemon daemon;
   const int port = daemon.http_port();
   v1::DesignRequest dart = testing::design_request("plane", 16);
@@ -119,10 +143,11 @@ TEST(Gateway, StatusCodesForInfeasibleUnimplementedAndUnknownCalls) {
   auto reply = http_request(port, "POST", "/v1/design", to_json(dart, false), kJson);
   EXPECT_EQ(reply.status, 422) << reply.body;
   EXPECT_NE(error_message(reply.body).find("criterion iv"), std::string::npos);
-  reply = http_request(port, "POST", "/v1/simulate", "{}", kJson);
-  EXPECT_EQ(reply.status, 501) << reply.body;
-  EXPECT_NE(error_message(reply.body).find("not implemented yet"), std::string::npos);
-  EXPECT_EQ(http_request(port, "POST", "/v1/run", "{}", kJson).status, 501);
+  v1::RunRequest run;
+  *run.mutable_design() = dart;
+  reply = http_request(port, "POST", "/v1/run", to_json(run, false), kJson);
+  EXPECT_EQ(reply.status, 422) << reply.body;
+  EXPECT_NE(error_message(reply.body).find("criterion iv"), std::string::npos);
   EXPECT_EQ(http_request(port, "POST", "/v1/frobnicate", "{}", kJson).status, 404);
   EXPECT_EQ(http_request(port, "GET", "/v1/design").status, 405);
   EXPECT_EQ(http_request(port, "DELETE", "/healthz").status, 405);

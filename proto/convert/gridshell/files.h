@@ -22,6 +22,12 @@ FileBundle patch_files(const v1::PatchResult& result);
 /// design.json, report.json and the views planar.svg, spatial.obj, maps.svg.
 FileBundle design_files(const v1::DesignResult& result);
 
+/// deployment.json and the views deployed.obj, deviation.ply (+ *_without_notches.*).
+FileBundle simulate_files(const v1::SimulateResult& result);
+
+/// Everything `gridshell run` writes: the design's files and the simulation's.
+FileBundle run_files(const v1::RunResult& result);
+
 /// Creates `dir` if needed and writes every file atomically (temporary file + rename). Throws
 /// InvalidInput naming the path on failure, or for a file name that is not a plain name.
 void write_files(const FileBundle& files, const std::string& dir);

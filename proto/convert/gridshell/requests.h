@@ -1,4 +1,4 @@
-// gridshell — the computations behind `gridshell patch|design` and the daemon's Patch and Design
+// gridshell — the computations behind `gridshell patch|design|simulate|run` and the daemon's
 // RPCs: request message -> checked kernel inputs -> kernel -> result message.
 //
 // The CLI's in-process runs and gridshelld call the same functions, so a local and a remote run
@@ -81,5 +81,18 @@ DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names);
 /// SVG/OBJ views (planar.svg, spatial.obj, maps.svg).
 v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& progress = {},
                             const RunSettings& settings = {});
+
+// Simulate and Run ---------------------------------------------------------------------------
+
+/// The deployment simulation (paper Section 5) of a design message: deployment.json and the
+/// views deployed.obj and deviation.ply (and their *_without_notches twins when both runs are
+/// asked for). Bad options name `options.<field>` (or the CLI flag), a bad design
+/// `design.<field>`.
+v1::SimulateResult run_simulate(const v1::SimulateRequest& request, const Progress& progress = {},
+                                const RunSettings& settings = {});
+
+/// Patch stage, grid design and simulation in one call.
+v1::RunResult run_run(const v1::RunRequest& request, const Progress& progress = {},
+                      const RunSettings& settings = {});
 
 }  // namespace gridshell

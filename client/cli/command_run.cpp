@@ -1,0 +1,126 @@
+// `gridshell run MESH --corners ... --out DIR`: patch, design and simulation in one go, with a
+// summary like the paper's Table 1 (next to the paper's values for its seven models).
+#include <cstdio>
+#include <filesystem>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "gridshell/files.h"
+#include "gridshell/requests.h"
+#include "paper_table1.h"
+#include "remote.h"
+
+namespace gridshell::cli {
+namespace {
+
+struct RunArguments {
+  DesignFlags design;
+  SimulationFlags simulation;
+  std::string out;
+  int threads = 0;
+  bool quiet = false;
+  RemoteOptions remote;
+};
+
+void row(const char* label, const std::string& ours, const std::string& paper) {
+  if (paper.empty())
+    std::printf("  %-22s %12s\n", label, ours.c_str());
+  else
+    std::printf("  %-22s %12s   %s\n", label, ours.c_str(), paper.c_str());
+}
+
+std::string number(double value, int decimals) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  return buffer;
+}
+
+void print_table(const v1::RunResult& result, const std::string& input) {
+  const PaperModel* paper = paper_model_for(input);
+  auto theirs = [&](double value, int decimals) {
+    return paper ? number(value, decimals) : std::string();
+  };
+  const v1::DesignReport& r = result.design().report();
+  const v1::Deployment& d = result.simulation().deployment();
+  // The patch's extent, sorted like Table 1 (width >= depth; height last).
+  Vec3 lo = Vec3::Constant(1e300), hi = -lo;
+  const auto& vertices = result.design().design().patch().vertices();
+  for (const auto& v : vertices.values()) {
+    const auto& p = v.list_value();
+    const Vec3 q(p.values(0).number_value(), p.values(1).number_value(),
+                 p.values(2).number_value());
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  const Vec3 size = hi - lo;
+  std::printf("\n  %-22s %12s   %s\n", "", "gridshell",
+              paper ? ("paper, Table 1 (" + std::string(paper->name) + ")").c_str() : "");
+  row("width x depth x height",
+      number(std::max(size.x(), size.y()), 1) + " x " + number(std::min(size.x(), size.y()), 1) +
+          " x " + number(size.z(), 1),
+      paper ? number(paper->width, 1) + " x " + number(paper->depth, 1) + " x " +
+                  number(paper->height, 1)
+            : "");
+  row("|M_V| patch vertices", std::to_string(r.patch_vertices()),
+      paper ? std::to_string(paper->mesh_vertices) : "");
+  row("|G_V| grid vertices", std::to_string(d.grid_vertices()),
+      paper ? std::to_string(paper->grid_vertices) : "");
+  row("t_smooth s", number(r.t_smooth(), 3),
+      paper ? (paper->t_smooth > 0 ? number(paper->t_smooth, 2) : "-") : "");
+  row("t_grid s", number(r.t_grid(), 3), theirs(paper ? paper->t_grid : 0, 2));
+  if (d.has_rms_without_notches())
+    row("RMS1 (no notches)", number(d.rms_without_notches(), 3),
+        theirs(paper ? paper->rms1 : 0, 2));
+  if (d.has_rms_with_notches())
+    row("RMS2 (notches)", number(d.rms_with_notches(), 3), theirs(paper ? paper->rms2 : 0, 2));
+  if (d.has_seconds_without_notches())
+    row("t1 s", number(d.seconds_without_notches(), 2), theirs(paper ? paper->t1 : 0, 2));
+  if (d.has_seconds_with_notches())
+    row("t2 s", number(d.seconds_with_notches(), 2), theirs(paper ? paper->t2 : 0, 2));
+  row("converged", d.converged() ? "yes" : "NO", "");
+}
+
+int run_run(const RunArguments& args) {
+  if (args.threads < 0) throw InvalidInput("--threads: must be >= 0 (0 = all cores)");
+  v1::RunRequest request;
+  *request.mutable_design() = design_request(args.design);
+  *request.mutable_simulation() = simulation_options_from_flags(args.simulation);
+  std::filesystem::create_directories(args.out);  // fail early on an unusable --out
+  const Progress progress = make_progress(args.quiet);
+  v1::RunResult result;
+  if (args.remote.remote()) {
+    prepare_design(request.design(), FieldNames::CommandLine);  // the CLI's own messages
+    result = RemoteClient(args.remote).run(request, progress);
+  } else {
+    result = gridshell::run_run(request, progress, {FieldNames::CommandLine, args.threads});
+  }
+  finish_progress();
+  write_files(run_files(result), args.out);
+  std::printf("run %s -> %s%s\n", args.design.mesh.c_str(), args.out.c_str(),
+              args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
+  print_design_summary(result.design());
+  print_deployment_summary(result.simulation().deployment());
+  print_table(result, args.design.mesh);
+  std::string written;
+  for (const auto& [name, contents] : run_files(result)) written += " " + name;
+  std::printf("\n  wrote          %s\n", written.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command add_run_command(CLI::App& app) {
+  auto args = std::make_shared<RunArguments>();
+  CLI::App* sub = app.add_subcommand(
+      "run", "Patch, design and simulate in one go, with a Table 1-like summary");
+  add_design_flags(sub, args->design);
+  add_simulation_flags(sub, args->simulation);
+  sub->add_option("--out", args->out, "output folder")->required();
+  sub->add_option("--threads", args->threads, "worker threads, in-process only (0 = all cores)")
+      ->capture_default_str();
+  sub->add_flag("--quiet", args->quiet, "no progress line");
+  add_remote_options(sub, args->remote);
+  return [args] { return run_run(*args); };
+}
+
+}  // namespace gridshell::cli
