@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <numbers>
+#include <ostream>
 
 #include "gridshell/design.h"
 #include "gridshell/errors.h"
@@ -267,6 +268,8 @@ struct Case {
   std::string name;
   bool notches_help = true;
 };
+
+void PrintTo(const Case& c, std::ostream* out) { *out << c.name; }
 
 class ExampleDeployment : public ::testing::TestWithParam<Case> {};
 
