@@ -5,7 +5,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -323,11 +322,13 @@ NewtonSolver::StepResult NewtonSolver::step() {
         alpha = std::min(alpha, 0.95 * (term.upper - value) / step);
     }
     // Trust radii: shorten the step along the same direction (no new factorization).
+    double alpha_trust = 1;
     for (size_t b = 0, k = 0; b < m.limits.size(); k += m.blocks[b].second, ++b)
       if (m.limits[b] > 0) {
         const double longest = d.segment(k, m.blocks[b].second).cwiseAbs().maxCoeff();
-        if (longest > m.limits[b]) alpha = std::min(alpha, m.limits[b] / longest);
+        if (longest > m.limits[b]) alpha_trust = std::min(alpha_trust, m.limits[b] / longest);
       }
+    alpha = std::min(alpha, alpha_trust);
     const Eigen::VectorXd Hd = m.hessian.selfadjointView<Eigen::Upper>() * d;
     const double gd = m.gradient.dot(d), dHd = d.dot(Hd);
     if (!(gd < 0) || !d.allFinite()) {  // not a descent direction: damp more
@@ -349,7 +350,10 @@ NewtonSolver::StepResult NewtonSolver::step() {
       // that does not raise the cost beyond rounding and let the gradient decide convergence.
       if (ok && predicted < rounding && trial <= cost_ + rounding) rho = 1;
       if (ok && rho > 1e-4) {
-        if (attempt == 0 && step == 1.0)
+        // Less damping when the model predicted the first trial well. A step shortened by the
+        // fraction to a barrier's boundary still validates the model (it is the same quadratic
+        // model along d); one shortened by a trust radius or by backtracking does not.
+        if (attempt == 0 && alpha_trust >= 1)
           lambda_ = std::max(options_.min_lambda,
                              lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
         nu_ = 2;
