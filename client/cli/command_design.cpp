@@ -13,6 +13,21 @@
 
 namespace gridshell::cli {
 
+void add_output_flags(CLI::App* sub, OutputFlags& flags, bool with_threads) {
+  sub->add_option("--out", flags.out, "output folder")->required();
+  if (with_threads)
+    sub->add_option("--threads", flags.threads, "worker threads, in-process only (0 = all cores)")
+        ->check(CLI::Range(0, 4096))
+        ->capture_default_str();
+  sub->add_flag("--quiet", flags.quiet, "no progress line");
+  add_remote_options(sub, flags.remote);
+}
+
+void print_heading(const char* command, const std::string& input, const OutputFlags& flags) {
+  std::printf("%s %s -> %s%s\n", command, input.c_str(), flags.out.c_str(),
+              flags.remote.remote() ? (" on " + flags.remote.server).c_str() : "");
+}
+
 void add_design_flags(CLI::App* sub, DesignFlags& flags) {
   sub->add_option("MESH", flags.mesh, "input mesh (.obj .off .ply .stl) or example:NAME")
       ->required();
@@ -77,27 +92,24 @@ namespace {
 
 struct DesignArguments {
   DesignFlags design;
-  std::string out;
-  int threads = 0;
-  bool quiet = false;
-  RemoteOptions remote;
+  OutputFlags output;
 };
 
 int run_design(const DesignArguments& args) {
   const v1::DesignRequest request = design_request(args.design);
-  std::filesystem::create_directories(args.out);  // fail early on an unusable --out
-  const Progress progress = make_progress(args.quiet);
+  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  const Progress progress = make_progress(args.output.quiet);
   v1::DesignResult result;
-  if (args.remote.remote()) {
+  if (args.output.remote.remote()) {
     prepare_design(request, FieldNames::CommandLine);  // the CLI's own messages for bad options
-    result = RemoteClient(args.remote).design(request, progress);
+    result = RemoteClient(args.output.remote).design(request, progress);
   } else {
-    result = gridshell::run_design(request, progress, {FieldNames::CommandLine, args.threads});
+    result =
+        gridshell::run_design(request, progress, {FieldNames::CommandLine, args.output.threads});
   }
   finish_progress();
-  write_files(design_files(result), args.out);
-  std::printf("design %s -> %s%s\n", args.design.mesh.c_str(), args.out.c_str(),
-              args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
+  write_files(design_files(result), args.output.out);
+  print_heading("design", args.design.mesh, args.output);
   print_design_summary(result);
   std::printf("  wrote           design.json report.json planar.svg spatial.obj maps.svg\n");
   return 0;
@@ -110,11 +122,7 @@ Command add_design_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "design", "Design the planar grid for a target patch (patch stage runs first)");
   add_design_flags(sub, args->design);
-  sub->add_option("--out", args->out, "output folder")->required();
-  sub->add_option("--threads", args->threads, "worker threads, in-process only (0 = all cores)")
-      ->capture_default_str();
-  sub->add_flag("--quiet", args->quiet, "no progress line");
-  add_remote_options(sub, args->remote);
+  add_output_flags(sub, args->output);
   return [args] { return run_design(*args); };
 }
 

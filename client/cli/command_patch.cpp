@@ -17,13 +17,11 @@ namespace {
 struct PatchArguments {
   std::string mesh;
   std::string corners;
-  std::string out;
+  OutputFlags output;
   std::string method = "fast";
   double eta_max = 1.0015;
   int max_iterations = 60;
   bool no_smoothing = false;
-  bool quiet = false;
-  RemoteOptions remote;
 };
 
 int run_patch(const PatchArguments& args) {
@@ -38,12 +36,12 @@ int run_patch(const PatchArguments& args) {
   options.set_max_smoothing_iterations(args.max_iterations);
   options.set_no_smoothing(args.no_smoothing);
 
-  std::filesystem::create_directories(args.out);  // fail early on an unusable --out
-  const Progress progress = make_progress(args.quiet);
+  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  const Progress progress = make_progress(args.output.quiet);
   v1::PatchResult result;
-  if (args.remote.remote()) {
+  if (args.output.remote.remote()) {
     prepare_patch(request, FieldNames::CommandLine);  // the CLI's own messages for bad options
-    result = RemoteClient(args.remote).patch(request, progress);
+    result = RemoteClient(args.output.remote).patch(request, progress);
   } else {
     result = gridshell::run_patch(request, progress, {FieldNames::CommandLine});
   }
@@ -51,12 +49,11 @@ int run_patch(const PatchArguments& args) {
   // Corner indices in file order, so the user can pass them back to --corners.
   for (v1::Corner& corner : *result.mutable_report()->mutable_corners())
     corner.set_input_vertex(file_vertex(input, corner.input_vertex()));
-  write_files(patch_files(result), args.out);
+  write_files(patch_files(result), args.output.out);
 
   const v1::PatchReport& r = result.report();
   const double deg = 180 / std::numbers::pi;
-  std::printf("patch %s -> %s%s\n", args.mesh.c_str(), args.out.c_str(),
-              args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
+  print_heading("patch", args.mesh, args.output);
   std::printf("  vertices        %d (input %d), faces %d, area %.4g\n", r.vertex_count(),
               r.input_vertex_count(), r.face_count(), r.area());
   std::printf("  corner angles   %.2f %.2f %.2f %.2f deg\n", r.corner_angles(0) * deg,
@@ -69,7 +66,7 @@ int run_patch(const PatchArguments& args) {
   std::printf("  gap factor eta  %.6f -> %.6f after %d smoothing iterations (eta_max %.4f)\n",
               r.eta_before(), r.eta_after(), r.smoothing_iterations(), r.eta_max());
   std::printf("  time            %.3f s\n", r.seconds());
-  const std::filesystem::path out(args.out);
+  const std::filesystem::path out(args.output.out);
   std::printf("  wrote           %s, %s\n", (out / "patch.obj").c_str(),
               (out / "patch.json").c_str());
   return 0;
@@ -86,14 +83,12 @@ Command add_patch_command(CLI::App& app) {
   sub->add_option("--corners", args->corners,
                   "i,j,k,l (vertex indices, file order from 0) | \"x,y,z;x,y,z;x,y,z;x,y,z\" | "
                   "auto (default: the example's corners, or auto)");
-  sub->add_option("--out", args->out, "output folder")->required();
   sub->add_option("--method", args->method, "geodesic engine: fast | cgal")->capture_default_str();
   sub->add_option("--eta-max", args->eta_max, "gap factor threshold")->capture_default_str();
   sub->add_option("--max-smoothing-iterations", args->max_iterations, "smoothing cap")
       ->capture_default_str();
   sub->add_flag("--no-smoothing", args->no_smoothing, "report eta but do not smooth");
-  sub->add_flag("--quiet", args->quiet, "no progress line");
-  add_remote_options(sub, args->remote);
+  add_output_flags(sub, args->output, false);
   return [args] { return run_patch(*args); };
 }
 

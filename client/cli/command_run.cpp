@@ -16,10 +16,7 @@ namespace {
 struct RunArguments {
   DesignFlags design;
   SimulationFlags simulation;
-  std::string out;
-  int threads = 0;
-  bool quiet = false;
-  RemoteOptions remote;
+  OutputFlags output;
 };
 
 void row(const char* label, const std::string& ours, const std::string& paper) {
@@ -81,23 +78,21 @@ void print_table(const v1::RunResult& result, const std::string& input) {
 }
 
 int run_run(const RunArguments& args) {
-  if (args.threads < 0) throw InvalidInput("--threads: must be >= 0 (0 = all cores)");
   v1::RunRequest request;
   *request.mutable_design() = design_request(args.design);
   *request.mutable_simulation() = simulation_options_from_flags(args.simulation);
-  std::filesystem::create_directories(args.out);  // fail early on an unusable --out
-  const Progress progress = make_progress(args.quiet);
+  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  const Progress progress = make_progress(args.output.quiet);
   v1::RunResult result;
-  if (args.remote.remote()) {
+  if (args.output.remote.remote()) {
     prepare_design(request.design(), FieldNames::CommandLine);  // the CLI's own messages
-    result = RemoteClient(args.remote).run(request, progress);
+    result = RemoteClient(args.output.remote).run(request, progress);
   } else {
-    result = gridshell::run_run(request, progress, {FieldNames::CommandLine, args.threads});
+    result = gridshell::run_run(request, progress, {FieldNames::CommandLine, args.output.threads});
   }
   finish_progress();
-  write_files(run_files(result), args.out);
-  std::printf("run %s -> %s%s\n", args.design.mesh.c_str(), args.out.c_str(),
-              args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
+  write_files(run_files(result), args.output.out);
+  print_heading("run", args.design.mesh, args.output);
   print_design_summary(result.design());
   print_deployment_summary(result.simulation().deployment());
   print_table(result, args.design.mesh);
@@ -115,11 +110,7 @@ Command add_run_command(CLI::App& app) {
       "run", "Patch, design and simulate in one go, with a Table 1-like summary");
   add_design_flags(sub, args->design);
   add_simulation_flags(sub, args->simulation);
-  sub->add_option("--out", args->out, "output folder")->required();
-  sub->add_option("--threads", args->threads, "worker threads, in-process only (0 = all cores)")
-      ->capture_default_str();
-  sub->add_flag("--quiet", args->quiet, "no progress line");
-  add_remote_options(sub, args->remote);
+  add_output_flags(sub, args->output);
   return [args] { return run_run(*args); };
 }
 

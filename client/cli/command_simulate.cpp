@@ -86,11 +86,8 @@ namespace {
 
 struct SimulateArguments {
   std::string design;
-  std::string out;
+  OutputFlags output;
   SimulationFlags flags;
-  int threads = 0;
-  bool quiet = false;
-  RemoteOptions remote;
 };
 
 v1::Design read_design(const std::string& path) {
@@ -108,20 +105,20 @@ v1::Design read_design(const std::string& path) {
 }
 
 int run_simulate(const SimulateArguments& args) {
-  if (args.threads < 0) throw InvalidInput("--threads: must be >= 0 (0 = all cores)");
   v1::SimulateRequest request;
   *request.mutable_design() = read_design(args.design);
   *request.mutable_options() = simulation_options_from_flags(args.flags);
   request.set_design_name(std::filesystem::path(args.design).filename().string());
-  std::filesystem::create_directories(args.out);  // fail early on an unusable --out
-  const Progress progress = make_progress(args.quiet);
+  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  const Progress progress = make_progress(args.output.quiet);
   v1::SimulateResult result;
   try {
-    if (args.remote.remote()) {
+    if (args.output.remote.remote()) {
       resolve_simulation_options(request.options());  // the CLI's own messages, before sending
-      result = RemoteClient(args.remote).simulate(request, progress);
+      result = RemoteClient(args.output.remote).simulate(request, progress);
     } else {
-      result = gridshell::run_simulate(request, progress, {FieldNames::CommandLine, args.threads});
+      result = gridshell::run_simulate(request, progress,
+                                       {FieldNames::CommandLine, args.output.threads});
     }
   } catch (const InvalidInput& e) {
     const std::string message = e.what();
@@ -130,9 +127,8 @@ int run_simulate(const SimulateArguments& args) {
     throw;
   }
   finish_progress();
-  write_files(simulate_files(result), args.out);
-  std::printf("simulate %s -> %s%s\n", args.design.c_str(), args.out.c_str(),
-              args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
+  write_files(simulate_files(result), args.output.out);
+  print_heading("simulate", args.design, args.output);
   print_deployment_summary(result.deployment());
   std::string written = "deployment.json";
   for (const v1::File& view : result.views()) written += " " + view.name();
@@ -147,12 +143,8 @@ Command add_simulate_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "simulate", "Simulate the deployment of a design (discrete elastic rods, paper Section 5)");
   sub->add_option("DESIGN", args->design, "design.json written by 'gridshell design'")->required();
-  sub->add_option("--out", args->out, "output folder")->required();
   add_simulation_flags(sub, args->flags);
-  sub->add_option("--threads", args->threads, "worker threads, in-process only (0 = all cores)")
-      ->capture_default_str();
-  sub->add_flag("--quiet", args->quiet, "no progress line");
-  add_remote_options(sub, args->remote);
+  add_output_flags(sub, args->output);
   return [args] { return run_simulate(*args); };
 }
 

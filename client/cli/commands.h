@@ -9,6 +9,7 @@
 
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/requests.pb.h"
+#include "remote.h"
 
 namespace gridshell::cli {
 
@@ -21,6 +22,18 @@ Command add_examples_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
 Command add_simulate_command(CLI::App& app);
 Command add_run_command(CLI::App& app);
+
+/// Flags of every command that computes and writes a folder: --out, --threads (in-process only;
+/// left out where a command has no parallel work), --quiet and the remote options.
+struct OutputFlags {
+  std::string out;
+  int threads = 0;
+  bool quiet = false;
+  RemoteOptions remote;
+};
+void add_output_flags(CLI::App* sub, OutputFlags& flags, bool with_threads = true);
+/// "COMMAND INPUT -> OUT[ on SERVER]", the first line of a command's summary.
+void print_heading(const char* command, const std::string& input, const OutputFlags& flags);
 
 /// Design flags shared by `design` and `run` (MESH, --corners, --alpha, ...).
 struct DesignFlags {
