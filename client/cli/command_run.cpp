@@ -21,9 +21,9 @@ struct RunArguments {
 
 void row(const char* label, const std::string& ours, const std::string& paper) {
   if (paper.empty())
-    std::printf("  %-22s %12s\n", label, ours.c_str());
+    std::printf("  %-22s %20s\n", label, ours.c_str());
   else
-    std::printf("  %-22s %12s   %s\n", label, ours.c_str(), paper.c_str());
+    std::printf("  %-22s %20s   %s\n", label, ours.c_str(), paper.c_str());
 }
 
 std::string number(double value, int decimals) {
@@ -50,7 +50,7 @@ void print_table(const v1::RunResult& result, const std::string& input) {
     hi = hi.cwiseMax(q);
   }
   const Vec3 size = hi - lo;
-  std::printf("\n  %-22s %12s   %s\n", "", "gridshell",
+  std::printf("\n  %-22s %20s   %s\n", "", "gridshell",
               paper ? ("paper, Table 1 (" + std::string(paper->name) + ")").c_str() : "");
   row("width x depth x height",
       number(std::max(size.x(), size.y()), 1) + " x " + number(std::min(size.x(), size.y()), 1) +
