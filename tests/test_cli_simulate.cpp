@@ -1,9 +1,14 @@
 // End-to-end tests of `gridshell simulate`: files, deployment.json fields, exit codes, errors.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "support.h"
 
@@ -158,6 +163,37 @@ TEST(CliRun, BadInputsStopBeforeAnyWork) {
     EXPECT_NE(result.err.find(c.expected), std::string::npos) << result.err;
     EXPECT_FALSE(std::filesystem::exists(dir + "/x/design.json"));
   }
+}
+
+// Ctrl-C during the simulation: exit code 130, and the design computed before it is kept.
+TEST(CliRun, InterruptedSimulationKeepsTheDesign) {
+  const std::string out = testing::temp_dir() + "/run";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, STDOUT_FILENO);
+    dup2(null, STDERR_FILENO);
+    execl(GRIDSHELL_CLI, GRIDSHELL_CLI, "run", "example:waves", "--quiet", "--out", out.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  bool designed = false;
+  for (int i = 0; i < 6000 && !designed; ++i) {
+    designed = std::filesystem::exists(out + "/design.json");
+    if (!designed) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // inside the simulation
+  kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(designed);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  const json design = json::parse(testing::read_text(out + "/design.json"));
+  EXPECT_FALSE(design["members"].empty());
+  EXPECT_TRUE(std::filesystem::exists(out + "/planar.svg"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/deployment.json"));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // summary like the paper's Table 1 (next to the paper's values for its seven models).
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "cli_support.h"
 #include "commands.h"
@@ -78,20 +79,35 @@ void print_table(const v1::RunResult& result, const std::string& input) {
 }
 
 int run_run(const RunArguments& args) {
-  v1::RunRequest request;
-  *request.mutable_design() = design_request(args.design);
-  *request.mutable_simulation() = simulation_options_from_flags(args.simulation);
+  // Both requests are checked before any work; the design is written as soon as it exists, so
+  // a simulation that is cancelled or fails leaves it in --out.
+  const v1::DesignRequest design_request_message = design_request(args.design);
+  v1::SimulateRequest simulate_request;
+  *simulate_request.mutable_options() = simulation_options_from_flags(args.simulation);
+  simulate_request.set_design_name("design.json");
   std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
+  prepare_simulation_options(simulate_request.options(), FieldNames::CommandLine);
+  const bool remote = args.output.remote.remote();
+  std::optional<RemoteClient> client;
   v1::RunResult result;
-  if (args.output.remote.remote()) {
-    prepare_design(request.design(), FieldNames::CommandLine);  // the CLI's own messages
-    result = RemoteClient(args.output.remote).run(request, progress);
+  if (remote) {
+    prepare_design(design_request_message, FieldNames::CommandLine);  // the CLI's own messages
+    client.emplace(args.output.remote);
+    *result.mutable_design() = client->design(design_request_message, progress);
   } else {
-    result = gridshell::run_run(request, progress, {FieldNames::CommandLine, args.output.threads});
+    *result.mutable_design() = gridshell::run_design(
+        design_request_message, progress, {FieldNames::CommandLine, args.output.threads});
   }
+  write_files(design_files(result.design()), args.output.out);
+  *simulate_request.mutable_design() = result.design().design();
+  if (remote)
+    *result.mutable_simulation() = client->simulate(simulate_request, progress);
+  else
+    *result.mutable_simulation() = gridshell::run_simulate(
+        simulate_request, progress, {FieldNames::CommandLine, args.output.threads});
   finish_progress();
-  write_files(run_files(result), args.output.out);
+  write_files(simulate_files(result.simulation()), args.output.out);
   print_heading("run", args.design.mesh, args.output);
   print_design_summary(result.design());
   print_deployment_summary(result.simulation().deployment());

@@ -194,10 +194,6 @@ v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest& request,
   return impl_->call(&v1::Gridshell::Stub::Simulate, request, progress);
 }
 
-v1::RunResult RemoteClient::run(const v1::RunRequest& request, const Progress& progress) {
-  return impl_->call(&v1::Gridshell::Stub::Run, request, progress);
-}
-
 std::string RemoteClient::health(const std::string& service) {
   auto stub = grpc::health::v1::Health::NewStub(impl_->channel);
   grpc::health::v1::HealthCheckRequest request;
@@ -225,7 +221,6 @@ v1::DesignResult RemoteClient::design(const v1::DesignRequest&, const Progress&)
 v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest&, const Progress&) {
   return {};
 }
-v1::RunResult RemoteClient::run(const v1::RunRequest&, const Progress&) { return {}; }
 std::string RemoteClient::health(const std::string&) { return {}; }
 
 #endif

@@ -29,15 +29,6 @@ std::string name_option(const std::string& message, FieldNames names, const std:
   return message;
 }
 
-v1::SimulationOptions resolve(const v1::SimulationOptions& options, FieldNames names,
-                              const std::string& prefix) {
-  try {
-    return resolve_simulation_options(options);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(name_option(e.what(), names, prefix));
-  }
-}
-
 v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOptions& options,
                             const std::string& name, const Progress& progress, int threads) {
   DeploymentJob job = run_deployment_job(design, options, name, progress, threads);
@@ -58,9 +49,19 @@ v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOption
 
 }  // namespace
 
+v1::SimulationOptions prepare_simulation_options(const v1::SimulationOptions& options,
+                                                 FieldNames names, const std::string& prefix) {
+  try {
+    return resolve_simulation_options(options);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(name_option(e.what(), names, prefix));
+  }
+}
+
 v1::SimulateResult run_simulate(const v1::SimulateRequest& request, const Progress& progress,
                                 const RunSettings& settings) {
-  const v1::SimulationOptions options = resolve(request.options(), settings.names, "options.");
+  const v1::SimulationOptions options =
+      prepare_simulation_options(request.options(), settings.names);
   const std::string name = request.design_name().empty() ? "design.json" : request.design_name();
   return simulate(request.design(), options, name, progress, settings.threads);
 }
@@ -69,7 +70,7 @@ v1::RunResult run_run(const v1::RunRequest& request, const Progress& progress,
                       const RunSettings& settings) {
   // Check the simulation options before the (longer) design runs.
   const v1::SimulationOptions options =
-      resolve(request.simulation(), settings.names, "simulation.");
+      prepare_simulation_options(request.simulation(), settings.names, "simulation.");
   v1::RunResult out;
   try {
     *out.mutable_design() = run_design(request.design(), progress, settings);

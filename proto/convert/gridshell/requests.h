@@ -84,6 +84,12 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
 
 // Simulate and Run ---------------------------------------------------------------------------
 
+/// Simulation options checked and completed with their defaults (material moduli, unit);
+/// throws InvalidInput naming `prefix` + field (or the CLI flag).
+v1::SimulationOptions prepare_simulation_options(const v1::SimulationOptions& options,
+                                                 FieldNames names,
+                                                 const std::string& prefix = "options.");
+
 /// The deployment simulation (paper Section 5) of a design message: deployment.json and the
 /// views deployed.obj and deviation.ply (and their *_without_notches twins when both runs are
 /// asked for). Bad options name `options.<field>` (or the CLI flag), a bad design
