@@ -56,6 +56,16 @@ double load_average() {
   return load;
 }
 
+/// The line that states the machine's load over a benchmark.
+std::string load_line(double load_start) {
+  char line[160];
+  std::snprintf(line, sizeof line,
+                "\n1-minute load average of the shared machine: %.2f at the start, %.2f at the "
+                "end.\n",
+                load_start, load_average());
+  return line;
+}
+
 /// CPU time of the calling thread in ms. The geodesic solves are single-threaded, so this is
 /// their cost without the time other processes take on a shared machine (equal to wall time on
 /// an idle one); all engines are timed the same way.
@@ -164,12 +174,7 @@ int bench_geodesic(const BenchArguments& args) {
                   growth.front().second, growth.back().second, exponent(growth_full));
     table << line;
   }
-  char load_line[160];
-  std::snprintf(load_line, sizeof load_line,
-                "\n1-minute load average of the shared machine: %.2f at the start, %.2f at the "
-                "end.\n",
-                load_start, load_average());
-  table << load_line;
+  table << load_line(load_start);
   table << "\nCommand: `gridshell bench geodesic --sources " << args.sources << " --cgal-sources "
         << args.cgal_sources << "`\n";
   std::cout << table.str();
@@ -249,12 +254,7 @@ int bench_design(const BenchArguments& args) {
     table << buffer;
     std::cerr << buffer;
   }
-  char load_line[160];
-  std::snprintf(load_line, sizeof load_line,
-                "\n1-minute load average of the shared machine: %.2f at the start, %.2f at the "
-                "end.\n",
-                load_start, load_average());
-  table << load_line;
+  table << load_line(load_start);
   table << "\nCommand: `gridshell bench design --repeats " << args.repeats << "`\n";
   std::cout << table.str();
   if (!args.no_write) {
