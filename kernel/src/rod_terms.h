@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <tuple>
 
 namespace gridshell::rod_terms {
 
@@ -237,54 +238,19 @@ struct AnchorResidual {
   }
 };
 
-/// Fixed-arity adaptors for Ceres: a member contributes 4 parameter blocks (x_a, x_b, theta,
-/// beta) or 6 with a neighbouring edge (+ x_n, theta_n). G and H are 4 or 6.
+/// Fixed-arity adaptor for Ceres: a member contributes 4 parameter blocks (x_a, x_b, theta,
+/// beta) or 6 with a neighbouring edge (+ x_n, theta_n). G and H are 4 or 6; Ceres calls it with
+/// the G + H blocks, then the residuals.
 template <typename Residual, int G, int H>
-struct PairFunctor;
-
-template <typename Residual>
-struct PairFunctor<Residual, 4, 4> {
+struct PairFunctor {
+  static_assert((G == 4 || G == 6) && (H == 4 || H == 6));
   Residual residual;
-  template <typename T>
-  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* b0, const T* b1,
-                  const T* b2, const T* b3, T* r) const {
-    const T* g[] = {a0, a1, a2, a3};
-    const T* h[] = {b0, b1, b2, b3};
-    return residual.evaluate(g, h, r);
-  }
-};
-template <typename Residual>
-struct PairFunctor<Residual, 6, 4> {
-  Residual residual;
-  template <typename T>
-  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* a4, const T* a5,
-                  const T* b0, const T* b1, const T* b2, const T* b3, T* r) const {
-    const T* g[] = {a0, a1, a2, a3, a4, a5};
-    const T* h[] = {b0, b1, b2, b3};
-    return residual.evaluate(g, h, r);
-  }
-};
-template <typename Residual>
-struct PairFunctor<Residual, 4, 6> {
-  Residual residual;
-  template <typename T>
-  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* b0, const T* b1,
-                  const T* b2, const T* b3, const T* b4, const T* b5, T* r) const {
-    const T* g[] = {a0, a1, a2, a3};
-    const T* h[] = {b0, b1, b2, b3, b4, b5};
-    return residual.evaluate(g, h, r);
-  }
-};
-template <typename Residual>
-struct PairFunctor<Residual, 6, 6> {
-  Residual residual;
-  template <typename T>
-  bool operator()(const T* a0, const T* a1, const T* a2, const T* a3, const T* a4, const T* a5,
-                  const T* b0, const T* b1, const T* b2, const T* b3, const T* b4, const T* b5,
-                  T* r) const {
-    const T* g[] = {a0, a1, a2, a3, a4, a5};
-    const T* h[] = {b0, b1, b2, b3, b4, b5};
-    return residual.evaluate(g, h, r);
+  template <typename T, typename... Rest>
+  bool operator()(const T* first, Rest... rest) const {
+    static_assert(sizeof...(Rest) == G + H, "G + H parameter blocks, then the residuals");
+    const T* blocks[] = {first, rest...};
+    T* r = std::get<G + H - 1>(std::forward_as_tuple(rest...));
+    return residual.evaluate(blocks, blocks + G, r);
   }
 };
 

@@ -189,6 +189,9 @@ class Deployment {
     rod_terms::MemberEdge edge;
   };
   Binding bind(Slider& s);
+  /// E_a of the anchored joint whose two members are bound as `g` and `h`.
+  rod_terms::AnchorResidual anchor_residual(const Joint& joint, const Binding& g,
+                                            const Binding& h) const;
   bool sides_changed() const;
   bool is_twist(const double* block) const {
     for (const Rod& rod : rods_)
@@ -408,6 +411,19 @@ Deployment::Binding Deployment::bind(Slider& s) {
   return b;
 }
 
+rod_terms::AnchorResidual Deployment::anchor_residual(const Joint& joint, const Binding& g,
+                                                      const Binding& h) const {
+  const AnchorTarget& target = anchors_[joint.anchor];
+  rod_terms::AnchorResidual anchor;
+  anchor.g = g.edge;
+  anchor.h = h.edge;
+  anchor.position = target.position;
+  anchor.normal = target.normal;
+  anchor.sqrt_position = std::sqrt(2 * w_anchor_position_);
+  anchor.sqrt_direction = std::sqrt(2 * w_anchor_direction_);
+  return anchor;
+}
+
 bool Deployment::sides_changed() const {
   for (const Joint& joint : joints_)
     for (const Slider& s : joint.end)
@@ -522,17 +538,9 @@ Deployment::Terms Deployment::build_terms() {
     parameters.insert(parameters.end(), bh.parameters.begin(), bh.parameters.end());
     rod_terms::ConnectionResidual connection{bg.edge, bh.edge, thickness_, position, direction};
     add(pair_cost(connection, bg.parameters.size(), bh.parameters.size()), parameters);
-    if (joint.anchor >= 0) {
-      const AnchorTarget& target = anchors_[joint.anchor];
-      rod_terms::AnchorResidual anchor;
-      anchor.g = bg.edge;
-      anchor.h = bh.edge;
-      anchor.position = target.position;
-      anchor.normal = target.normal;
-      anchor.sqrt_position = std::sqrt(2 * w_anchor_position_);
-      anchor.sqrt_direction = std::sqrt(2 * w_anchor_direction_);
-      add(pair_cost(anchor, bg.parameters.size(), bh.parameters.size()), parameters);
-    }
+    if (joint.anchor >= 0)
+      add(pair_cost(anchor_residual(joint, bg, bh), bg.parameters.size(), bh.parameters.size()),
+          parameters);
   }
   return out;
 }
@@ -865,16 +873,9 @@ DeploymentRun Deployment::results() {
     c.gap = Eigen::Vector3d(r[0], r[1], r[2]).norm() / position / scale_;
     run.connections.push_back(c);
     if (joint.anchor >= 0) {
-      const AnchorTarget& target = anchors_[joint.anchor];
-      rod_terms::AnchorResidual anchor;
-      anchor.g = bg.edge;
-      anchor.h = bh.edge;
-      anchor.position = target.position;
-      anchor.normal = target.normal;
-      anchor.sqrt_position = std::sqrt(2 * w_anchor_position_);
-      anchor.sqrt_direction = std::sqrt(2 * w_anchor_direction_);
-      anchor.evaluate(const_cast<const double* const*>(bg.parameters.data()),
-                      const_cast<const double* const*>(bh.parameters.data()), r);
+      anchor_residual(joint, bg, bh)
+          .evaluate(const_cast<const double* const*>(bg.parameters.data()),
+                    const_cast<const double* const*>(bh.parameters.data()), r);
       for (double v : r) energy["anchor"] += 0.5 * v * v;
     }
     for (const Slider* s : {&a, &b}) {

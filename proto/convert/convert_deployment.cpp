@@ -165,18 +165,24 @@ Design design_from_proto(const v1::Design& in) {
   const int ng = static_cast<int>(design.grid.g.size()),
             nh = static_cast<int>(design.grid.h.size());
   if (ng < 2 || nh < 2) fail("members", "each family needs at least its two boundary members");
+  // A crossing's or anchor's member indices.
+  const auto check_members = [&](const std::string& field, int g, int h) {
+    if (g < 0 || g >= ng) fail(field + ".g", "no such g member");
+    if (h < 0 || h >= nh) fail(field + ".h", "no such h member");
+  };
   for (int i = 0; i < in.crossings_size(); ++i) {
     const v1::Crossing& c = in.crossings(i);
     const std::string field = "crossings[" + std::to_string(i) + "]";
     Crossing x;
     x.g = c.g();
     x.h = c.h();
-    if (x.g < 0 || x.g >= ng) fail(field + ".g", "no such g member");
-    if (x.h < 0 || x.h >= nh) fail(field + ".h", "no such h member");
+    check_members(field, x.g, x.h);
     if (c.surface_point_size() != 3) fail(field + ".surface_point", "expected 3 numbers");
     if (c.planar_point_size() != 2) fail(field + ".planar_point", "expected 2 numbers");
-    for (int k = 0; k < 3; ++k) x.surface_point[k] = finite(c.surface_point(k), field);
-    for (int k = 0; k < 2; ++k) x.planar_point[k] = finite(c.planar_point(k), field);
+    for (int k = 0; k < 3; ++k)
+      x.surface_point[k] = finite(c.surface_point(k), field + ".surface_point");
+    for (int k = 0; k < 2; ++k)
+      x.planar_point[k] = finite(c.planar_point(k), field + ".planar_point");
     x.s_g = finite(c.s_g(), field + ".s_g");
     x.s_bar_g = finite(c.s_bar_g(), field + ".s_bar_g");
     x.s_h = finite(c.s_h(), field + ".s_h");
@@ -190,8 +196,7 @@ Design design_from_proto(const v1::Design& in) {
     Anchor anchor;
     anchor.g = a.g();
     anchor.h = a.h();
-    if (anchor.g < 0 || anchor.g >= ng) fail(field + ".g", "no such g member");
-    if (anchor.h < 0 || anchor.h >= nh) fail(field + ".h", "no such h member");
+    check_members(field, anchor.g, anchor.h);
     anchor.corner = a.corner();
     anchor.side = a.side();
     if (a.position_size() != 3) fail(field + ".position", "expected 3 numbers");
