@@ -1,7 +1,8 @@
 // `gridshell bench service`: gridshelld under load. Starts the daemon next to this executable on
 // an ephemeral loopback port and measures, on a paper-like example (double vault, default
 // options):
-//   - requests/s and p50/p99 latency of Design for 1, 2, 4 and 8 concurrent clients,
+//   - requests/s and p50/p99 latency of Design for 1, 2, 4 and 8 concurrent clients, in rounds
+//     (each round runs every level once; ratios against the same round's single client),
 //   - the daemon's resident memory before and after 200 requests,
 //   - the service overhead: remote minus in-process time of one Design (same kernel threads),
 //   - the daemon's own measured stop latency when requests are cancelled mid-way.
@@ -200,15 +201,24 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
     for (auto& thread : pool) thread.join();
     return threads * per_thread / seconds_since(start);
   };
-  std::vector<Level> levels;
-  std::vector<double> control;
-  for (int clients : {1, 2, 4, 8}) {
-    const int requests = std::max(repeats, 1) * (4 + 2 * clients);
-    std::cerr << "bench service: " << clients << " client(s), " << requests << " requests\n";
-    control.push_back(in_process_rate(std::min(clients, workers)));
-    levels.push_back(run_level(daemon.address(), request, clients, requests));
-    served += requests;
-  }
+  // Rounds: every round runs all levels once (in-process control, then the service), and each
+  // level's speed-up is taken against the single-client rate of its own round, so a slow or
+  // fast phase of the shared machine affects both sides of a ratio. Reported: medians over
+  // the rounds.
+  const int rounds = std::max(repeats, 1);
+  const std::vector<int> client_counts = {1, 2, 4, 8};
+  std::vector<std::vector<Level>> levels(client_counts.size());
+  std::vector<std::vector<double>> control(client_counts.size());
+  for (int round = 0; round < rounds; ++round)
+    for (size_t k = 0; k < client_counts.size(); ++k) {
+      const int clients = client_counts[k];
+      const int requests = 4 + 2 * clients;
+      std::cerr << "bench service: round " << round + 1 << "/" << rounds << ", " << clients
+                << " client(s), " << requests << " requests\n";
+      control[k].push_back(in_process_rate(std::min(clients, workers)));
+      levels[k].push_back(run_level(daemon.address(), request, clients, requests));
+      served += requests;
+    }
   if (served < kMemoryRequests) {
     std::cerr << "bench service: " << kMemoryRequests - served << " more requests for memory\n";
     run_level(daemon.address(), request, 8, kMemoryRequests - served);
@@ -274,20 +284,39 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
            "its own channel issuing requests back to back. Latency is per request as the "
            "client sees it, in seconds.\n\n"
         << "*In-process* is the same design run in the benchmark's own process on min(clients, "
-        << workers << ") threads right before each row, without the service: the parallelism "
+        << workers
+        << ") threads right before each level of each round, without the service: the parallelism "
         << "the shared machine offered at that moment. *Service / in-process* near 1 means the "
         << "daemon adds no serialization of its own.\n\n"
-        << "| clients | requests | requests/s | vs 1 client | in-process designs/s | service / "
-           "in-process | p50 latency s | p99 latency s |\n"
-        << "|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  const double base_rate = levels.front().requests / levels.front().wall;
-  for (size_t k = 0; k < levels.size(); ++k) {
-    const Level& level = levels[k];
-    const double rate = level.requests / level.wall;
-    std::snprintf(line, sizeof line, "| %d | %d | %.2f | %.2fx | %.2f | %.2f | %.3f | %.3f |\n",
-                  level.clients, level.requests, rate, rate / base_rate, control[k],
-                  rate / control[k], percentile(level.latencies, 50),
-                  percentile(level.latencies, 99));
+        << "Each level runs once per round (" << rounds << " rounds, levels in order 1, 2, 4, 8 "
+        << "within a round); *vs 1 client* is the median over the rounds of the level's rate "
+        << "divided by the single-client rate of the same round, *per round* lists those "
+        << "ratios.\n\n"
+        << "| clients | requests | requests/s | vs 1 client | per round | in-process designs/s "
+           "| service / in-process | p50 latency s | p99 latency s |\n"
+        << "|---:|---:|---:|---:|---|---:|---:|---:|---:|\n";
+  for (size_t k = 0; k < client_counts.size(); ++k) {
+    int requests = 0;
+    std::vector<double> rates, speedups, in_process, versus, latencies;
+    std::string per_round;
+    for (int round = 0; round < rounds; ++round) {
+      const Level& level = levels[k][round];
+      const double rate = level.requests / level.wall;
+      const double base = levels[0][round].requests / levels[0][round].wall;
+      requests += level.requests;
+      rates.push_back(rate);
+      speedups.push_back(rate / base);
+      in_process.push_back(control[k][round]);
+      versus.push_back(rate / control[k][round]);
+      latencies.insert(latencies.end(), level.latencies.begin(), level.latencies.end());
+      char ratio[32];
+      std::snprintf(ratio, sizeof ratio, "%s%.2f", round ? " / " : "", rate / base);
+      per_round += ratio;
+    }
+    std::snprintf(line, sizeof line,
+                  "| %d | %d | %.2f | %.2fx | %s | %.2f | %.2f | %.3f | %.3f |\n", client_counts[k],
+                  requests, median(rates), median(speedups), per_round.c_str(), median(in_process),
+                  median(versus), percentile(latencies, 50), percentile(latencies, 99));
     table << line;
   }
   std::snprintf(line, sizeof line,
@@ -319,7 +348,7 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
                   *std::max_element(cancel_ms.begin(), cancel_ms.end()));
     table << line;
   }
-  table << "\nCommand: `gridshell bench service`\n";
+  table << "\nCommand: `gridshell bench service --repeats " << rounds << "`\n";
   std::cout << table.str();
   if (!no_write) {
     write_section(out, "service", table.str());

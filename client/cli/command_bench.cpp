@@ -284,7 +284,9 @@ Command add_bench_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--out", args->out, "markdown file to update")->capture_default_str();
   sub->add_flag("--no-write", args->no_write, "print only");
-  sub->add_option("--repeats", args->repeats, "runs per example (design)")->capture_default_str();
+  sub->add_option("--repeats", args->repeats,
+                  "runs per example (design, simulate); rounds of all client levels (service)")
+      ->capture_default_str();
   return [args] {
     if (args->sources < 1) throw InvalidInput("--sources: must be at least 1");
     for (int s : args->sizes)
