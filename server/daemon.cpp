@@ -98,6 +98,8 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
   if (o.queue < 0 || o.queue > 100000) throw InvalidInput("--queue: must be 0..100000");
   if (o.request_threads < 0 || o.request_threads > 1024)
     throw InvalidInput("--request-threads: must be 0..1024");
+  if (o.progress_interval_ms < 0 || o.progress_interval_ms > 60000)
+    throw InvalidInput("--progress-interval-ms: must be 0..60000");
   if (o.max_message_mib < 1 || o.max_message_mib > 2047)
     throw InvalidInput("--max-message-mib: must be 1..2047");
   if (o.http_body_limit_mib < 1 || o.http_body_limit_mib > 4096)
@@ -116,7 +118,8 @@ void Daemon::start() {
   Impl& d = *impl_;
   const DaemonOptions& o = d.options;
   d.started = true;
-  d.queue = std::make_unique<JobQueue>(JobQueue::Options{o.workers, o.queue, o.log});
+  d.queue = std::make_unique<JobQueue>(
+      JobQueue::Options{o.workers, o.queue, o.log, o.progress_interval_ms});
   d.methods = make_methods({FieldNames::Request, o.request_threads});
   d.service = std::make_unique<GridshellService>(*d.queue, d.methods, d.token);
 

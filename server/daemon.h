@@ -19,6 +19,7 @@ struct DaemonOptions {
   /// Kernel threads inside one request. 1: the pool already keeps every core busy with
   /// concurrent requests, and more would oversubscribe them. Results do not depend on it.
   int request_threads = 1;
+  int progress_interval_ms = 100;      ///< progress events per request and stage at most this often
   int max_message_mib = 256;           ///< largest gRPC message, either direction
   int http_body_limit_mib = 256;       ///< largest HTTP request body
   std::string static_dir;              ///< served by the gateway for GET; empty = none

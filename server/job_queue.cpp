@@ -27,6 +27,17 @@ class Job {
 
   /// Time per stage group ("patch", "distance maps", ...): the part of the kernel's stage name
   /// before ':'; stages interleaved from several threads are charged to the latest reported.
+  /// Whether a progress event is forwarded (JobQueue::Options::progress_interval_ms).
+  bool forward_progress(std::string_view stage, double fraction,
+                        std::chrono::milliseconds interval) {
+    const Clock::time_point now = Clock::now();
+    std::lock_guard lock(progress_mutex_);
+    if (stage == progress_stage_ && fraction < 1 && now - progress_sent_ < interval) return false;
+    progress_stage_.assign(stage);
+    progress_sent_ = now;
+    return true;
+  }
+
   void note_stage(std::string_view stage) {
     const std::string group(stage.substr(0, stage.find(':')));
     std::lock_guard lock(stage_mutex_);
@@ -55,6 +66,9 @@ class Job {
     stage_.clear();
   }
 
+  std::mutex progress_mutex_;
+  std::string progress_stage_;
+  Clock::time_point progress_sent_;
   std::mutex stage_mutex_;
   std::string stage_;
   Clock::time_point stage_start_;
@@ -76,7 +90,7 @@ std::string utc_timestamp() {
       std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()) % 1000;
   std::tm tm{};
   gmtime_r(&seconds, &tm);
-  char buffer[40];
+  char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
                 tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
                 static_cast<int>(ms.count()));
@@ -205,8 +219,10 @@ void JobQueue::work() {
     Status status;
     std::unique_ptr<google::protobuf::Message> result;
     const Progress progress(
-        [&job](std::string_view stage, double fraction) {
+        [&job, interval = std::chrono::milliseconds(options_.progress_interval_ms)](
+            std::string_view stage, double fraction) {
           job->note_stage(stage);
+          if (!job->forward_progress(stage, fraction, interval)) return;
           v1::Progress event;
           event.set_stage(std::string(stage));
           event.set_fraction(fraction);

@@ -33,6 +33,9 @@ int main(int argc, char** argv) {
   app.add_option("--request-threads", options.request_threads,
                  "kernel threads per request (0 = all cores)")
       ->capture_default_str();
+  app.add_option("--progress-interval-ms", options.progress_interval_ms,
+                 "progress events per request and stage at most this often (0 = all)")
+      ->capture_default_str();
   app.add_option("--max-message-mib", options.max_message_mib, "largest gRPC message, MiB")
       ->capture_default_str();
   app.add_option("--http-body-limit-mib", options.http_body_limit_mib,

@@ -106,6 +106,35 @@ TEST(Daemon, RemotePatchIsIdenticalToInProcess) {
   EXPECT_EQ(report, local_report);
 }
 
+// Progress is forwarded at most every progress_interval_ms within a stage: with an interval
+// longer than the whole request each stage sends its first event (and at most one more, at
+// fraction 1); with 0 every event the kernel reports is offered to the stream.
+TEST(Daemon, ProgressEventsAreThrottledPerStage) {
+  const v1::DesignRequest request = testing::design_request("double-vault", 32);
+  auto events = [&](int interval_ms) {
+    server::DaemonOptions options = testing::test_options(1);
+    options.progress_interval_ms = interval_ms;
+    TestDaemon daemon(options);
+    auto remote = testing::call_design(*daemon.stub(), request);
+    EXPECT_TRUE(remote.status.ok()) << remote.status.error_message();
+    return remote.progress;
+  };
+  const std::vector<v1::Progress> slow = events(60000), all = events(0);
+  ASSERT_FALSE(slow.empty());
+  std::set<std::string> stages;
+  int run = 0;
+  for (size_t i = 0; i < slow.size(); ++i) {
+    stages.insert(slow[i].stage());
+    run = i > 0 && slow[i].stage() == slow[i - 1].stage() ? run + 1 : 1;
+    EXPECT_LE(run, 2) << slow[i].stage() << " at event " << i;
+    if (run == 2) {
+      EXPECT_GE(slow[i].fraction(), 1.0) << slow[i].stage();
+    }
+  }
+  EXPECT_GE(stages.size(), 4u);  // queued, patch, distance maps, ... all still reported
+  EXPECT_GT(all.size(), 2 * slow.size());
+}
+
 TEST(Daemon, EightConcurrentClientsAllGetCorrectResults) {
   TestDaemon daemon(testing::test_options(2, 8));
   const v1::DesignRequest request = testing::design_request("double-vault", 32);
