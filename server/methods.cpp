@@ -7,20 +7,26 @@ namespace gridshell::server {
 
 Methods make_methods(const RunSettings& settings) {
   Methods methods;
-  methods.patch = {"Patch", [settings](const v1::PatchRequest& request, const Progress& progress) {
+  methods.patch = {"Patch",
+                   [settings](const v1::PatchRequest& request, const Progress& progress) {
                      return run_patch(request, progress, settings);
-                   }};
+                   },
+                   {}};
   methods.design = {"Design",
                     [settings](const v1::DesignRequest& request, const Progress& progress) {
                       return run_design(request, progress, settings);
-                    }};
+                    },
+                    {}};
   methods.simulate = {"Simulate",
                       [settings](const v1::SimulateRequest& request, const Progress& progress) {
                         return run_simulate(request, progress, settings);
-                      }};
-  methods.run = {"Run", [settings](const v1::RunRequest& request, const Progress& progress) {
+                      },
+                      {}};
+  methods.run = {"Run",
+                 [settings](const v1::RunRequest& request, const Progress& progress) {
                    return run_run(request, progress, settings);
-                 }};
+                 },
+                 {}};
   return methods;
 }
 

@@ -60,7 +60,7 @@ TEST(CliRemote, SimulateAndRunWriteTheSameFiles) {
       if (json.contains(run)) json[run].erase("seconds");
     return json;
   };
-  for (const std::string command :
+  for (const std::string& command :
        {"simulate '" + design + "/design.json' --notches on",
         std::string(
             "run example:hypar --resolution 16 --members-u 7 --members-v 7 --notches on")}) {
