@@ -27,13 +27,19 @@ class Job {
 
   /// Time per stage group ("patch", "distance maps", ...): the part of the kernel's stage name
   /// before ':'; stages interleaved from several threads are charged to the latest reported.
-  /// Whether a progress event is forwarded (JobQueue::Options::progress_interval_ms).
+  /// Whether a progress event is forwarded (JobQueue::Options::progress_interval_ms): the first
+  /// of a stage, the first at fraction 1, and others at most once per interval.
   bool forward_progress(std::string_view stage, double fraction,
                         std::chrono::milliseconds interval) {
     const Clock::time_point now = Clock::now();
     std::lock_guard lock(progress_mutex_);
-    if (stage == progress_stage_ && fraction < 1 && now - progress_sent_ < interval) return false;
-    progress_stage_.assign(stage);
+    if (stage != progress_stage_) {
+      progress_stage_.assign(stage);
+      progress_complete_ = false;
+    } else if (fraction >= 1 ? progress_complete_ : now - progress_sent_ < interval) {
+      return false;  // too soon, or the stage's completion was already forwarded
+    }
+    progress_complete_ = progress_complete_ || fraction >= 1;
     progress_sent_ = now;
     return true;
   }
@@ -69,6 +75,7 @@ class Job {
   std::mutex progress_mutex_;
   std::string progress_stage_;
   Clock::time_point progress_sent_;
+  bool progress_complete_ = false;  // fraction 1 of progress_stage_ was forwarded
   std::mutex stage_mutex_;
   std::string stage_;
   Clock::time_point stage_start_;

@@ -75,9 +75,9 @@ class JobQueue {
     int capacity = 16;            ///< jobs that may wait for a worker; one more is refused
     std::ostream* log = nullptr;  ///< one JSON line per request; null = no log
     /// Progress events of one job are forwarded at most this often within a stage (the first
-    /// event of every stage and fraction 1 always). The kernel reports ~240 events per design;
-    /// each one forwarded wakes the transport and the client, which costs the computing cores
-    /// more than the event is worth. 0 = forward every event.
+    /// event of every stage and its first at fraction 1 always). The kernel reports ~240 events per
+    /// design; each one forwarded wakes the transport and the client, which costs the computing
+    /// cores more than the event is worth. 0 = forward every event.
     int progress_interval_ms = 100;
   };
 
