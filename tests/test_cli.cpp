@@ -120,6 +120,10 @@ TEST(CliDesign, ReflexCornerIsInfeasibleAndBadOptionsInvalid) {
   result = run_cli("design example:plane --quiet --lamella-width -1 --out " + testing::temp_dir());
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.err.find("--lamella-width"), std::string::npos) << result.err;
+  result =
+      run_cli("design example:plane --quiet --interior-anchors -1 --out " + testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--interior-anchors"), std::string::npos) << result.err;
 }
 
 TEST(CliGeodesic, JsonComparesWithCgal) {

@@ -50,6 +50,10 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
       ->capture_default_str();
   sub->add_option("--method", flags.method, "geodesic engine: fast | cgal")->capture_default_str();
   sub->add_option("--eta-max", flags.eta_max, "gap factor threshold")->capture_default_str();
+  sub->add_option("--interior-anchors", flags.interior_anchors,
+                  "also pin up to N inner crossings at the target's bumps and dips (0 = boundary "
+                  "anchors only, as in the paper)")
+      ->capture_default_str();
 }
 
 v1::DesignRequest design_request(const DesignFlags& flags) {
@@ -68,6 +72,7 @@ v1::DesignRequest design_request(const DesignFlags& flags) {
   options.set_resolution(flags.resolution);
   options.set_geodesic_method(flags.method);
   options.set_eta_max(flags.eta_max);
+  options.set_interior_anchors(flags.interior_anchors);
   return request;
 }
 
@@ -80,8 +85,11 @@ void print_design_summary(const v1::DesignResult& result) {
   std::printf("  alpha           %.2f deg on the surface; planar %.2f deg in [%.2f, %.2f]\n",
               d.alpha() * deg, d.alpha_bar() * deg, d.alpha_bar_range(0) * deg,
               d.alpha_bar_range(1) * deg);
-  std::printf("  members         %d g + %d h inner (+ 4 boundary), %d crossings, %d anchors\n",
-              r.members_g(), r.members_h(), r.crossings(), d.anchors_size());
+  int inner = 0;
+  for (const v1::Anchor& a : d.anchors()) inner += a.side() < 0;
+  std::printf("  members         %d g + %d h inner (+ 4 boundary), %d crossings, %d anchors%s\n",
+              r.members_g(), r.members_h(), r.crossings(), d.anchors_size(),
+              inner ? (" (" + std::to_string(inner) + " inner)").c_str() : "");
   std::printf("  max notch       %.4g   max length mismatch %.2e\n", r.max_notch(),
               r.max_length_mismatch());
   std::printf("  time            %.3f s (t_smooth %.3f s, t_grid %.3f s)\n", r.seconds(),

@@ -80,6 +80,15 @@ void print_deployment_summary(const v1::Deployment& d) {
         r->grid_vertices(), r->iterations(), r->seconds(),
         r->converged() ? "converged" : "NOT converged", r->gradient_norm(), stress / 1e6);
   }
+  if (d.has_rms_with_notches() && d.has_rms_without_notches() &&
+      d.rms_with_notches() > d.rms_without_notches())
+    std::printf(
+        "  note            the grid with notches deviates more than without: it has likely "
+        "snapped into\n"
+        "                  another shape than the target's (an inner bump popping through); "
+        "inner anchors\n"
+        "                  can hold it (gridshell design ... --interior-anchors 1, see "
+        "docs/decisions.md)\n");
 }
 
 namespace {

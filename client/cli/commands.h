@@ -47,6 +47,7 @@ struct DesignFlags {
   int resolution = 100;
   std::string method = "fast";
   double eta_max = 1.0015;
+  int interior_anchors = 0;
 };
 void add_design_flags(CLI::App* sub, DesignFlags& flags);
 /// Loads the mesh and builds the request (InvalidInput names the flag).

@@ -1,7 +1,10 @@
 #include "gridshell/anchors.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <tuple>
 
 namespace gridshell {
 namespace {
@@ -72,6 +75,79 @@ std::vector<double> boundary_curvature(const std::vector<Vec3>& polyline, int sa
   }
   return curvature;
 }
+
+namespace {
+
+/// Inner anchors (AnchorOptions::interior): strict local extrema of the height over the boundary's
+/// least-squares plane among the grid's inner crossings, most prominent first.
+void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vector<Vec3>& normals,
+                            const AnchorOptions& options, std::vector<Anchor>& anchors) {
+  const TriangleMesh& mesh = patch.mesh;
+  const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
+  if (ng < 3 || nh < 3 || static_cast<int>(grid.crossings.size()) != ng * nh) return;
+  // Plane of the boundary: centroid and the direction of least spread of the side vertices,
+  // oriented along the target's mean normal.
+  std::vector<int> boundary;
+  for (const auto& side : patch.sides) boundary.insert(boundary.end(), side.begin(), side.end());
+  Vec3 centroid = Vec3::Zero();
+  for (int v : boundary) centroid += mesh.vertices[v];
+  centroid /= static_cast<double>(boundary.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (int v : boundary) {
+    const Vec3 d = mesh.vertices[v] - centroid;
+    covariance += d * d.transpose();
+  }
+  Vec3 up = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvectors().col(0);
+  Vec3 mean_normal = Vec3::Zero();
+  for (const Vec3& n : normals) mean_normal += n;
+  if (up.dot(mean_normal) < 0) up = -up;
+  const double threshold = options.min_interior_prominence * bounding_box_size(mesh).norm();
+  auto height = [&](int g, int h) {
+    return (grid.crossings[static_cast<size_t>(g) * nh + h].surface_point - centroid).dot(up);
+  };
+  struct Candidate {
+    double prominence;
+    int g, h;
+  };
+  std::vector<Candidate> candidates;
+  for (int g = 1; g + 1 < ng; ++g)
+    for (int h = 1; h + 1 < nh; ++h) {
+      const double z = height(g, h);
+      double lowest = std::numeric_limits<double>::infinity(), highest = -lowest, sum = 0;
+      for (int dg = -1; dg <= 1; ++dg)
+        for (int dh = -1; dh <= 1; ++dh) {
+          if (dg == 0 && dh == 0) continue;
+          const double n = height(g + dg, h + dh);
+          lowest = std::min(lowest, n);
+          highest = std::max(highest, n);
+          sum += n;
+        }
+      if (!(z > highest || z < lowest)) continue;
+      const double prominence = std::abs(z - sum / 8);
+      if (prominence >= threshold) candidates.push_back({prominence, g, h});
+    }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.prominence != b.prominence ? a.prominence > b.prominence
+                                        : std::tie(a.g, a.h) < std::tie(b.g, b.h);
+  });
+  if (static_cast<int>(candidates.size()) > options.interior) candidates.resize(options.interior);
+  for (const Candidate& c : candidates) {
+    Anchor a;
+    a.g = c.g, a.h = c.h;
+    a.side = -1;
+    a.position = grid.crossings[static_cast<size_t>(c.g) * nh + c.h].surface_point;
+    // The nearest vertex carries the normal, as for the boundary anchors.
+    int best = 0;
+    for (int v = 1; v < mesh.vertex_count(); ++v)
+      if ((mesh.vertices[v] - a.position).squaredNorm() <
+          (mesh.vertices[best] - a.position).squaredNorm())
+        best = v;
+    a.normal = normals[best];
+    anchors.push_back(a);
+  }
+}
+
+}  // namespace
 
 std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
                                   const AnchorOptions& options) {
@@ -169,6 +245,7 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
       anchors.push_back(a);
     }
   }
+  if (options.interior > 0) place_interior_anchors(patch, grid, normals, options, anchors);
   return anchors;
 }
 

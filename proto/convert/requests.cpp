@@ -15,6 +15,7 @@ namespace {
 
 // Generous caps that keep one request from asking for unbounded work; far above every example.
 constexpr int kMaxMembers = 1000;
+constexpr int kMaxInteriorAnchors = 100;
 constexpr int kMaxSmoothingIterations = 100000;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -309,6 +310,11 @@ DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names) 
                        ": must be positive (or 0 for a tenth of the width)");
   options.members.lamella_width = o.lamella_width();
   options.members.lamella_thickness = o.lamella_thickness();
+  if (o.interior_anchors() < 0 || o.interior_anchors() > kMaxInteriorAnchors)
+    throw InvalidInput(field(names, "options.interior_anchors", "--interior-anchors") +
+                       ": must be between 0 (boundary anchors only) and " +
+                       std::to_string(kMaxInteriorAnchors));
+  options.anchors.interior = o.interior_anchors();
   if (o.has_resolution()) {
     const int r = o.resolution();
     if (r != 0 && (r < 8 || r > 1000))
@@ -331,6 +337,7 @@ DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names) 
   record.set_max_members(options.members.max_members);
   record.set_geodesic_method(to_string(options.patch.cut.method));
   record.set_length_tolerance(options.grid.length_tolerance);
+  record.set_interior_anchors(options.anchors.interior);
   return in;
 }
 

@@ -400,6 +400,9 @@ std::vector<BadInput> bad_inputs() {
       "TooManyMembers", [](auto& r) { r.mutable_options()->set_members_v(5000); },
       "options.members_v: must be between 0");
   design_case(
+      "NegativeInteriorAnchors", [](auto& r) { r.mutable_options()->set_interior_anchors(-2); },
+      "options.interior_anchors: must be between 0 (boundary anchors only) and 100");
+  design_case(
       "NegativeLamellaWidth", [](auto& r) { r.mutable_options()->set_lamella_width(-1); },
       "options.lamella_width: must be positive");
   design_case(
