@@ -237,6 +237,11 @@ grpc::ServerWriteReactor<v1::RunEvent>* GridshellService::Run(grpc::CallbackServ
   return serve<v1::RunEvent>(context, request, methods_.run);
 }
 
+grpc::ServerWriteReactor<v1::GeodesicEvent>* GridshellService::Geodesic(
+    grpc::CallbackServerContext* context, const v1::GeodesicRequest* request) {
+  return serve<v1::GeodesicEvent>(context, request, methods_.geodesic);
+}
+
 std::shared_ptr<grpc::AuthMetadataProcessor> make_token_processor(
     std::string token, std::function<void(const std::string&)> on_refused) {
   return std::make_shared<TokenProcessor>(std::move(token), std::move(on_refused));

@@ -29,6 +29,8 @@ class GridshellService final : public v1::Gridshell::CallbackService {
       grpc::CallbackServerContext* context, const v1::SimulateRequest* request) override;
   grpc::ServerWriteReactor<v1::RunEvent>* Run(grpc::CallbackServerContext* context,
                                               const v1::RunRequest* request) override;
+  grpc::ServerWriteReactor<v1::GeodesicEvent>* Geodesic(
+      grpc::CallbackServerContext* context, const v1::GeodesicRequest* request) override;
 
  private:
   template <class Event, class M>

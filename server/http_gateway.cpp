@@ -144,6 +144,7 @@ struct HttpGateway::Impl {
     routes["/v1/design"] = route(methods.design);
     routes["/v1/simulate"] = route(methods.simulate);
     routes["/v1/run"] = route(methods.run);
+    routes["/v1/geodesic"] = route(methods.geodesic);
   }
 
   template <class Stream>
@@ -356,9 +357,10 @@ class HttpGateway::Impl::Session final : public SessionBase,
     if (path.rfind("/v1/", 0) == 0) {
       const auto it = gateway_.routes.find(path);
       if (it == gateway_.routes.end())
-        return respond_error({StatusCode::NotFound,
-                              "no such method: " + path + " (POST /v1/patch|design|simulate|run)"},
-                             keep_alive_);
+        return respond_error(
+            {StatusCode::NotFound,
+             "no such method: " + path + " (POST /v1/patch|design|simulate|run|geodesic)"},
+            keep_alive_);
       if (verb != http::verb::post)
         return respond_error({StatusCode::Unimplemented, "use POST " + path}, keep_alive_, 405);
       if (!authorized(request)) return unauthorized();

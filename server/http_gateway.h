@@ -1,6 +1,7 @@
 // gridshelld — the HTTP/JSON gateway (Boost.Beast on Asio) next to the gRPC service:
 //
-//   POST /v1/patch|design|simulate|run   request in protobuf's JSON mapping -> result as JSON,
+//   POST /v1/METHOD                      request in protobuf's JSON mapping -> result as JSON
+//                                        (METHOD = patch|design|simulate|run|geodesic),
 //                                        or, with "Accept: text/event-stream", progress and the
 //                                        result as Server-Sent Events
 //   GET  /healthz                        {"status": "SERVING"} (200) or NOT_SERVING (503)

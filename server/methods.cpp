@@ -27,6 +27,11 @@ Methods make_methods(const RunSettings& settings) {
                    return run_run(request, progress, settings);
                  },
                  {}};
+  methods.geodesic = {"Geodesic",
+                      [settings](const v1::GeodesicRequest& request, const Progress& progress) {
+                        return run_geodesic(request, progress, settings);
+                      },
+                      {}};
   return methods;
 }
 

@@ -38,6 +38,7 @@ struct Methods {
   Method<v1::DesignRequest, v1::DesignResult> design;
   Method<v1::SimulateRequest, v1::SimulateResult> simulate;
   Method<v1::RunRequest, v1::RunResult> run;
+  Method<v1::GeodesicRequest, v1::GeodesicResult> geodesic;
 };
 
 /// The table; `settings` (kernel threads per request) applies to every method.

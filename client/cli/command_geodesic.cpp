@@ -1,17 +1,15 @@
 // `gridshell geodesic MESH --source V [--method ..] [--compare cgal] [--repeat N] [--json]`:
 // one single-source distance field, timed, optionally compared with a reference engine.
-#include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <limits>
 
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/errors.h"
-#include "gridshell/geodesic.h"
+#include "gridshell/requests.h"
 #include "gridshell/v1/reports.pb.h"
+#include "remote.h"
 
 namespace gridshell::cli {
 namespace {
@@ -24,71 +22,34 @@ struct GeodesicArguments {
   int repeat = 1;
   bool json = false;
   std::string distances_out;
+  RemoteOptions remote;
 };
-
-struct Timed {
-  std::vector<double> distances;
-  double ms = 0;
-};
-
-Timed time_method(const TriangleMesh& mesh, GeodesicMethod method, const SurfacePoint& source,
-                  int repeat, const Progress& progress) {
-  const GeodesicSolver solver(mesh, GeodesicOptions{method});
-  std::vector<double> times;
-  Timed result;
-  for (int r = 0; r < repeat; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    result.distances = solver.distances(source, progress);
-    times.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count());
-  }
-  result.ms = median(times);
-  return result;
-}
 
 int run_geodesic(const GeodesicArguments& args) {
-  if (args.repeat < 1) throw InvalidInput("--repeat: must be at least 1");
   const InputMesh input = load_input(args.mesh);
-  const int source_vertex = mesh_vertex(input, args.source, "--source");
-  const SurfacePoint source = SurfacePoint::at_vertex(input.mesh, source_vertex);
-  const GeodesicMethod method = parse_geodesic_method(args.method);
+  v1::GeodesicRequest request;
+  *request.mutable_mesh() = request_mesh(input);
+  // The mesh goes out as loaded; the source is checked against the file's numbering here and
+  // sent as an index into the loaded mesh.
+  request.set_source(mesh_vertex(input, args.source, "--source"));
+  request.set_method(args.method);
+  request.set_compare(args.compare);
+  if (args.repeat < 1) throw InvalidInput("--repeat: must be at least 1");
+  request.set_repeat(args.repeat);
+  request.set_distances(!args.distances_out.empty());
   const Progress progress = make_progress(true);
-  const Timed main = time_method(input.mesh, method, source, args.repeat, progress);
-
-  v1::GeodesicReport report;
+  const v1::GeodesicResult result =
+      args.remote.remote()
+          ? (prepare_geodesic(request, FieldNames::CommandLine),  // the CLI's own messages
+             RemoteClient(args.remote).geodesic(request, progress))
+          : gridshell::run_geodesic(request, progress, {FieldNames::CommandLine});
+  v1::GeodesicReport report = result.report();
   report.set_input(std::filesystem::path(args.mesh).filename().string());
-  report.set_vertices(input.mesh.vertex_count());
   report.set_source(args.source);
-  report.set_method(to_string(method));
-  report.set_ms_per_source(main.ms);
-  report.set_repeats(args.repeat);
-  double max_distance = 0;
-  for (double d : main.distances)
-    if (std::isfinite(d)) max_distance = std::max(max_distance, d);
-  report.set_max_distance(max_distance);
-  if (!args.compare.empty()) {
-    const GeodesicMethod reference = parse_geodesic_method(args.compare);
-    const Timed ref = time_method(input.mesh, reference, source, args.repeat, progress);
-    const double floor = 1e-12 * std::max(1.0, bounding_box_size(input.mesh).norm());
-    double max_abs = 0, max_rel = 0;
-    for (size_t v = 0; v < main.distances.size(); ++v) {
-      const double a = main.distances[v], b = ref.distances[v];
-      if (std::isinf(a) && std::isinf(b)) continue;
-      const double diff = std::abs(a - b);
-      max_abs = std::max(max_abs, diff);
-      max_rel = std::max(max_rel, diff / std::max(std::abs(b), floor));
-    }
-    report.set_reference(to_string(reference));
-    report.set_reference_ms_per_source(ref.ms);
-    report.set_max_abs_diff(max_abs);
-    report.set_max_rel_diff(max_rel);
-    report.set_speedup(main.ms > 0 ? ref.ms / main.ms : 0);
-  }
   if (!args.distances_out.empty()) {
     std::string text;
     char line[64];
-    for (double d : main.distances) {
+    for (double d : result.distances()) {
       std::snprintf(line, sizeof line, "%.17g\n", d);
       text += line;
     }
@@ -97,10 +58,11 @@ int run_geodesic(const GeodesicArguments& args) {
   if (args.json) {
     std::cout << to_json(report, false) << "\n";
   } else {
-    std::printf("%s: %d vertices, source %d, %s: %.3f ms per source (median of %d)\n",
-                args.mesh.c_str(), input.mesh.vertex_count(), args.source, report.method().c_str(),
-                main.ms, args.repeat);
-    if (!args.compare.empty())
+    std::printf("%s: %d vertices, source %d, %s: %.3f ms per source (median of %d)%s\n",
+                args.mesh.c_str(), report.vertices(), args.source, report.method().c_str(),
+                report.ms_per_source(), report.repeats(),
+                args.remote.remote() ? (" on " + args.remote.server).c_str() : "");
+    if (!report.reference().empty())
       std::printf(
           "reference %s: %.3f ms per source (%.1fx), max abs diff %.3g, max rel diff %.3g\n",
           report.reference().c_str(), report.reference_ms_per_source(), report.speedup(),
@@ -123,6 +85,7 @@ Command add_geodesic_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--json", args->json, "print one JSON object");
   sub->add_option("--distances", args->distances_out, "write the distances, one per line");
+  add_remote_options(sub, args->remote);
   return [args] { return run_geodesic(*args); };
 }
 

@@ -194,6 +194,11 @@ v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest& request,
   return impl_->call(&v1::Gridshell::Stub::Simulate, request, progress);
 }
 
+v1::GeodesicResult RemoteClient::geodesic(const v1::GeodesicRequest& request,
+                                          const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Geodesic, request, progress);
+}
+
 std::string RemoteClient::health(const std::string& service) {
   auto stub = grpc::health::v1::Health::NewStub(impl_->channel);
   grpc::health::v1::HealthCheckRequest request;
@@ -219,6 +224,9 @@ RemoteClient::~RemoteClient() = default;
 v1::PatchResult RemoteClient::patch(const v1::PatchRequest&, const Progress&) { return {}; }
 v1::DesignResult RemoteClient::design(const v1::DesignRequest&, const Progress&) { return {}; }
 v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest&, const Progress&) {
+  return {};
+}
+v1::GeodesicResult RemoteClient::geodesic(const v1::GeodesicRequest&, const Progress&) {
   return {};
 }
 std::string RemoteClient::health(const std::string&) { return {}; }

@@ -46,6 +46,7 @@ class RemoteClient {
   v1::PatchResult patch(const v1::PatchRequest& request, const Progress& progress = {});
   v1::DesignResult design(const v1::DesignRequest& request, const Progress& progress = {});
   v1::SimulateResult simulate(const v1::SimulateRequest& request, const Progress& progress = {});
+  v1::GeodesicResult geodesic(const v1::GeodesicRequest& request, const Progress& progress = {});
   /// grpc.health.v1 Check of `service` ("" = the whole daemon): "SERVING", "NOT_SERVING", ...
   std::string health(const std::string& service = "");
 

@@ -4,11 +4,13 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <utility>
 
 #include "gridshell/convert.h"
 #include "gridshell/design_export.h"
 #include "gridshell/errors.h"
+#include "gridshell/geodesic.h"
 
 namespace gridshell {
 namespace {
@@ -91,6 +93,19 @@ std::string corner_label(const v1::Corners& corners) {
   return label;
 }
 
+/// The mesh vertex that sent vertex `v` became; InvalidInput naming `at` if there is none.
+int loaded_vertex(const LoadReport& load, int v, const std::string& at) {
+  const auto& map = load.vertex_of_file_vertex;
+  if (v < 0 || v >= static_cast<int>(map.size()))
+    throw InvalidInput(at + ": vertex index " + std::to_string(v) +
+                       " is out of range (the mesh has " + std::to_string(map.size()) +
+                       " vertices, numbered from 0)");
+  if (map[v] < 0)
+    throw InvalidInput(at + ": vertex " + std::to_string(v) +
+                       " was removed as an isolated vertex (no face uses it)");
+  return map[v];
+}
+
 /// Index of the sent vertex that became mesh vertex `v` (the first one, for welded duplicates).
 int sent_vertex(const LoadReport& load, int v) {
   if (v < 0) return -1;
@@ -156,20 +171,11 @@ CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load, Fi
     if (corners.vertices_size() != 4)
       throw InvalidInput(vertices_name + ": expected 4 vertex indices, got " +
                          std::to_string(corners.vertices_size()));
-    const auto& map = load.vertex_of_file_vertex;
     spec.kind = CornerSpec::Kind::Vertices;
-    for (int i = 0; i < 4; ++i) {
-      const int v = corners.vertices(i);
-      const std::string at = names == FieldNames::Request ? indexed(vertices_name, i) : name;
-      if (v < 0 || v >= static_cast<int>(map.size()))
-        throw InvalidInput(at + ": vertex index " + std::to_string(v) +
-                           " is out of range (the mesh has " + std::to_string(map.size()) +
-                           " vertices, numbered from 0)");
-      if (map[v] < 0)
-        throw InvalidInput(at + ": vertex " + std::to_string(v) +
-                           " was removed as an isolated vertex (no face uses it)");
-      spec.vertices[i] = map[v];
-    }
+    for (int i = 0; i < 4; ++i)
+      spec.vertices[i] =
+          loaded_vertex(load, corners.vertices(i),
+                        names == FieldNames::Request ? indexed(vertices_name, i) : name);
   } else if (points) {
     if (corners.points_size() != 12)
       throw InvalidInput(points_name + ": expected 4 points (12 numbers x, y, z), got " +
@@ -364,6 +370,111 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     add_view("spatial.obj", spatial_obj(design));
     add_view("maps.svg", maps_svg(design));
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
+    return out;
+  });
+}
+
+}  // namespace gridshell
+
+// Geodesic -----------------------------------------------------------------------------------
+
+namespace gridshell {
+namespace {
+
+constexpr int kMaxRepeat = 1000;
+
+struct TimedField {
+  std::vector<double> distances;
+  double ms = 0;
+};
+
+TimedField timed_field(const TriangleMesh& mesh, GeodesicMethod method, const SurfacePoint& source,
+                       int repeat, const Progress& progress) {
+  const GeodesicSolver solver(mesh, GeodesicOptions{method});
+  std::vector<double> times;
+  TimedField out;
+  for (int r = 0; r < repeat; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    out.distances = solver.distances(source, progress);
+    times.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
+  }
+  std::sort(times.begin(), times.end());
+  const size_t n = times.size();
+  out.ms = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
+  return out;
+}
+
+GeodesicMethod any_method(const std::string& text, const std::string& name) {
+  try {
+    return parse_geodesic_method(text.empty() ? "fast" : text);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(name + ": " + e.what());
+  }
+}
+
+}  // namespace
+
+GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request, FieldNames names) {
+  return with_field_names(names, [&] {
+    GeodesicInputs in;
+    LoadReport load;
+    in.mesh = to_mesh(request.mesh(), &load, names);
+    in.source = loaded_vertex(load, request.source(), field(names, "source", "--source"));
+    in.method = any_method(request.method(), field(names, "method", "--method"));
+    if (!request.compare().empty())
+      in.reference = any_method(request.compare(), field(names, "compare", "--compare"));
+    in.repeat = request.repeat() == 0 ? 1 : request.repeat();
+    if (in.repeat < 1 || in.repeat > kMaxRepeat)
+      throw InvalidInput(field(names, "repeat", "--repeat") + ": must be between 1 and " +
+                         std::to_string(kMaxRepeat) + " (0 = 1)");
+    return in;
+  });
+}
+
+v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progress& progress,
+                                const RunSettings& settings) {
+  return with_field_names(settings.names, [&] {
+    const GeodesicInputs in = prepare_geodesic(request, settings.names);
+    const TriangleMesh& mesh = in.mesh;
+    const GeodesicMethod method = in.method;
+    const std::optional<GeodesicMethod>& reference = in.reference;
+    const int repeat = in.repeat;
+    const int sent = request.source();
+    const SurfacePoint source = SurfacePoint::at_vertex(mesh, in.source);
+    const TimedField main = timed_field(mesh, method, source, repeat, progress);
+    v1::GeodesicResult out;
+    v1::GeodesicReport& report = *out.mutable_report();
+    report.set_input(request.mesh().name());
+    report.set_vertices(mesh.vertex_count());
+    report.set_source(sent);
+    report.set_method(to_string(method));
+    report.set_ms_per_source(main.ms);
+    report.set_repeats(repeat);
+    double max_distance = 0;
+    for (double d : main.distances)
+      if (std::isfinite(d)) max_distance = std::max(max_distance, d);
+    report.set_max_distance(max_distance);
+    if (reference) {
+      const TimedField ref = timed_field(mesh, *reference, source, repeat, progress);
+      const double floor = 1e-12 * std::max(1.0, bounding_box_size(mesh).norm());
+      double max_abs = 0, max_rel = 0;
+      for (size_t v = 0; v < main.distances.size(); ++v) {
+        const double a = main.distances[v], b = ref.distances[v];
+        if (std::isinf(a) && std::isinf(b)) continue;
+        const double diff = std::abs(a - b);
+        max_abs = std::max(max_abs, diff);
+        max_rel = std::max(max_rel, diff / std::max(std::abs(b), floor));
+      }
+      report.set_reference(to_string(*reference));
+      report.set_reference_ms_per_source(ref.ms);
+      report.set_max_abs_diff(max_abs);
+      report.set_max_rel_diff(max_rel);
+      report.set_speedup(main.ms > 0 ? ref.ms / main.ms : 0);
+    }
+    if (request.distances())
+      out.mutable_distances()->Add(main.distances.begin(), main.distances.end());
     return out;
   });
 }

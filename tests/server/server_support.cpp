@@ -164,6 +164,12 @@ CallResult<v1::RunResult> call_run(v1::Gridshell::Stub& stub, const v1::RunReque
   return call(&v1::Gridshell::Stub::Run, stub, request, context);
 }
 
+CallResult<v1::GeodesicResult> call_geodesic(v1::Gridshell::Stub& stub,
+                                             const v1::GeodesicRequest& request,
+                                             grpc::ClientContext* context) {
+  return call(&v1::Gridshell::Stub::Geodesic, stub, request, context);
+}
+
 const v1::Design& small_design() {
   static const v1::Design design = run_design(design_request("plane", 16)).design();
   return design;
@@ -425,6 +431,34 @@ std::vector<BadInput> bad_inputs() {
   v1::SimulateRequest simulate;
   *simulate.mutable_design() = small_design();
   simulate.mutable_options()->set_notches("on");
+  // Geodesic: the mesh checks are shared; the source and the engines are its own.
+  v1::GeodesicRequest geodesic;
+  *geodesic.mutable_mesh() = base.mesh();
+  auto geodesic_case = [&](std::string name, const std::function<void(v1::GeodesicRequest&)>& edit,
+                           std::string expected) {
+    v1::GeodesicRequest request = geodesic;
+    edit(request);
+    set.push_back({std::move(name), "Geodesic", to_json(request, false), std::move(expected)});
+  };
+  geodesic_case(
+      "GeodesicSourceOutOfRange", [](auto& r) { r.set_source(1 << 20); },
+      "source: vertex index 1048576 is out of range");
+  geodesic_case(
+      "GeodesicNegativeSource", [](auto& r) { r.set_source(-1); },
+      "source: vertex index -1 is out of range");
+  geodesic_case(
+      "GeodesicUnknownMethod", [](auto& r) { r.set_method("fastest"); },
+      "method: unknown geodesic method 'fastest'");
+  geodesic_case(
+      "GeodesicUnknownReference", [](auto& r) { r.set_compare("exact"); },
+      "compare: unknown geodesic method 'exact'");
+  geodesic_case(
+      "GeodesicTooManyRepeats", [](auto& r) { r.set_repeat(100000); },
+      "repeat: must be between 1 and 1000");
+  geodesic_case(
+      "GeodesicEmptyMesh", [](auto& r) { r.mutable_mesh()->clear_positions(); },
+      "mesh.positions: empty");
+
   auto simulate_case = [&](std::string name, const std::function<void(v1::SimulateRequest&)>& edit,
                            std::string expected) {
     v1::SimulateRequest request = simulate;

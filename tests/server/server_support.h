@@ -64,6 +64,9 @@ CallResult<v1::DesignResult> call_design(v1::Gridshell::Stub& stub,
 CallResult<v1::SimulateResult> call_simulate(v1::Gridshell::Stub& stub,
                                              const v1::SimulateRequest& request,
                                              grpc::ClientContext* context = nullptr);
+CallResult<v1::GeodesicResult> call_geodesic(v1::Gridshell::Stub& stub,
+                                             const v1::GeodesicRequest& request,
+                                             grpc::ClientContext* context = nullptr);
 CallResult<v1::RunResult> call_run(v1::Gridshell::Stub& stub, const v1::RunRequest& request,
                                    grpc::ClientContext* context = nullptr);
 
@@ -85,7 +88,7 @@ HttpReply http_request(int port, const std::string& method, const std::string& t
 /// request the daemon must answer with INVALID_ARGUMENT / 400, and a part of the message.
 struct BadInput {
   std::string name;
-  std::string method;    ///< "Patch", "Design", "Simulate" or "Run"
+  std::string method;    ///< "Patch", "Design", "Simulate", "Run" or "Geodesic"
   std::string json;      ///< the request in JSON (what the HTTP gateway receives)
   std::string expected;  ///< must appear in the error message
 };

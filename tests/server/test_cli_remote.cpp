@@ -45,6 +45,28 @@ TEST(CliRemote, DesignWritesByteIdenticalFiles) {
             without_timings(read_text(local + "/report.json")));
 }
 
+TEST(CliRemote, GeodesicGivesTheSameDistancesAndReport) {
+  TestDaemon daemon;
+  const std::string local = testing::temp_dir(), remote = testing::temp_dir();
+  const std::string args = "geodesic example:waves --source 17 --compare cgal --json --distances ";
+  auto result = run_cli(args + "'" + local + "/d.txt'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  auto local_report = nlohmann::json::parse(result.out);
+  result = run_cli(args + "'" + remote + "/d.txt' --server " + daemon.grpc_address());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  auto remote_report = nlohmann::json::parse(result.out);
+  EXPECT_FALSE(read_text(local + "/d.txt").empty());
+  EXPECT_EQ(read_text(remote + "/d.txt"), read_text(local + "/d.txt"));
+  for (auto* r : {&local_report, &remote_report})
+    for (const char* key : {"ms_per_source", "reference_ms_per_source", "speedup"}) r->erase(key);
+  EXPECT_EQ(remote_report, local_report);
+  EXPECT_EQ(remote_report["source"], 17);
+  // A bad source is the CLI's own message, before any call.
+  result = run_cli("geodesic example:waves --source -3 --server " + daemon.grpc_address());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--source"), std::string::npos) << result.err;
+}
+
 TEST(CliRemote, SimulateAndRunWriteTheSameFiles) {
   TestDaemon daemon;
   const std::string design = testing::temp_dir();

@@ -92,6 +92,40 @@ TEST(Daemon, RemoteDesignIsByteIdenticalToInProcess) {
   EXPECT_EQ(report, local_report);
 }
 
+// Geodesic over gRPC: the same distances, bit for bit, and the same report except the timings;
+// compared with CGAL on the daemon's side too.
+TEST(Daemon, RemoteGeodesicEqualsInProcess) {
+  TestDaemon daemon;
+  v1::GeodesicRequest request;
+  *request.mutable_mesh() = testing::design_request("double-vault").mesh();
+  request.set_source(17);
+  request.set_compare("cgal");
+  request.set_distances(true);
+  const v1::GeodesicResult local = run_geodesic(request);
+  const auto remote = testing::call_geodesic(*daemon.stub(), request);
+  ASSERT_TRUE(remote.status.ok()) << remote.status.error_message();
+  ASSERT_TRUE(remote.result);
+  ASSERT_EQ(remote.result->distances_size(), local.distances_size());
+  ASSERT_EQ(local.distances_size(), local.report().vertices());
+  for (int v = 0; v < local.distances_size(); ++v)
+    EXPECT_EQ(remote.result->distances(v), local.distances(v)) << v;
+  EXPECT_EQ(local.distances(17), 0.0);
+  v1::GeodesicReport a = remote.result->report(), b = local.report();
+  for (v1::GeodesicReport* r : {&a, &b}) {
+    r->clear_ms_per_source();
+    r->clear_reference_ms_per_source();
+    r->clear_speedup();
+  }
+  EXPECT_EQ(to_json(a, false), to_json(b, false));
+  EXPECT_EQ(a.reference(), "cgal");
+  EXPECT_LE(a.max_rel_diff(), 1e-9);
+  // Without `distances` only the report comes back.
+  request.set_distances(false);
+  const auto brief = testing::call_geodesic(*daemon.stub(), request);
+  ASSERT_TRUE(brief.result);
+  EXPECT_EQ(brief.result->distances_size(), 0);
+}
+
 TEST(Daemon, RemotePatchIsIdenticalToInProcess) {
   TestDaemon daemon;
   const v1::PatchRequest request = testing::patch_request("sphere");
@@ -267,7 +301,12 @@ TEST(Daemon, EveryBadInputIsInvalidArgumentWithItsMessage) {
       v1::SimulateRequest request;
       ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
       status = testing::call_simulate(*stub, request).status;
+    } else if (bad.method == "Geodesic") {
+      v1::GeodesicRequest request;
+      ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
+      status = testing::call_geodesic(*stub, request).status;
     } else {
+      ASSERT_EQ(bad.method, "Run");
       v1::RunRequest request;
       ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(bad.json, &request).ok());
       status = testing::call_run(*stub, request).status;

@@ -1,5 +1,5 @@
-// gridshell — the computations behind `gridshell patch|design|simulate|run` and the daemon's
-// RPCs: request message -> checked kernel inputs -> kernel -> result message.
+// gridshell — the computations behind `gridshell patch|design|simulate|run|geodesic` and the
+// daemon's RPCs: request message -> checked kernel inputs -> kernel -> result message.
 //
 // The CLI's in-process runs and gridshelld call the same functions, so a local and a remote run
 // produce the same result messages (and, through files.h, the same files). Nothing here knows
@@ -10,9 +10,11 @@
 // ("mesh.positions[7]: ...", "options.eta_max: ..."); the kernel adds Infeasible and Cancelled.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "gridshell/design.h"
+#include "gridshell/geodesic.h"
 #include "gridshell/mesh_io.h"
 #include "gridshell/progress.h"
 #include "gridshell/target_patch.h"
@@ -95,6 +97,24 @@ v1::SimulationOptions prepare_simulation_options(const v1::SimulationOptions& op
 /// asked for). Bad options name `options.<field>` (or the CLI flag), a bad design
 /// `design.<field>`.
 v1::SimulateResult run_simulate(const v1::SimulateRequest& request, const Progress& progress = {},
+                                const RunSettings& settings = {});
+
+// Geodesic ----------------------------------------------------------------------------------
+
+/// A geodesic request checked and converted into kernel inputs.
+struct GeodesicInputs {
+  TriangleMesh mesh;
+  int source = 0;  ///< vertex of `mesh`
+  GeodesicMethod method = GeodesicMethod::Fast;
+  std::optional<GeodesicMethod> reference;
+  int repeat = 1;
+};
+/// Checks every field; throws InvalidInput naming the first bad one.
+GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request, FieldNames names);
+/// One exact single-source distance field (`gridshell geodesic`): timed (median of `repeat`
+/// solves), optionally compared with a reference engine; the distances of every vertex of the
+/// mesh as loaded (the sent order unless the loader removed or welded vertices) on request.
+v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progress& progress = {},
                                 const RunSettings& settings = {});
 
 /// Patch stage, grid design and simulation in one call.
