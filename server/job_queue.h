@@ -74,10 +74,11 @@ class JobQueue {
     int workers = 0;              ///< 0 = one per hardware thread
     int capacity = 16;            ///< jobs that may wait for a worker; one more is refused
     std::ostream* log = nullptr;  ///< one JSON line per request; null = no log
-    /// Progress events of one job are forwarded at most this often within a stage (the first
-    /// event of every stage and its first at fraction 1 always). The kernel reports ~240 events per
-    /// design; each one forwarded wakes the transport and the client, which costs the computing
-    /// cores more than the event is worth. 0 = forward every event.
+    /// Progress events of one job are forwarded at most this often within a stage; the first
+    /// event of a stage and its first at fraction 1 always go out. The kernel reports ~240
+    /// events per design, and each one forwarded wakes the transport and the client, which
+    /// costs the computing cores more than it is worth. 0 = forward every event except a
+    /// stage's repeated fraction 1.
     int progress_interval_ms = 100;
   };
 

@@ -104,9 +104,7 @@ void expect_grid_criteria(const Design& design, const std::string& name) {
 TEST(Design, GridCriteriaOnEveryExample) {
   for (const std::string& name : example_names()) {
     const ExampleSurface example = make_example(name);
-    CornerSpec corners;
-    corners.kind = CornerSpec::Kind::Vertices;
-    corners.vertices = example.corners;
+    const CornerSpec corners = CornerSpec::at_vertices(example.corners);
     DesignOptions options;
     options.maps.resolution = 64;
     try {
@@ -150,9 +148,7 @@ TEST(Design, EnneperSaddleIsInfeasibleWithAClearReason) {
 
 TEST(Design, ExplicitMemberCountsAndAlphaChoice) {
   const ExampleSurface example = make_example("double-vault");
-  CornerSpec corners;
-  corners.kind = CornerSpec::Kind::Vertices;
-  corners.vertices = example.corners;
+  const CornerSpec corners = CornerSpec::at_vertices(example.corners);
   DesignOptions options;
   options.maps.resolution = 48;
   options.members_g = 5;
@@ -172,9 +168,7 @@ TEST(Design, ExplicitMemberCountsAndAlphaChoice) {
 
 TEST(Design, DeterministicAcrossThreadCounts) {
   const ExampleSurface example = make_example("sphere");
-  CornerSpec corners;
-  corners.kind = CornerSpec::Kind::Vertices;
-  corners.vertices = example.corners;
+  const CornerSpec corners = CornerSpec::at_vertices(example.corners);
   DesignOptions one, four;
   one.maps.resolution = four.maps.resolution = 48;
   one.maps.threads = one.grid.threads = 1;
@@ -196,9 +190,7 @@ TEST(Design, DeterministicAcrossThreadCounts) {
 TEST(Design, InteriorAnchorsAtCrownsAndNoneOnASaddle) {
   auto design = [](const std::string& name) {
     const ExampleSurface example = make_example(name);
-    CornerSpec corners;
-    corners.kind = CornerSpec::Kind::Vertices;
-    corners.vertices = example.corners;
+    const CornerSpec corners = CornerSpec::at_vertices(example.corners);
     DesignOptions options;
     options.maps.resolution = 48;
     return make_design(example.mesh, corners, options);

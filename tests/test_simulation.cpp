@@ -288,8 +288,7 @@ TEST_P(ExampleDeployment, ConvergesAndNotchesReduceTheDeviation) {
   } else {
     ExampleSurface example = make_example(c.name);
     mesh = std::move(example.mesh);
-    corners.kind = CornerSpec::Kind::Vertices;
-    corners.vertices = example.corners;
+    corners = CornerSpec::at_vertices(example.corners);
   }
   DesignOptions design_options;
   design_options.anchors.interior = c.interior_anchors;

@@ -118,9 +118,7 @@ v1::DesignRequest example_request() {
   const ExampleSurface example = make_example(kExample);
   v1::DesignRequest request;
   *request.mutable_mesh() = to_proto(example.mesh, std::string("example:") + kExample);
-  CornerSpec corners;
-  corners.kind = CornerSpec::Kind::Vertices;
-  corners.vertices = example.corners;
+  const CornerSpec corners = CornerSpec::at_vertices(example.corners);
   *request.mutable_corners() = to_proto(corners, "example");
   return request;
 }

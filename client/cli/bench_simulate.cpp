@@ -57,9 +57,7 @@ int bench_simulate(int repeats, const std::string& out, bool no_write) {
                          : std::string(row.name);
     std::cerr << "bench simulate: " << label << ": design\n";
     const ExampleSurface example = make_example(row.name);
-    CornerSpec corners;
-    corners.kind = CornerSpec::Kind::Vertices;
-    corners.vertices = example.corners;
+    const CornerSpec corners = CornerSpec::at_vertices(example.corners);
     char buffer[1024];
     try {
       DesignOptions design_options;

@@ -215,9 +215,7 @@ int bench_design(const BenchArguments& args) {
   const double load_start = load_average();
   for (const PaperRow& row : kTable1) {
     const ExampleSurface example = make_example(row.name);
-    CornerSpec corners;
-    corners.kind = CornerSpec::Kind::Vertices;
-    corners.vertices = example.corners;
+    const CornerSpec corners = CornerSpec::at_vertices(example.corners);
     std::vector<double> t_grid, t_smooth, t_cpu;
     std::string line;
     for (int r = 0; r < args.repeats; ++r) {

@@ -38,11 +38,13 @@ int run_geodesic(const GeodesicArguments& args) {
   request.set_repeat(args.repeat);
   request.set_distances(!args.distances_out.empty());
   const Progress progress = make_progress(true);
-  const v1::GeodesicResult result =
-      args.remote.remote()
-          ? (prepare_geodesic(request, FieldNames::CommandLine),  // the CLI's own messages
-             RemoteClient(args.remote).geodesic(request, progress))
-          : gridshell::run_geodesic(request, progress, {FieldNames::CommandLine});
+  v1::GeodesicResult result;
+  if (args.remote.remote()) {
+    prepare_geodesic(request, FieldNames::CommandLine);  // bad flags get the CLI's own messages
+    result = RemoteClient(args.remote).geodesic(request, progress);
+  } else {
+    result = gridshell::run_geodesic(request, progress, {FieldNames::CommandLine});
+  }
   v1::GeodesicReport report = result.report();
   report.set_input(std::filesystem::path(args.mesh).filename().string());
   report.set_source(args.source);

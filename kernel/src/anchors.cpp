@@ -3,7 +3,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <ranges>
 #include <tuple>
 
 namespace gridshell {
@@ -78,6 +80,15 @@ std::vector<double> boundary_curvature(const std::vector<Vec3>& polyline, int sa
 
 namespace {
 
+/// The vertex of `candidates` closest to p (the first of equals); `candidates` is not empty.
+template <class Range>
+int nearest_vertex(const TriangleMesh& mesh, const Range& candidates, const Vec3& p) {
+  int best = *std::begin(candidates);
+  for (int v : candidates)
+    if ((mesh.vertices[v] - p).squaredNorm() < (mesh.vertices[best] - p).squaredNorm()) best = v;
+  return best;
+}
+
 /// Inner anchors (AnchorOptions::interior): strict local extrema of the height over the boundary's
 /// least-squares plane among the grid's inner crossings, most prominent first.
 void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vector<Vec3>& normals,
@@ -137,12 +148,7 @@ void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vec
     a.side = -1;
     a.position = grid.crossings[static_cast<size_t>(c.g) * nh + c.h].surface_point;
     // The nearest vertex carries the normal, as for the boundary anchors.
-    int best = 0;
-    for (int v = 1; v < mesh.vertex_count(); ++v)
-      if ((mesh.vertices[v] - a.position).squaredNorm() <
-          (mesh.vertices[best] - a.position).squaredNorm())
-        best = v;
-    a.normal = normals[best];
+    a.normal = normals[nearest_vertex(mesh, std::views::iota(0, mesh.vertex_count()), a.position)];
     anchors.push_back(a);
   }
 }
@@ -156,10 +162,7 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
   const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
   auto normal_near = [&](const Vec3& p, int side) {
     // The closest vertex of that side carries the normal (boundary crossings lie on the side).
-    int best = patch.sides[side].front();
-    for (int v : patch.sides[side])
-      if ((mesh.vertices[v] - p).squaredNorm() < (mesh.vertices[best] - p).squaredNorm()) best = v;
-    return normals[best];
+    return normals[nearest_vertex(mesh, patch.sides[side], p)];
   };
   std::vector<Anchor> anchors;
   // Corners: c0 = g0 x h0, c1 = g_last x h0, c2 = g_last x h_last, c3 = g0 x h_last.

@@ -4,7 +4,6 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
-#include <optional>
 #include <utility>
 
 #include "gridshell/convert.h"
@@ -438,26 +437,22 @@ v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progre
   return with_field_names(settings.names, [&] {
     const GeodesicInputs in = prepare_geodesic(request, settings.names);
     const TriangleMesh& mesh = in.mesh;
-    const GeodesicMethod method = in.method;
-    const std::optional<GeodesicMethod>& reference = in.reference;
-    const int repeat = in.repeat;
-    const int sent = request.source();
     const SurfacePoint source = SurfacePoint::at_vertex(mesh, in.source);
-    const TimedField main = timed_field(mesh, method, source, repeat, progress);
+    const TimedField main = timed_field(mesh, in.method, source, in.repeat, progress);
     v1::GeodesicResult out;
     v1::GeodesicReport& report = *out.mutable_report();
     report.set_input(request.mesh().name());
     report.set_vertices(mesh.vertex_count());
-    report.set_source(sent);
-    report.set_method(to_string(method));
+    report.set_source(request.source());
+    report.set_method(to_string(in.method));
     report.set_ms_per_source(main.ms);
-    report.set_repeats(repeat);
+    report.set_repeats(in.repeat);
     double max_distance = 0;
     for (double d : main.distances)
       if (std::isfinite(d)) max_distance = std::max(max_distance, d);
     report.set_max_distance(max_distance);
-    if (reference) {
-      const TimedField ref = timed_field(mesh, *reference, source, repeat, progress);
+    if (in.reference) {
+      const TimedField ref = timed_field(mesh, *in.reference, source, in.repeat, progress);
       const double floor = 1e-12 * std::max(1.0, bounding_box_size(mesh).norm());
       double max_abs = 0, max_rel = 0;
       for (size_t v = 0; v < main.distances.size(); ++v) {
@@ -467,7 +462,7 @@ v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progre
         max_abs = std::max(max_abs, diff);
         max_rel = std::max(max_rel, diff / std::max(std::abs(b), floor));
       }
-      report.set_reference(to_string(*reference));
+      report.set_reference(to_string(*in.reference));
       report.set_reference_ms_per_source(ref.ms);
       report.set_max_abs_diff(max_abs);
       report.set_max_rel_diff(max_rel);

@@ -24,6 +24,13 @@ struct CornerSpec {
   Kind kind = Kind::Auto;
   std::array<int, 4> vertices{};
   std::array<Vec3, 4> points{};
+  /// Corners given as vertex indices (e.g. an example surface's suggested corners).
+  static CornerSpec at_vertices(const std::array<int, 4>& vertices) {
+    CornerSpec spec;
+    spec.kind = Kind::Vertices;
+    spec.vertices = vertices;
+    return spec;
+  }
 };
 
 /// Parses the `--corners` syntax above. Throws InvalidInput naming `--corners` and the problem.
