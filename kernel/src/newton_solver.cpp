@@ -252,6 +252,12 @@ void NewtonSolver::set_exact_hessian(bool exact) {
   impl_->exact_hessian = exact;
 }
 
+double NewtonSolver::gradient_at(const double* block) const {
+  const auto it = impl_->offset_of.find(block);
+  return it == impl_->offset_of.end() || impl_->gradient.size() == 0 ? 0.0
+                                                                     : impl_->gradient[it->second];
+}
+
 double NewtonSolver::gradient_max_norm() const {
   return impl_->gradient.size() ? impl_->gradient.cwiseAbs().maxCoeff() : 0.0;
 }

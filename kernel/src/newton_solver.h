@@ -74,6 +74,9 @@ class NewtonSolver {
   double cost() const { return cost_; }
   /// Max-norm of the gradient from the last evaluate().
   double gradient_max_norm() const;
+  /// The gradient's entry for the first unknown of parameter block `block` from the last
+  /// evaluate(); 0 if the block is not free.
+  double gradient_at(const double* block) const;
   /// One damped Newton step from the last evaluate(): tries (H + lambda D) d = -g until the
   /// cost decreases (gain ratio > 1e-4), increasing lambda otherwise; on success the
   /// parameters hold x + d (not yet re-evaluated).

@@ -62,6 +62,15 @@ namespace {
 
 using rod_terms::EdgeReference;
 
+/// A sliding connection is held at a rod vertex at most this many times (released in between
+/// when its one-sided derivatives showed it was not a minimum there).
+constexpr int kMaxHolds = 3;
+/// ... after crossing back and forth over the same vertex this many times in a row. Three
+/// happen on the way down to an equilibrium (triple-vault): held and released at the end, that
+/// cost 19 iterations. A one-sided derivative check when a connection is held cannot tell
+/// early: it is exact only once the rest of the grid is in equilibrium.
+constexpr int kFlipsToHold = 6;
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -103,6 +112,12 @@ struct Slider {
   double lo = 0, hi = 0;        // notch interval in rest arc length (scaled) when sliding
   double s_bar = 0, notch = 0;  // scaled
   int side = 0;                 // neighbouring edge used for the normal's blending (+1 / -1)
+  // Held at a rod vertex (edge = the vertex, beta = 0, constant): a kink minimum, see
+  // Deployment::hold / release_held.
+  bool held = false;
+  int holds = 0;                             // times it was held
+  int last_vertex = -1, last_direction = 0;  // the last rod vertex it crossed, and which way
+  int flips = 0;  // times in a row it crossed back over the vertex it crossed before
   double sigma(const Rod& r) const { return (edge + beta) * r.h; }
 };
 
@@ -182,6 +197,10 @@ class Deployment {
   void update_frames();
   void update_reference_twist(Rod& rod);
   bool reproject(Slider& slider);
+  /// Releases the held sliders whose one-sided derivatives do not both point uphill (the
+  /// energy must rise to both sides of the vertex); true if any was released.
+  bool release_held();
+  int held_count() const;
   void notch_edges(const Slider& s, int* lo_edge, double* lo_beta, int* hi_edge,
                    double* hi_beta) const;
   struct Binding {
@@ -499,7 +518,7 @@ Deployment::Terms Deployment::build_terms() {
     Slider& a = joint.end[0];
     Slider& b = joint.end[1];
     for (Slider* s : {&a, &b}) {
-      if (!s->sliding) {
+      if (!s->sliding || s->held) {
         out.constant.push_back(&s->beta);
         continue;
       }
@@ -585,18 +604,45 @@ void Deployment::update_reference_twist(Rod& rod) {
 }
 
 bool Deployment::reproject(Slider& s) {
-  if (!s.sliding) return false;
+  if (!s.sliding || s.held) return false;
   const Rod& rod = rods_[s.rod];
   bool moved = false;
+  int vertex = -1, direction = 0;  // the last vertex crossed (vertex k joins edges k-1 and k)
   while (s.beta > 1 && s.edge < rod.n - 1) {
     s.beta -= 1;
     ++s.edge;
     moved = true;
+    vertex = s.edge;
+    direction = 1;
   }
   while (s.beta < 0 && s.edge > 0) {
     s.beta += 1;
     --s.edge;
     moved = true;
+    vertex = s.edge + 1;
+    direction = -1;
+  }
+  if (moved) {
+    // Back and forth over the same vertex, again and again: along the member the energy has a
+    // kink at the vertex that pulls the connection into it from both sides (the nearest point
+    // of a bent polyline to its partner is the vertex), stronger than E_p's push away from
+    // edge ends; no smooth equilibrium exists and the steps would cycle over the vertex
+    // forever. Hold it there (checked and, if it does not hold, released by release_held).
+    const double at = vertex * rod.h;
+    s.flips = vertex == s.last_vertex && direction == -s.last_direction ? s.flips + 1 : 0;
+    if (s.flips >= kFlipsToHold && s.holds < kMaxHolds && at > s.lo + 1e-6 * rod.h &&
+        at < s.hi - 1e-6 * rod.h) {
+      s.held = true;
+      ++s.holds;
+      s.edge = vertex;
+      s.beta = 0;
+      s.last_vertex = -1;
+      s.last_direction = 0;
+      s.flips = 0;
+      return true;
+    }
+    s.last_vertex = vertex;
+    s.last_direction = direction;
   }
   s.beta = std::clamp(s.beta, 0.0, 1.0);
   // Stay strictly inside the notch (the limit terms are undefined on and beyond its ends).
@@ -608,6 +654,70 @@ bool Deployment::reproject(Slider& s) {
     s.beta = sigma / rod.h - s.edge;
   }
   return moved;
+}
+
+int Deployment::held_count() const {
+  int count = 0;
+  for (const Joint& joint : joints_)
+    for (const Slider& s : joint.end) count += s.held;
+  return count;
+}
+
+bool Deployment::release_held() {
+  std::vector<Slider*> held;
+  for (Joint& joint : joints_)
+    for (Slider& s : joint.end)
+      if (s.held) held.push_back(&s);
+  if (held.empty()) return false;
+  // The partial derivative of the energy in beta on the edge after the vertex (at beta = 0:
+  // to the right) and on the edge before it (at beta = 1: to the left), with every held slider
+  // free and everything else as it is; each slider's beta enters only its own terms.
+  auto derivatives = [&](bool right) {
+    for (Slider* s : held) {
+      s->held = false;
+      if (!right) {
+        s->edge -= 1;
+        s->beta = 1;
+      }
+    }
+    std::vector<double> out;
+    {
+      Terms terms = build_terms();
+      NewtonSolver check(terms.blocks, terms.terms, {});
+      const bool ok = check.evaluate();
+      for (Slider* s : held)
+        out.push_back(ok ? check.gradient_at(&s->beta) : std::numeric_limits<double>::quiet_NaN());
+    }
+    for (Slider* s : held) {
+      s->held = true;
+      if (!right) {
+        s->edge += 1;
+        s->beta = 0;
+      }
+    }
+    return out;
+  };
+  const std::vector<double> to_right = derivatives(true), to_left = derivatives(false);
+  const double tolerance = options_.gradient_tolerance * force_reference_;
+  bool released = false;
+  for (size_t i = 0; i < held.size(); ++i) {
+    Slider& s = *held[i];
+    const bool right_uphill = to_right[i] >= -tolerance, left_uphill = to_left[i] <= tolerance;
+    if (right_uphill && left_uphill) continue;  // a minimum at the vertex: stays held
+    // Release it a little into the edge where the energy descends.
+    s.held = false;
+    const Rod& rod = rods_[s.rod];
+    const double at = s.edge * rod.h;
+    const double inset = std::min(1e-3, 0.25 * std::min(s.hi - at, at - s.lo) / rod.h);
+    if (!right_uphill && (left_uphill || to_right[i] <= -to_left[i])) {
+      s.beta = inset;
+    } else {
+      s.edge -= 1;
+      s.beta = 1 - inset;
+    }
+    released = true;
+  }
+  return released;
 }
 
 bool Deployment::move_sliders() {
@@ -672,6 +782,10 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
         throw std::runtime_error("simulation: the state left the energy's domain");
     }
     if (run.gradient_norm <= tolerance) {
+      if (release_held()) {  // not a minimum at some vertex after all: go on from there
+        rebuild = true;
+        continue;
+      }
       run.converged = true;
       run.termination = "gradient below tolerance";
       return;
@@ -692,6 +806,10 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
     // whose rounding grows with the barrier's curvature, so the gradient alone cannot go
     // lower there.
     if (step.relative_step < 1e-12 && run.gradient_norm < 1e3 * tolerance) {
+      if (release_held()) {
+        rebuild = true;
+        continue;
+      }
       run.converged = true;
       run.termination = "step below tolerance (gradient at its rounding limit)";
       return;
@@ -748,6 +866,10 @@ void Deployment::solve_ceres(const Progress& progress, const std::string& stage,
       Terms check = build_terms();
       run.gradient_norm = gradient_norm(check);
       run.converged = run.gradient_norm <= options_.gradient_tolerance;
+      if (run.converged && release_held()) {
+        run.converged = false;
+        continue;
+      }
       if (run.converged) return;
     }
     if (run.iterations >= options_.max_iterations ||
@@ -776,10 +898,14 @@ DeploymentRun Deployment::solve(const Progress& progress) {
   out.iterations = run.iterations;
   out.outer_iterations = run.outer_iterations;
   out.connection_moves = moves_;
+  out.connections_at_vertices = held_count();
   out.converged = run.converged;
   out.gradient_norm = run.gradient_norm;
   out.gradient_tolerance = options_.gradient_tolerance;
   out.termination = run.termination;
+  if (out.connections_at_vertices > 0)
+    out.termination += "; " + std::to_string(out.connections_at_vertices) +
+                       " connection end(s) held at a rod vertex (energy rising to both sides)";
   out.seconds = seconds_since(start);
   progress.report(stage, 1.0);
   return out;
@@ -871,6 +997,8 @@ DeploymentRun Deployment::results() {
     c.notch_g = a.notch / scale_;
     c.notch_h = b.notch / scale_;
     c.gap = Eigen::Vector3d(r[0], r[1], r[2]).norm() / position / scale_;
+    c.at_vertex_g = a.held;
+    c.at_vertex_h = b.held;
     run.connections.push_back(c);
     if (joint.anchor >= 0) {
       anchor_residual(joint, bg, bh)

@@ -75,6 +75,7 @@ void fill_run(const DeploymentRun& run, v1::SimulationRun* out) {
   out->set_iterations(run.iterations);
   out->set_outer_iterations(run.outer_iterations);
   out->set_connection_moves(run.connection_moves);
+  out->set_connections_at_vertices(run.connections_at_vertices);
   out->set_converged(run.converged);
   out->set_gradient_norm(run.gradient_norm);
   out->set_gradient_tolerance(run.gradient_tolerance);
@@ -93,6 +94,8 @@ void fill_run(const DeploymentRun& run, v1::SimulationRun* out) {
     connection->set_notch_g(c.notch_g);
     connection->set_notch_h(c.notch_h);
     connection->set_gap(c.gap);
+    connection->set_at_vertex_g(c.at_vertex_g);
+    connection->set_at_vertex_h(c.at_vertex_h);
   }
 }
 

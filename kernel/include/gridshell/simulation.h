@@ -111,6 +111,9 @@ struct SimulatedConnection {
   double slide_g = 0, slide_h = 0;  ///< final rest arc length minus s̄ (0 without notches)
   double notch_g = 0, notch_h = 0;  ///< s - s̄ (the notch's length and direction)
   double gap = 0;  ///< |q_g - q_h + t m_g|: how far the connection is from being closed
+  /// Held at a vertex of that member's rod: a minimum where the energy has a kink along the
+  /// member (see docs/decisions.md, "Connections held at rod vertices").
+  bool at_vertex_g = false, at_vertex_h = false;
 };
 
 struct DeploymentRun {
@@ -127,6 +130,9 @@ struct DeploymentRun {
   int iterations = 0;        ///< Levenberg-Marquardt iterations in all
   int outer_iterations = 0;  ///< frame updates / re-projections
   int connection_moves = 0;  ///< times a sliding connection moved to a neighbouring edge
+  /// Sliding connection ends held at a rod vertex at the end (a kink minimum: the energy rises
+  /// to both sides along the member, checked by its one-sided derivatives).
+  int connections_at_vertices = 0;
   bool converged = false;    ///< gradient below tolerance and no connection moved at the end
   double gradient_norm = 0;  ///< final max-norm, relative to the reference force
   double gradient_tolerance = 0;
