@@ -3,6 +3,11 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <openssl/bio.h>
+#include <openssl/err.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 
 #include <atomic>
 #include <mutex>
@@ -36,6 +41,35 @@ void check_address(const std::string& address, const char* option) {
   if (port.find_first_not_of("0123456789") != std::string::npos || port.size() > 5 ||
       std::stoi(port) > 65535)
     throw InvalidInput(std::string(option) + ": '" + port + "' is not a port number");
+}
+
+/// Checks that `cert_pem` holds a PEM certificate chain and `key_pem` the private key of its
+/// first certificate, so that the daemon never starts with TLS it cannot use (an empty or
+/// wrong file must not silently mean "no TLS", nor fail later as "cannot listen").
+void check_tls_pair(const std::string& cert_pem, const std::string& key_pem) {
+  auto bio = [](const std::string& text) {
+    return std::unique_ptr<BIO, decltype(&BIO_free)>(
+        BIO_new_mem_buf(text.data(), static_cast<int>(text.size())), &BIO_free);
+  };
+  auto cert_bio = bio(cert_pem);
+  std::unique_ptr<X509, decltype(&X509_free)> cert(
+      PEM_read_bio_X509(cert_bio.get(), nullptr, nullptr, nullptr), &X509_free);
+  ERR_clear_error();
+  if (!cert)
+    throw InvalidInput(
+        "--tls-cert: no PEM certificate in the file (expected -----BEGIN CERTIFICATE-----)");
+  auto key_bio = bio(key_pem);
+  std::unique_ptr<EVP_PKEY, decltype(&EVP_PKEY_free)> key(
+      PEM_read_bio_PrivateKey(key_bio.get(), nullptr, nullptr, nullptr), &EVP_PKEY_free);
+  ERR_clear_error();
+  if (!key)
+    throw InvalidInput(
+        "--tls-key: no unencrypted PEM private key in the file (expected -----BEGIN ... PRIVATE "
+        "KEY-----)");
+  const bool match = X509_check_private_key(cert.get(), key.get()) == 1;
+  ERR_clear_error();
+  if (!match)
+    throw InvalidInput("--tls-key: the key does not belong to the first certificate of --tls-cert");
 }
 
 }  // namespace
@@ -108,6 +142,7 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
   if (tls) {
     d.cert_pem = read_secret_file(o.tls_cert, "--tls-cert");
     d.key_pem = read_secret_file(o.tls_key, "--tls-key");
+    check_tls_pair(d.cert_pem, d.key_pem);
   }
   if (!o.token_file.empty()) d.token = read_token_file(o.token_file);
 }
@@ -129,7 +164,7 @@ void Daemon::start() {
     grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   });
   std::shared_ptr<grpc::ServerCredentials> credentials;
-  if (!d.cert_pem.empty()) {
+  if (!o.tls_cert.empty()) {
     grpc::SslServerCredentialsOptions ssl;
     ssl.pem_key_cert_pairs.push_back({d.key_pem, d.cert_pem});
     credentials = grpc::SslServerCredentials(ssl);
@@ -145,6 +180,9 @@ void Daemon::start() {
     credentials = grpc::InsecureServerCredentials();
   }
   grpc::ServerBuilder builder;
+  // gRPC sets SO_REUSEPORT by default: a second daemon on the same port would start and take
+  // half of the connections. One daemon per port.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.AddListeningPort(o.listen, credentials, &d.grpc_port);
   const int max_message = o.max_message_mib * (1 << 20);
   builder.SetMaxReceiveMessageSize(max_message);

@@ -125,6 +125,57 @@ TEST(Security, NonLoopbackAddressesNeedTlsAndATokenOrInsecure) {
   EXPECT_THROW(server::Daemon{options}, InvalidInput);  // unreadable files
 }
 
+// TLS files are checked when the daemon is configured: an empty or wrong file must neither
+// mean "no TLS" (the token would then travel in plain text) nor fail later as "cannot listen".
+TEST(Security, TlsFilesMustHoldACertificateAndItsKey) {
+  const testing::Certificate good = testing::make_self_signed_certificate();
+  const testing::Certificate other = testing::make_self_signed_certificate();
+  const std::string dir = testing::temp_dir();
+  struct Case {
+    std::string cert, key, field, says;
+  };
+  const std::vector<Case> cases = {
+      {"", "", "--tls-cert", "no PEM certificate"},
+      {"root:x:0:0:root:/root:/bin/bash\n", good.key_pem, "--tls-cert", "no PEM certificate"},
+      {good.cert_pem, "", "--tls-key", "no unencrypted PEM private key"},
+      {good.cert_pem, good.cert_pem, "--tls-key", "no unencrypted PEM private key"},
+      {good.cert_pem, other.key_pem, "--tls-key", "does not belong"},
+  };
+  for (const Case& c : cases) {
+    auto options = testing::test_options();
+    options.listen = "0.0.0.0:0";  // needs TLS and a token
+    options.tls_cert = testing::write_text(dir, "cert.pem", c.cert);
+    options.tls_key = testing::write_text(dir, "key.pem", c.key);
+    options.token_file = testing::write_text(dir, "token", std::string(kToken) + "\n");
+    try {
+      server::Daemon daemon(options);
+      ADD_FAILURE() << c.field << " / " << c.says << ": accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(c.field, 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
+    }
+  }
+  auto options = testing::test_options();
+  options.tls_cert = testing::write_text(dir, "cert.pem", good.cert_pem);
+  options.tls_key = testing::write_text(dir, "key.pem", good.key_pem);
+  EXPECT_NO_THROW(server::Daemon{options});
+}
+
+// gRPC would share a port between processes (SO_REUSEPORT) and split the connections.
+TEST(Security, ASecondDaemonCannotTakeTheSamePort) {
+  TestDaemon first;
+  auto options = testing::test_options();
+  options.listen = first.grpc_address();
+  server::Daemon second(options);
+  try {
+    second.start();
+    ADD_FAILURE() << "second daemon started on " << options.listen;
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("--listen"), std::string::npos) << e.what();
+  }
+  second.shutdown();
+}
+
 TEST(Security, LoopbackAddresses) {
   for (const char* address : {"127.0.0.1:1", "127.10.0.3:80", "localhost:50051", "[::1]:50051"})
     EXPECT_TRUE(server::is_loopback_address(address)) << address;
