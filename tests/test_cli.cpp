@@ -63,6 +63,29 @@ TEST(CliPatch, BadCornersAreInvalidInput) {
   }
 }
 
+TEST(CliPatch, FarCornerPointIsInvalidInput) {
+  // Used to fail as "--corners: the mesh has no faces" (squared distances overflowed).
+  const auto result =
+      run_cli("patch example:plane --quiet --corners '1e200,0,0;10,0,0;10,10,0;0,10,0' --out " +
+              testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("--corners: point 1"), std::string::npos) << result.err;
+}
+
+// An unusable --out is the user's input (exit 2) and found before any work is done.
+TEST(CliPatch, UnusableOutIsInvalidInput) {
+  const std::string dir = testing::temp_dir();
+  const std::string file = testing::write_text(dir, "a-file", "x");
+  for (const std::string& out :
+       {file, file + "/sub", std::string("/proc/gridshell-out"), std::string("/dev/null")}) {
+    const auto result = run_cli("patch example:plane --quiet --out '" + out + "'");
+    EXPECT_EQ(result.exit_code, 2) << out << ": " << result.err;
+    EXPECT_EQ(result.err.rfind("error: --out:", 0), 0u) << result.err;
+  }
+  const auto empty = run_cli("patch example:plane --quiet --out ''");
+  EXPECT_EQ(empty.exit_code, 2) << empty.err;
+}
+
 TEST(CliPatch, CrossingBoundaryIsInfeasible) {
   // Corners of the plane example in bow-tie order: c0, c2, c1, c3.
   const ExampleSurface plane = make_example("plane");

@@ -96,6 +96,9 @@ TEST(CliSimulate, BadInputsNameTheProblem) {
   json no_width = design;
   no_width["options"]["lamella_width"] = -1;
   const std::string width_path = testing::write_text(dir, "width.json", no_width.dump());
+  json thick = design;  // accepted by design once; the simulation left its domain (exit 1)
+  thick["options"]["lamella_thickness"] = 1e10;
+  const std::string thick_path = testing::write_text(dir, "thick.json", thick.dump());
   const std::string good = "'" + design_dir() + "/design.json'";
   const std::vector<Case> cases{
       {"/nonexistent/design.json", "cannot open"},
@@ -107,6 +110,12 @@ TEST(CliSimulate, BadInputsNameTheProblem) {
       {good + " --young -5", "--young"},
       {good + " --mu 0", "--mu"},
       {good + " --edges-per-interval 100", "--edges-per-interval"},
+      // Extremes that used to give Infinity / NaN in deployment.json with exit code 0.
+      {good + " --young 1e-300 --shear 1e-301", "--young"},
+      {good + " --young 1e300 --shear 1e299", "--young"},
+      {good + " --mu 1e300", "--mu"},
+      {good + " --unit 1e300", "--unit"},
+      {"'" + thick_path + "'", "lamella_thickness"},
   };
   for (const Case& c : cases) {
     const auto result = run_cli("simulate " + c.arguments + " --quiet --out '" + dir + "/x'");

@@ -758,6 +758,30 @@ TEST(MeshIoReject, InfCoordinateInBinaryStlNamesTheFacet) {
                   {"inf.stl", "facet 6", "corner 2", "non-finite"});
 }
 
+TEST(MeshIoReject, HugeCoordinateNamesTheVertex) {
+  // 1e100 used to pass as "all faces are degenerate", 1e160 as "2 boundary loops".
+  for (const char* z : {"1e100", "1e160", "-2e15"})
+    expect_contains(reject("huge.obj", std::string("v 0 0 0\nv 1 0 0\nv 0 1 ") + z +
+                                           "\nv 1 1 0\nf 1 2 3\nf 2 4 3\n"),
+                    {"huge.obj", "vertex 3 (line 3)", "beyond +-1e15"});
+  // An isolated vertex far away is only dropped (with a warning), as any isolated vertex.
+  LoadReport report;
+  const TriangleMesh mesh = load_mesh(
+      write_text(temp_dir(), "far.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e200 0 0\nf 1 2 3\n"),
+      &report);
+  EXPECT_EQ(mesh.vertex_count(), 3);
+}
+
+TEST(MeshIoReject, FifoAndDevicesAreNotRead) {
+  // A FIFO would block in open() for ever, /dev/zero never ends.
+  const std::string fifo = temp_dir() + "/pipe.obj";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  expect_contains(load_error(fifo), {"pipe.obj", "not a regular file"});
+  const std::string device = temp_dir() + "/zero.obj";
+  fs::create_symlink("/dev/zero", device);
+  expect_contains(load_error(device), {"zero.obj", "not a regular file"});
+}
+
 // Rejections: index out of range.
 
 TEST(MeshIoReject, ObjIndexOutOfRange) {

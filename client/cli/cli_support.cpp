@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <mutex>
@@ -127,6 +128,22 @@ double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const size_t n = values.size();
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+void prepare_output_folder(const std::string& out) {
+  namespace fs = std::filesystem;
+  if (out.empty()) throw InvalidInput("--out: empty: give the output folder");
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw InvalidInput("--out: cannot create the output folder " + out + ": " + ec.message());
+  if (!fs::is_directory(out, ec))
+    throw InvalidInput("--out: " + out + " exists and is not a folder");
+  // Writable? (results are written atomically: a temporary file beside the final one)
+  const fs::path probe = fs::path(out) / (".gridshell-write-test-" + std::to_string(::getpid()));
+  std::FILE* f = std::fopen(probe.c_str(), "w");
+  if (!f) throw InvalidInput("--out: cannot write into " + out + ": " + std::strerror(errno));
+  std::fclose(f);
+  fs::remove(probe, ec);
 }
 
 }  // namespace gridshell::cli

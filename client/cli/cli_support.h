@@ -57,4 +57,9 @@ int file_vertex(const InputMesh& input, int mesh_vertex);
 /// Median of a list of numbers.
 double median(std::vector<double> values);
 
+/// Creates the output folder `--out` names (with its parents) and checks that files can be
+/// written into it, before any work is done (also before a remote run). Throws InvalidInput
+/// naming --out otherwise.
+void prepare_output_folder(const std::string& out);
+
 }  // namespace gridshell::cli

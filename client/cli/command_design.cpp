@@ -105,7 +105,7 @@ struct DesignArguments {
 
 int run_design(const DesignArguments& args) {
   const v1::DesignRequest request = design_request(args.design);
-  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
   v1::DesignResult result;
   if (args.output.remote.remote()) {

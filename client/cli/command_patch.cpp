@@ -36,7 +36,7 @@ int run_patch(const PatchArguments& args) {
   options.set_max_smoothing_iterations(args.max_iterations);
   options.set_no_smoothing(args.no_smoothing);
 
-  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
   v1::PatchResult result;
   if (args.output.remote.remote()) {

@@ -85,7 +85,7 @@ int run_run(const RunArguments& args) {
   v1::SimulateRequest simulate_request;
   *simulate_request.mutable_options() = simulation_options_from_flags(args.simulation);
   simulate_request.set_design_name("design.json");
-  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
   prepare_simulation_options(simulate_request.options(), FieldNames::CommandLine);
   const bool remote = args.output.remote.remote();

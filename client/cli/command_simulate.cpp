@@ -54,7 +54,8 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
     if (!(*flags.shear > 0)) throw InvalidInput("--shear: must be a positive number of pascal");
     o.set_shear_modulus(*flags.shear);
   }
-  if ((flags.young || flags.shear) && flags.material.empty()) o.set_material("custom");
+  // Without --material the moduli override the default material's (resolve_simulation_options
+  // then calls it "custom").
   o.set_unit(flags.unit);
   o.set_unit_in_meters(parse_length_unit(flags.unit, "--unit"));
   if (!(flags.mu > 0)) throw InvalidInput("--mu: must be a positive number");
@@ -107,7 +108,9 @@ v1::Design read_design(const std::string& path) {
   v1::Design design;
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &design, options);
+  std::string json = text.str();
+  if (json.rfind("\xEF\xBB\xBF", 0) == 0) json.erase(0, 3);  // a UTF-8 byte order mark
+  const auto status = google::protobuf::util::JsonStringToMessage(json, &design, options);
   if (!status.ok())
     throw InvalidInput(path + ": not a gridshell design file: " + std::string(status.message()));
   return design;
@@ -118,7 +121,7 @@ int run_simulate(const SimulateArguments& args) {
   *request.mutable_design() = read_design(args.design);
   *request.mutable_options() = simulation_options_from_flags(args.flags);
   request.set_design_name(std::filesystem::path(args.design).filename().string());
-  std::filesystem::create_directories(args.output.out);  // fail early on an unusable --out
+  prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
   v1::SimulateResult result;
   try {

@@ -157,8 +157,17 @@ struct RemoteClient::Impl {
 
 RemoteClient::RemoteClient(const RemoteOptions& options) : impl_(std::make_unique<Impl>()) {
   impl_->options = options;
-  if (options.server.find(':') == std::string::npos)
+  const auto colon = options.server.rfind(':');
+  if (colon == std::string::npos || colon == 0)
     throw InvalidInput("--server: expected HOST:PORT, got '" + options.server + "'");
+  const std::string port = options.server.substr(colon + 1);
+  if (port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) < 1 ||
+      std::stoi(port) > 65535)
+    throw InvalidInput("--server: '" + port + "' is not a port number (1-65535)");
+  // Up to a year: a deadline that gRPC's clock arithmetic does not overflow (NaN fails too).
+  if (!(options.timeout >= 0 && options.timeout <= 3.2e7))
+    throw InvalidInput("--timeout: must be between 0 (none) and 3.2e7 seconds");
   if (!options.token_file.empty()) {
     impl_->token = trimmed(read_whole_file(options.token_file, "--token-file"));
     if (impl_->token.empty())

@@ -51,6 +51,21 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
   Design design;
   design.target = std::move(target);
   const Patch& patch = design.target.patch;
+  {
+    // Lamella dimensions against the patch, before the expensive maps: a section wider than
+    // half the patch, or a millionth of it, is no gridshell (and its simulation has no meaning).
+    const std::array<double, 4> sides = side_lengths(patch);
+    const double longest = *std::max_element(sides.begin(), sides.end());
+    for (const auto& [value, flag] :
+         {std::pair{options.members.lamella_width, "--lamella-width"},
+          std::pair{options.members.lamella_thickness, "--lamella-thickness"}})
+      if (value != 0 && !(value >= 1e-6 * longest && value <= 0.5 * longest)) {
+        std::ostringstream msg;
+        msg << flag << ": " << value << " is outside [1e-6, 0.5] x the longest patch side ("
+            << longest << ")";
+        throw InvalidInput(msg.str());
+      }
+  }
   auto start = std::chrono::steady_clock::now();
   const GeodesicSolver solver(patch.mesh, GeodesicOptions{options.patch.cut.method});
   design.maps = compute_distance_maps(patch, solver, options.maps, progress);

@@ -996,6 +996,11 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
   if (np == 0)
     fail(path + ": no faces (" + raw.source + " defines " + count_of(nv, "vertex", "vertices") +
          " but no faces)");
+  // Coordinates beyond kMaxCoordinate (the vertices faces use; isolated ones are dropped below).
+  for (int index : raw.corners)
+    if (index >= 0 && index < nv && raw.vertices[index].cwiseAbs().maxCoeff() > kMaxCoordinate)
+      fail(path + ": " + vertex_label(raw, index) +
+           ": a coordinate beyond +-1e15 (rescale the model)");
 
   // Index range, then fan triangulation.
   std::vector<Face> triangles;
@@ -1179,6 +1184,13 @@ std::string read_file(const std::string& path) {
     fail(path + ": cannot open mesh file: " + ec.message());
   if (!fs::exists(status)) fail(path + ": cannot open mesh file: no such file");
   if (fs::is_directory(status)) fail(path + ": cannot read mesh file: it is a directory");
+  // A FIFO would block in open() (uninterruptibly), a device such as /dev/zero never ends.
+  if (!fs::is_regular_file(status))
+    fail(path + ": cannot read mesh file: not a regular file (a device, FIFO or socket)");
+  constexpr std::uintmax_t kMaxBytes = std::uintmax_t{4} << 30;
+  if (const std::uintmax_t size = fs::file_size(path, ec); !ec && size > kMaxBytes)
+    fail(path + ": cannot read mesh file: " + std::to_string(size >> 20) +
+         " MiB, more than the 4096 MiB gridshell reads");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path + ": cannot open mesh file: " + std::strerror(errno));
   std::ostringstream out;

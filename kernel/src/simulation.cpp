@@ -282,6 +282,12 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
   const double extent = (hi - lo).maxCoeff();
   if (!(extent > 0) || !std::isfinite(extent))
     throw InvalidInput("patch: the target surface has no extent");
+  for (const auto& [value, name] :
+       {std::pair{width, "lamella_width"}, std::pair{thickness, "lamella_thickness"}})
+    if (!(value >= 1e-6 * extent && value <= 0.5 * extent))
+      throw InvalidInput(std::string(name) + ": " + std::to_string(value) +
+                         " is outside [1e-6, 0.5] x the target's extent (" +
+                         std::to_string(extent) + ")");
   scale_ = options.reference_extent / extent;
   width_ = width * scale_;
   thickness_ = thickness * scale_;
@@ -318,7 +324,8 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
         cumulative.push_back(cumulative.back() + (m.surface[k] - m.surface[k - 1]).norm());
       const double surface_length = cumulative.back();
       if (!(surface_length > 0))
-        throw InvalidInput("members: a member's surface polyline has zero length");
+        throw InvalidInput(std::string("members: member ") + (m.family == Family::G ? "g" : "h") +
+                           std::to_string(m.index) + ": its surface polyline has zero length");
       // Start on the geodesic, offset by half the thickness: g below the surface, h above it
       // (the connection puts h on the material-normal side of g).
       const double side = m.family == Family::G ? -0.5 : 0.5;
@@ -386,15 +393,17 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
     joint.end[1] = make_slider(ng + c.h, c.s_h, c.s_bar_h, may_slide);
     joints_.push_back(joint);
   }
-  for (const Anchor& a : anchors) {
+  for (size_t k = 0; k < anchors.size(); ++k) {
+    const Anchor& a = anchors[k];
+    const std::string where = "anchors[" + std::to_string(k) + "]: ";
     if (!finite(a.position) || !finite(a.normal) || !(a.normal.norm() > 0))
-      throw InvalidInput("anchors: anchor at crossing (" + std::to_string(a.g) + ", " +
+      throw InvalidInput(where + "anchor at crossing (" + std::to_string(a.g) + ", " +
                          std::to_string(a.h) + ") has a non-finite position or normal");
     int found = -1;
     for (size_t j = 0; j < joints_.size(); ++j)
       if (joints_[j].g == a.g && joints_[j].h == a.h) found = static_cast<int>(j);
     if (found < 0)
-      throw InvalidInput("anchors: anchor at (" + std::to_string(a.g) + ", " + std::to_string(a.h) +
+      throw InvalidInput(where + "anchor at (" + std::to_string(a.g) + ", " + std::to_string(a.h) +
                          ") is not a crossing of the grid");
     if (joints_[found].anchor >= 0) continue;  // the same crossing anchored twice
     joints_[found].anchor = static_cast<int>(anchors_.size());
@@ -767,8 +776,13 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       rebuild = false;
       ++run.outer_iterations;
     }
-    if (!newton->evaluate())
+    if (!newton->evaluate()) {
+      if (run.iterations == 0)  // the start itself: the input's fault
+        throw InvalidInput(
+            "members: the grid laid on its geodesics has folded or degenerate rod edges (the "
+            "energy cannot be evaluated there); check the members' surface polylines");
       throw std::runtime_error("simulation: the state left the energy's domain");
+    }
     run.gradient_norm = newton->gradient_max_norm() / force_reference_;
     if (first < 0) first = std::max(run.gradient_norm, 10 * tolerance);
     const double fraction =
@@ -894,6 +908,12 @@ DeploymentRun Deployment::solve(const Progress& progress) {
   else
     solve_newton(progress, stage, run);
   DeploymentRun out = results();
+  // Never hand out a result that is not a number.
+  bool finite_result = std::isfinite(out.rms) && std::isfinite(run.gradient_norm);
+  for (const auto& [term, value] : out.energies)
+    finite_result = finite_result && std::isfinite(value);
+  if (!finite_result)
+    throw std::runtime_error("simulation: the result is not finite (RMS, gradient or an energy)");
   out.notches = options_.notches;
   out.iterations = run.iterations;
   out.outer_iterations = run.outer_iterations;

@@ -26,8 +26,12 @@ TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& spec,
       }
       break;
     case CornerSpec::Kind::Points:
-      for (int i = 0; i < 4; ++i)
+      for (int i = 0; i < 4; ++i) {
+        if (!spec.points[i].allFinite() || spec.points[i].cwiseAbs().maxCoeff() > kMaxCoordinate)
+          throw InvalidInput("--corners: point " + std::to_string(i + 1) +
+                             " has a coordinate that is not a finite number within +-1e15");
         result.input_corners[i] = closest_surface_point(mesh, spec.points[i]);
+      }
       break;
     case CornerSpec::Kind::Auto: {
       const auto corners = auto_corners(mesh);

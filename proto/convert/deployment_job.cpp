@@ -42,19 +42,23 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
           "expected newton or ceres, got '" + o.solver() + "'");
   require(o.notches() == "on" || o.notches() == "off" || o.notches() == "both", "notches",
           "expected on, off or both, got '" + o.notches() + "'");
-  // Material: a preset by name; explicit moduli override it ("custom" when no name is given).
-  if (o.material().empty() && o.young_modulus() == 0 && o.shear_modulus() == 0)
-    o.set_material(defaults.material.name);
-  if (!o.material().empty() && o.material() != "custom") {
-    const Material preset = material_by_name(o.material());
+  // Material: a preset by name (default lime wood); explicit moduli override its values (without
+  // a name the material is then "custom"). "custom" by name needs both moduli.
+  if (o.material() != "custom") {
+    const bool overridden = o.young_modulus() != 0 || o.shear_modulus() != 0;
+    const Material preset =
+        material_by_name(o.material().empty() ? defaults.material.name : o.material());
     if (o.young_modulus() == 0) o.set_young_modulus(preset.young_modulus);
     if (o.shear_modulus() == 0) o.set_shear_modulus(preset.shear_modulus);
-  } else {
-    o.set_material("custom");
+    o.set_material(o.material().empty() && overridden ? "custom" : preset.name);
   }
-  require(positive(o.young_modulus()), "young_modulus", "must be a positive number (Pa)");
-  require(positive(o.shear_modulus()), "shear_modulus",
-          "must be a positive number (Pa); give it with the Young's modulus or pick a material");
+  // 1 kPa (soft foam) to 10 TPa (beyond diamond): outside, energies and stresses overflow.
+  require(positive(o.young_modulus()) && o.young_modulus() >= 1e3 && o.young_modulus() <= 1e13,
+          "young_modulus", "must be a number of pascals between 1e3 and 1e13");
+  require(positive(o.shear_modulus()) && o.shear_modulus() >= 1e3 && o.shear_modulus() <= 1e13,
+          "shear_modulus",
+          "must be a number of pascals between 1e3 and 1e13; give it with the Young's modulus or "
+          "pick a material");
   auto fill = [](double value, double fallback) { return value == 0 ? fallback : value; };
   o.set_friction_mu(fill(o.friction_mu(), defaults.friction_mu));
   o.set_friction_epsilon(fill(o.friction_epsilon(), defaults.friction_epsilon));
@@ -70,27 +74,32 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
   o.set_reference_extent(fill(o.reference_extent(), defaults.reference_extent));
   o.set_gradient_tolerance(fill(o.gradient_tolerance(), defaults.gradient_tolerance));
   if (o.max_iterations() == 0) o.set_max_iterations(defaults.max_iterations);
-  require(std::isfinite(o.friction_mu()) && o.friction_mu() > 0, "friction_mu",
-          "must be a positive number");
+  require(std::isfinite(o.friction_mu()) && o.friction_mu() > 0 && o.friction_mu() <= 100,
+          "friction_mu", "must be a positive number up to 100 (the paper's is 0.1)");
   require(positive(o.friction_epsilon()) && o.friction_epsilon() < 0.5, "friction_epsilon",
           "must be in (0, 0.5)");
-  require(positive(o.notch_limit_weight()), "notch_limit_weight", "must be a positive number");
   for (const auto& [value, name] :
        {std::pair{o.connection_position_weight(), "connection_position_weight"},
         {o.connection_direction_weight(), "connection_direction_weight"},
         {o.anchor_position_weight(), "anchor_position_weight"},
         {o.anchor_direction_weight(), "anchor_direction_weight"},
-        {o.reference_extent(), "reference_extent"},
-        {o.gradient_tolerance(), "gradient_tolerance"}})
-    require(positive(value), name, "must be a positive number");
+        {o.notch_limit_weight(), "notch_limit_weight"}})
+    require(positive(value) && value <= 1e6, name, "must be a positive number up to 1e6");
+  require(
+      positive(o.reference_extent()) && o.reference_extent() >= 1e-3 && o.reference_extent() <= 1e6,
+      "reference_extent", "must be between 1e-3 and 1e6");
+  require(positive(o.gradient_tolerance()) && o.gradient_tolerance() <= 1, "gradient_tolerance",
+          "must be in (0, 1]");
   require(std::isfinite(o.edges_per_interval()) && o.edges_per_interval() >= 1 &&
               o.edges_per_interval() <= 64,
           "edges_per_interval", "must be between 1 and 64");
   require(o.max_iterations() >= 1 && o.max_iterations() <= 1000000, "max_iterations",
           "must be between 1 and 1000000");
   if (o.unit_in_meters() == 0) o.set_unit_in_meters(parse_length_unit(o.unit()));
-  require(std::isfinite(o.unit_in_meters()) && o.unit_in_meters() >= 0, "unit_in_meters",
-          "must be a positive number of metres (or 0 for unknown)");
+  require(
+      std::isfinite(o.unit_in_meters()) && o.unit_in_meters() >= 0 &&
+          (o.unit_in_meters() == 0 || (o.unit_in_meters() >= 1e-9 && o.unit_in_meters() <= 1e6)),
+      "unit_in_meters", "must be between 1e-9 and 1e6 metres (or 0 for unknown)");
   return o;
 }
 
