@@ -1,6 +1,7 @@
 // Discrete Gaussian curvature, injectivity bound, gap factor eta and smoothing (paper 3.3).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -40,7 +41,9 @@ TEST(GaussianCurvature, SphereIsOneOverRSquared) {
   const std::vector<double> k = gaussian_curvature(mesh);
   const MeshTopology topology = build_topology(mesh);
   for (int v = 0; v < mesh.vertex_count(); ++v)
-    if (!topology.is_boundary_vertex[v]) EXPECT_NEAR(k[v] * R * R, 1.0, 0.05) << v;
+    if (!topology.is_boundary_vertex[v]) {
+      EXPECT_NEAR(k[v] * R * R, 1.0, 0.05) << v;
+    }
 }
 
 TEST(GaussianCurvature, DevelopableSurfacesAreFlat) {
@@ -60,7 +63,9 @@ TEST(GaussianCurvature, SaddleIsNegative) {
   const MeshTopology topology = build_topology(hypar);
   const std::vector<double> k = gaussian_curvature(hypar);
   for (int v = 0; v < hypar.vertex_count(); ++v)
-    if (!topology.is_boundary_vertex[v]) EXPECT_LT(k[v], 0.0);
+    if (!topology.is_boundary_vertex[v]) {
+      EXPECT_LT(k[v], 0.0);
+    }
 }
 
 TEST(Coverability, FlatPatchHasNoGapAndInfiniteInjectivityBound) {
@@ -87,6 +92,35 @@ TEST(Coverability, InjectivityBoundIsPiOverSqrtKmax) {
                    std::numbers::pi / std::sqrt(report.gaussian_curvature_max));
 }
 
+// The longest member distance comes from sources solved in parallel: the same for any thread
+// count, and bounded by the brute-force maximum over all pairs of opposite side vertices (the
+// sources are a sample of one side's vertices).
+TEST(Coverability, LongestMemberDistanceDoesNotDependOnThreads) {
+  const int n = 24;
+  const TriangleMesh mesh = sharp_bump(n, 1.0);
+  const Patch patch = whole_grid_patch(mesh, n);
+  std::vector<double> longest;
+  for (int threads : {1, 2, 5}) {
+    CoverabilityOptions options;
+    options.threads = threads;
+    longest.push_back(analyze_coverability(patch, options).longest_member_distance);
+  }
+  EXPECT_EQ(longest[0], longest[1]);
+  EXPECT_EQ(longest[0], longest[2]);
+  const GeodesicSolver solver(patch.mesh);
+  double all_pairs = 0, corner_to_corner = 0;
+  for (int s = 0; s < 2; ++s)
+    for (int v : patch.sides[s]) {
+      const std::vector<double> d = solver.distances(SurfacePoint::at_vertex(patch.mesh, v));
+      for (int q : patch.sides[s + 2]) all_pairs = std::max(all_pairs, d[q]);
+      if (v == patch.sides[s].front())
+        corner_to_corner = std::max(corner_to_corner, d[patch.sides[s + 2].back()]);
+    }
+  EXPECT_LE(longest[0], all_pairs);
+  EXPECT_GE(longest[0], corner_to_corner);  // the sample includes each side's first vertex
+  EXPECT_GT(longest[0], 0.9 * all_pairs);
+}
+
 TEST(Coverability, SharpBumpHasAGapThatSmoothingCloses) {
   const int n = 30;
   const TriangleMesh mesh = sharp_bump(n, 3.0);
@@ -104,7 +138,9 @@ TEST(Coverability, SharpBumpHasAGapThatSmoothingCloses) {
   EXPECT_GT(result.max_displacement, 0.0);
   const MeshTopology topology = build_topology(patch.mesh);
   for (int v = 0; v < patch.mesh.vertex_count(); ++v)
-    if (topology.is_boundary_vertex[v]) EXPECT_EQ(patch.mesh.vertices[v], before[v]) << v;
+    if (topology.is_boundary_vertex[v]) {
+      EXPECT_EQ(patch.mesh.vertices[v], before[v]) << v;
+    }
 }
 
 TEST(Coverability, SmoothingCapIsInfeasible) {
@@ -130,7 +166,9 @@ TEST(LaplacianSmoothing, KeepsAPlaneFlatAndFixedVerticesFixed) {
   EXPECT_GT(moved, 0.0);
   for (int v = 0; v < mesh.vertex_count(); ++v) {
     EXPECT_NEAR(mesh.vertices[v].z(), 0.0, 1e-12);
-    if (fixed[v]) EXPECT_EQ(mesh.vertices[v], before[v]);
+    if (fixed[v]) {
+      EXPECT_EQ(mesh.vertices[v], before[v]);
+    }
   }
 }
 

@@ -200,8 +200,9 @@ void expect_consistent_cut(const TriangleMesh& input, const std::array<int, 4>& 
               corner_vertices[patch.corners_reversed ? (4 - i) % 4 : i]);
   }
   for (int v = 0; v < patch.mesh.vertex_count(); ++v)
-    if (patch.input_vertex[v] >= 0)
+    if (patch.input_vertex[v] >= 0) {
       EXPECT_EQ(patch.mesh.vertices[v], input.vertices[patch.input_vertex[v]]);
+    }
   EXPECT_LE(surface_area(patch.mesh), surface_area(input) * (1 + 1e-12));
   EXPECT_GT(surface_area(patch.mesh), 0.0);
   const auto angles = corner_angles(patch);

@@ -4,10 +4,14 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <numbers>
 #include <sstream>
+#include <thread>
 
 #include "gridshell/curvature.h"
 #include "gridshell/errors.h"
@@ -84,19 +88,48 @@ CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOp
   GeodesicSolver solver(patch.mesh, GeodesicOptions{options.method});
   // Longest member: members join opposite sides (0-2 and 1-3); sample sources on one side.
   const int samples = std::max(2, options.member_distance_samples);
-  int done = 0;
+  std::vector<std::pair<int, int>> jobs;  // (source vertex, side it starts on)
   for (int s = 0; s < 2; ++s) {
     const auto& from = patch.sides[s];
-    const auto& to = patch.sides[s + 2];
-    for (int i = 0; i < samples; ++i) {
-      progress.report("coverability: member lengths", 0.1 + 0.8 * done++ / (2.0 * samples));
-      const int v = from[static_cast<size_t>(std::lround(i * (from.size() - 1.0) / (samples - 1)))];
-      const std::vector<double> d =
-          solver.distances(SurfacePoint::at_vertex(patch.mesh, v), progress.checker());
-      for (int q : to)
-        report.longest_member_distance = std::max(report.longest_member_distance, d[q]);
-    }
+    for (int i = 0; i < samples; ++i)
+      jobs.push_back(
+          {from[static_cast<size_t>(std::lround(i * (from.size() - 1.0) / (samples - 1)))], s});
   }
+  progress.report("coverability: member lengths", 0.1);
+  // The sources' solves in parallel, each into its own slot (deterministic for any thread count).
+  std::vector<double> longest(jobs.size(), 0.0);
+  std::atomic<size_t> next{0};
+  std::atomic<bool> stop{false};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const Progress checker = progress.checker();
+  auto worker = [&] {
+    while (!stop) {
+      const size_t job = next++;
+      if (job >= jobs.size()) return;
+      try {
+        progress.check();
+        const auto [v, side] = jobs[job];
+        const std::vector<double> d =
+            solver.distances(SurfacePoint::at_vertex(patch.mesh, v), checker);
+        for (int q : patch.sides[side + 2]) longest[job] = std::max(longest[job], d[q]);
+      } catch (...) {
+        std::lock_guard lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        stop = true;
+      }
+    }
+  };
+  int threads =
+      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::clamp(threads, 1, static_cast<int>(jobs.size()));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  for (double d : longest)
+    report.longest_member_distance = std::max(report.longest_member_distance, d);
   report.injectivity_ok = report.longest_member_distance < report.injectivity_bound;
   progress.report("coverability: gap factor", 0.9);
   report.gap = gap_factor(patch, solver, k, progress);

@@ -232,7 +232,8 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
                           const RunSettings& settings) {
   return with_field_names(settings.names, [&] {
     const auto start = std::chrono::steady_clock::now();
-    const PatchInputs in = prepare_patch(request, settings.names);
+    PatchInputs in = prepare_patch(request, settings.names);
+    in.options.coverability.threads = settings.threads;
     const TargetPatch result = make_target_patch(in.mesh, in.corners, in.options, progress);
 
     v1::PatchResult out;
@@ -352,6 +353,7 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     const auto start = std::chrono::steady_clock::now();
     DesignInputs in = prepare_design(request, settings.names);
     in.options.maps.threads = in.options.grid.threads = settings.threads;
+    in.options.patch.coverability.threads = settings.threads;
     const Design design = make_design(in.mesh, in.corners, in.options, progress);
     in.record.set_lamella_width(design.lamella_width);
     in.record.set_lamella_thickness(design.lamella_thickness);

@@ -22,6 +22,9 @@ struct CoverabilityOptions {
   /// Sources per side when searching the longest boundary-to-boundary distance.
   int member_distance_samples = 9;
   GeodesicMethod method = GeodesicMethod::Fast;
+  /// Worker threads for those sources' solves; 0 = hardware concurrency (the result does not
+  /// depend on it).
+  int threads = 0;
 };
 
 /// The gap factor (paper 3.3) for one curvature peak.
