@@ -99,4 +99,70 @@ int bench_simulate(int repeats, const std::string& out, bool no_write) {
   return 0;
 }
 
+int bench_resolution(const std::vector<double>& edges, int repeats, const std::string& out,
+                     bool no_write) {
+  std::ostringstream table;
+  table << "## Rod resolution: the seven examples at several rod edges per interval\n\n"
+        << "Measured " << today() << " on " << cpu_name() << ", "
+        << std::thread::hardware_concurrency()
+        << " hardware threads. Each example designed once with default options, then simulated "
+           "without (1) and with (2) notches at each resolution (`--edges-per-interval`: rod "
+           "edges per interval between crossings; the default is 2), "
+        << repeats
+        << " time(s) each, times are medians in seconds. How far RMS changes with the "
+           "resolution tells how far a result is the rods' equilibrium rather than the "
+           "discretization's. The paper's |G_V| is in parentheses: between our one and two "
+           "edges per interval (see docs/decisions.md, \"Rod resolution and the paper's "
+           "|G_V|\").\n\n"
+        << "| example | edges per interval | \\|G_V\\| (paper) | RMS1 (paper) | RMS2 (paper) | "
+           "t1 s | t2 s | iterations 1 / 2 | converged |\n"
+        << "|---|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  for (const PaperModel& row : kPaperTable1) {
+    std::cerr << "bench resolution: " << row.name << ": design\n";
+    const ExampleSurface example = make_example(row.name);
+    const Design design =
+        make_design(example.mesh, CornerSpec::at_vertices(example.corners), DesignOptions{});
+    for (const double epi : edges) {
+      char buffer[1024];
+      try {
+        std::vector<double> t1, t2;
+        DeploymentRun without, with;
+        for (int r = 0; r < repeats; ++r) {
+          std::cerr << "bench resolution: " << row.name << ", " << epi << " edges per interval\n";
+          SimulationOptions options;
+          options.edges_per_interval = epi;
+          options.notches = false;
+          without = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                                        design.lamella_width, design.lamella_thickness, options);
+          options.notches = true;
+          with = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                                     design.lamella_width, design.lamella_thickness, options);
+          t1.push_back(without.seconds);
+          t2.push_back(with.seconds);
+        }
+        std::snprintf(buffer, sizeof buffer,
+                      "| %s | %g | %d (%d) | %.3f (%.2f) | %.3f (%.2f) | %.2f | %.2f | %d / %d | "
+                      "%s |\n",
+                      row.name, epi, with.grid_vertices, row.grid_vertices, without.rms, row.rms1,
+                      with.rms, row.rms2, median(t1), median(t2), without.iterations,
+                      with.iterations, without.converged && with.converged ? "yes" : "**no**");
+      } catch (const std::exception& e) {
+        std::snprintf(buffer, sizeof buffer, "| %s | %g | failed: %s | | | | | | |\n", row.name,
+                      epi, e.what());
+      }
+      table << buffer;
+      std::cerr << buffer;
+    }
+  }
+  table << "\nCommand: `gridshell bench resolution --edges";
+  for (size_t i = 0; i < edges.size(); ++i) table << (i ? "," : " ") << edges[i];
+  table << " --repeats " << repeats << "`\n";
+  std::cout << table.str();
+  if (!no_write) {
+    write_section(out, "resolution", table.str());
+    std::cerr << "wrote " << out << "\n";
+  }
+  return 0;
+}
+
 }  // namespace gridshell::cli

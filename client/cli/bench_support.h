@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace gridshell::cli {
 
@@ -16,5 +17,9 @@ void write_section(const std::string& path, const std::string& name, const std::
 /// `gridshell bench simulate`: the seven paper-like examples designed with default options and
 /// simulated without and with notches, `repeats` times each; medians next to Table 1.
 int bench_simulate(int repeats, const std::string& out, bool no_write);
+/// The rod resolution study: the seven examples simulated at each of `edges` rod edges per
+/// interval between crossings (section "resolution").
+int bench_resolution(const std::vector<double>& edges, int repeats, const std::string& out,
+                     bool no_write);
 
 }  // namespace gridshell::cli

@@ -38,6 +38,7 @@ struct BenchArguments {
   std::string out;
   bool no_write = false;
   int repeats = 3;
+  std::vector<double> edges{1, 2, 3, 4};
 };
 
 /// CPU time of the whole process (all threads) in s.
@@ -268,9 +269,13 @@ Command add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArguments>();
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
-  sub->add_option("WHAT", args->what, "geodesic | design | simulate | service")
+  sub->add_option("WHAT", args->what, "geodesic | design | simulate | resolution | service")
       ->required()
-      ->check(CLI::IsMember({"geodesic", "design", "simulate", "service"}));
+      ->check(CLI::IsMember({"geodesic", "design", "simulate", "resolution", "service"}));
+  sub->add_option("--edges", args->edges,
+                  "rod edges per interval between crossings to compare (resolution)")
+      ->delimiter(',')
+      ->capture_default_str();
   sub->add_option("--sizes", args->sizes, "target vertex counts")
       ->delimiter(',')
       ->capture_default_str();
@@ -291,6 +296,12 @@ Command add_bench_command(CLI::App& app) {
       if (s < 100 || s > 2000000) throw InvalidInput("--sizes: each size must be 100..2000000");
     if (args->repeats < 1) throw InvalidInput("--repeats: must be at least 1");
     if (args->what == "simulate") return bench_simulate(args->repeats, args->out, args->no_write);
+    if (args->what == "resolution") {
+      if (args->edges.empty()) throw InvalidInput("--edges: give at least one resolution");
+      for (double e : args->edges)
+        if (!(e >= 1 && e <= 64)) throw InvalidInput("--edges: each must be between 1 and 64");
+      return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
+    }
     if (args->what == "service")
       return bench_service(args->out, args->no_write, args->repeats, write_section);
     return args->what == "design" ? bench_design(*args) : bench_geodesic(*args);
