@@ -99,6 +99,9 @@ TEST(CliSimulate, BadInputsNameTheProblem) {
   json thick = design;  // accepted by design once; the simulation left its domain (exit 1)
   thick["options"]["lamella_thickness"] = 1e10;
   const std::string thick_path = testing::write_text(dir, "thick.json", thick.dump());
+  json far = design;  // a patch vertex at 1e300 used to be reported as a lamella_width problem
+  far["patch"]["vertices"][0][2] = 1e300;
+  const std::string far_path = testing::write_text(dir, "far.json", far.dump());
   const std::string good = "'" + design_dir() + "/design.json'";
   const std::vector<Case> cases{
       {"/nonexistent/design.json", "cannot open"},
@@ -116,6 +119,7 @@ TEST(CliSimulate, BadInputsNameTheProblem) {
       {good + " --mu 1e300", "--mu"},
       {good + " --unit 1e300", "--unit"},
       {"'" + thick_path + "'", "lamella_thickness"},
+      {"'" + far_path + "'", "patch.vertices[0]"},
   };
   for (const Case& c : cases) {
     const auto result = run_cli("simulate " + c.arguments + " --quiet --out '" + dir + "/x'");

@@ -284,10 +284,13 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
     throw InvalidInput("patch: the target surface has no extent");
   for (const auto& [value, name] :
        {std::pair{width, "lamella_width"}, std::pair{thickness, "lamella_thickness"}})
-    if (!(value >= 1e-6 * extent && value <= 0.5 * extent))
-      throw InvalidInput(std::string(name) + ": " + std::to_string(value) +
-                         " is outside [1e-6, 0.5] x the target's extent (" +
-                         std::to_string(extent) + ")");
+    if (!(value >= 1e-6 * extent && value <= 0.5 * extent)) {
+      char message[200];
+      std::snprintf(message, sizeof message,
+                    "%s: %g is outside [1e-6, 0.5] x the target's extent (%g)", name, value,
+                    extent);
+      throw InvalidInput(message);
+    }
   scale_ = options.reference_extent / extent;
   width_ = width * scale_;
   thickness_ = thickness * scale_;

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "gridshell/errors.h"
+#include "gridshell/mesh.h"
 
 namespace gridshell {
 namespace {
@@ -17,7 +18,8 @@ using google::protobuf::ListValue;
 double number(const google::protobuf::Value& value, const std::string& field) {
   if (value.kind_case() != google::protobuf::Value::kNumberValue) fail(field, "expected a number");
   const double v = value.number_value();
-  if (!std::isfinite(v)) fail(field, "not a finite number");
+  if (!std::isfinite(v) || std::abs(v) > kMaxCoordinate)
+    fail(field, "not a finite number within +-1e15");
   return v;
 }
 
@@ -39,7 +41,8 @@ std::vector<Eigen::Matrix<double, N, 1>> points(const ListValue& list, const std
 }
 
 double finite(double v, const std::string& field) {
-  if (!std::isfinite(v)) fail(field, "not a finite number");
+  if (!std::isfinite(v) || std::abs(v) > kMaxCoordinate)
+    fail(field, "not a finite number within +-1e15");
   return v;
 }
 
