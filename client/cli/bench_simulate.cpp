@@ -20,6 +20,33 @@
 
 namespace gridshell::cli {
 
+namespace {
+
+/// The design simulated without and with notches `repeats` times, one run after the other.
+struct RunPair {
+  DeploymentRun without, with;
+  std::vector<double> t1, t2;
+};
+
+RunPair simulate_pair(const Design& design, SimulationOptions options, int repeats,
+                      const std::string& label) {
+  RunPair out;
+  for (int r = 0; r < repeats; ++r) {
+    std::cerr << "bench: " << label << " run " << r + 1 << "\n";
+    options.notches = false;
+    out.without = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                                      design.lamella_width, design.lamella_thickness, options);
+    options.notches = true;
+    out.with = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                                   design.lamella_width, design.lamella_thickness, options);
+    out.t1.push_back(out.without.seconds);
+    out.t2.push_back(out.with.seconds);
+  }
+  return out;
+}
+
+}  // namespace
+
 int bench_simulate(int repeats, const std::string& out, bool no_write) {
   std::ostringstream table;
   const SimulationOptions defaults;
@@ -63,20 +90,7 @@ int bench_simulate(int repeats, const std::string& out, bool no_write) {
       DesignOptions design_options;
       design_options.anchors.interior = interior_anchors;
       const Design design = make_design(example.mesh, corners, design_options);
-      std::vector<double> t1, t2;
-      DeploymentRun without, with;
-      for (int r = 0; r < repeats; ++r) {
-        std::cerr << "bench simulate: " << label << " run " << r + 1 << "\n";
-        SimulationOptions options;
-        options.notches = false;
-        without = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
-                                      design.lamella_width, design.lamella_thickness, options);
-        options.notches = true;
-        with = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
-                                   design.lamella_width, design.lamella_thickness, options);
-        t1.push_back(without.seconds);
-        t2.push_back(with.seconds);
-      }
+      const auto [without, with, t1, t2] = simulate_pair(design, {}, repeats, label);
       std::snprintf(buffer, sizeof buffer,
                     "| %s | %d (%d) | %.3f (%.2f) | %.3f (%.2f) | %.2f (%.2f) | %.2f (%.2f) | %d / "
                     "%d | %s |\n",
@@ -125,21 +139,11 @@ int bench_resolution(const std::vector<double>& edges, int repeats, const std::s
     for (const double epi : edges) {
       char buffer[1024];
       try {
-        std::vector<double> t1, t2;
-        DeploymentRun without, with;
-        for (int r = 0; r < repeats; ++r) {
-          std::cerr << "bench resolution: " << row.name << ", " << epi << " edges per interval\n";
-          SimulationOptions options;
-          options.edges_per_interval = epi;
-          options.notches = false;
-          without = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
-                                        design.lamella_width, design.lamella_thickness, options);
-          options.notches = true;
-          with = simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
-                                     design.lamella_width, design.lamella_thickness, options);
-          t1.push_back(without.seconds);
-          t2.push_back(with.seconds);
-        }
+        SimulationOptions options;
+        options.edges_per_interval = epi;
+        std::ostringstream label;
+        label << row.name << ", " << epi << " edges per interval";
+        const auto [without, with, t1, t2] = simulate_pair(design, options, repeats, label.str());
         std::snprintf(buffer, sizeof buffer,
                       "| %s | %g | %d (%d) | %.3f (%.2f) | %.3f (%.2f) | %.2f | %.2f | %d / %d | "
                       "%s |\n",
