@@ -250,6 +250,20 @@ TEST(Simulation, RejectsInconsistentGridsWithTheField) {
   EXPECT_NE(message(bad).find("members"), std::string::npos);
 }
 
+// The cap counts linear solves, also those of a step that needs several: never exceeded.
+TEST(Simulation, IterationCapIsNeverExceeded) {
+  PlanarGrid p = planar_grid(3, 4.0);
+  p.anchors[2].position.z() = 1;
+  for (int cap : {1, 2, 3, 5}) {
+    SimulationOptions options;
+    options.max_iterations = cap;
+    const DeploymentRun run = simulate_deployment(p.grid, p.anchors, plate(10), 0.1, 0.01, options);
+    EXPECT_LE(run.iterations, cap);
+    EXPECT_FALSE(run.converged);
+    EXPECT_NE(run.termination.find("iteration cap"), std::string::npos) << run.termination;
+  }
+}
+
 TEST(Simulation, CancellationStopsTheSolve) {
   PlanarGrid p = planar_grid(3, 4.0);
   p.anchors[2].position.z() = 1;

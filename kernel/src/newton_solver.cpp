@@ -289,7 +289,7 @@ void NewtonSolver::write(const Eigen::VectorXd& x) const {
     for (int a = 0; a < size; ++a) pointer[a] = x[k++];
 }
 
-NewtonSolver::StepResult NewtonSolver::step() {
+NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
   Impl& m = *impl_;
   StepResult result;
   const Eigen::VectorXd x0 = read();
@@ -301,6 +301,11 @@ NewtonSolver::StepResult NewtonSolver::step() {
   while (true) {
     if (lambda_ > options_.max_lambda) {
       result.stalled = true;
+      write(x0);
+      return result;
+    }
+    if (result.trials >= max_trials) {
+      result.out_of_trials = true;
       write(x0);
       return result;
     }

@@ -58,9 +58,10 @@ class NewtonSolver {
 
   struct StepResult {
     bool accepted = false;
-    int trials = 0;            ///< linear solves this step took
-    bool stalled = false;      ///< damping hit its maximum without an acceptable step
-    double relative_step = 0;  ///< max_i |d_i| / (1 + |x_i|) of the accepted step
+    int trials = 0;              ///< linear solves this step took
+    bool stalled = false;        ///< damping hit its maximum without an acceptable step
+    bool out_of_trials = false;  ///< the trial budget ran out first
+    double relative_step = 0;    ///< max_i |d_i| / (1 + |x_i|) of the accepted step
   };
 
   /// `blocks`: the free parameter blocks (pointer, size); their order defines the unknowns.
@@ -80,7 +81,9 @@ class NewtonSolver {
   /// One damped Newton step from the last evaluate(): tries (H + lambda D) d = -g until the
   /// cost decreases (gain ratio > 1e-4), increasing lambda otherwise; on success the
   /// parameters hold x + d (not yet re-evaluated).
-  StepResult step();
+  /// At most `max_trials` linear solves (the caller's iteration budget); when they run out
+  /// without an acceptable step, `out_of_trials` is set and the parameters are unchanged.
+  StepResult step(int max_trials = std::numeric_limits<int>::max());
   double lambda() const { return lambda_; }
   /// Full Hessian (numeric curvature of the flagged terms) from the next evaluate() on; costs
   /// one extra Jacobian evaluation per free parameter of each flagged term.

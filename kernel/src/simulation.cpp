@@ -811,9 +811,13 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) + ")";
       return;
     }
-    const NewtonSolver::StepResult step = newton->step();
+    const NewtonSolver::StepResult step = newton->step(options_.max_iterations - run.iterations);
     run.iterations += step.trials;
     lambda = newton->lambda();
+    if (step.out_of_trials) {
+      run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) + ")";
+      return;
+    }
     if (!step.accepted) {
       run.termination = "no step decreases the energy (damping at its maximum)";
       return;
