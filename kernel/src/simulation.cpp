@@ -113,7 +113,7 @@ struct Slider {
   double s_bar = 0, notch = 0;  // scaled
   int side = 0;                 // neighbouring edge used for the normal's blending (+1 / -1)
   // Held at a rod vertex (edge = the vertex, beta = 0, constant): a kink minimum, see
-  // Deployment::hold / release_held.
+  // Deployment::reproject and release_held.
   bool held = false;
   int holds = 0;                             // times it was held
   int last_vertex = -1, last_direction = 0;  // the last rod vertex it crossed, and which way

@@ -41,8 +41,13 @@ std::string shortest(double value) {
 // The kernel names the CLI flags it was written for ("--corners: ...", "--alpha ..."); API
 // callers see the request fields instead.
 std::string to_request_names(const std::string& message) {
-  static const std::pair<std::string, std::string> kFlags[] = {{"--corners", "corners"},
-                                                               {"--alpha", "options.alpha"}};
+  static const std::pair<std::string, std::string> kFlags[] = {
+      {"--corners", "corners"},
+      {"--alpha", "options.alpha"},
+      {"--lamella-width", "options.lamella_width"},
+      {"--lamella-thickness", "options.lamella_thickness"},
+      {"--members-u", "options.members_u"},
+      {"--members-v", "options.members_v"}};
   for (const auto& [flag, path] : kFlags)
     if (message.rfind(flag, 0) == 0) return path + message.substr(flag.size());
   return message;

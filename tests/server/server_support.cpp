@@ -418,6 +418,9 @@ std::vector<BadInput> bad_inputs() {
       "NanLamellaThickness", [&](auto& r) { r.mutable_options()->set_lamella_thickness(nan); },
       "options.lamella_thickness: must be positive");
   design_case(
+      "LamellaWiderThanHalfThePatch", [](auto& r) { r.mutable_options()->set_lamella_width(1e4); },
+      "options.lamella_width: 10000 is outside [1e-6, 0.5] x the longest patch side");
+  design_case(
       "ResolutionTooSmall", [](auto& r) { r.mutable_options()->set_resolution(5); },
       "options.resolution: must be 0 (adaptive) or 8..1000");
   {
