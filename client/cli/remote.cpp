@@ -161,9 +161,9 @@ RemoteClient::RemoteClient(const RemoteOptions& options) : impl_(std::make_uniqu
   if (colon == std::string::npos || colon == 0)
     throw InvalidInput("--server: expected HOST:PORT, got '" + options.server + "'");
   const std::string port = options.server.substr(colon + 1);
-  if (port.empty() || port.size() > 5 ||
-      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) < 1 ||
-      std::stoi(port) > 65535)
+  const bool digits = !port.empty() && port.size() <= 5 &&
+                      port.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits || std::stoi(port) < 1 || std::stoi(port) > 65535)
     throw InvalidInput("--server: '" + port + "' is not a port number (1-65535)");
   // Up to a year: a deadline that gRPC's clock arithmetic does not overflow (NaN fails too).
   if (!(options.timeout >= 0 && options.timeout <= 3.2e7))

@@ -4,18 +4,15 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
-#include <mutex>
 #include <numbers>
 #include <sstream>
-#include <thread>
 
 #include "gridshell/curvature.h"
 #include "gridshell/errors.h"
 #include "gridshell/mesh_topology.h"
+#include "parallel.h"
 
 namespace gridshell {
 namespace {
@@ -98,36 +95,13 @@ CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOp
   progress.report("coverability: member lengths", 0.1);
   // The sources' solves in parallel, each into its own slot (deterministic for any thread count).
   std::vector<double> longest(jobs.size(), 0.0);
-  std::atomic<size_t> next{0};
-  std::atomic<bool> stop{false};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
   const Progress checker = progress.checker();
-  auto worker = [&] {
-    while (!stop) {
-      const size_t job = next++;
-      if (job >= jobs.size()) return;
-      try {
-        progress.check();
-        const auto [v, side] = jobs[job];
-        const std::vector<double> d =
-            solver.distances(SurfacePoint::at_vertex(patch.mesh, v), checker);
-        for (int q : patch.sides[side + 2]) longest[job] = std::max(longest[job], d[q]);
-      } catch (...) {
-        std::lock_guard lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        stop = true;
-      }
-    }
-  };
-  int threads =
-      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, static_cast<int>(jobs.size()));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  detail::parallel_for(jobs.size(), options.threads, [&](size_t job) {
+    progress.check();
+    const auto [v, side] = jobs[job];
+    const std::vector<double> d = solver.distances(SurfacePoint::at_vertex(patch.mesh, v), checker);
+    for (int q : patch.sides[side + 2]) longest[job] = std::max(longest[job], d[q]);
+  });
   for (double d : longest)
     report.longest_member_distance = std::max(report.longest_member_distance, d);
   report.injectivity_ok = report.longest_member_distance < report.injectivity_bound;

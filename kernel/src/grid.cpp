@@ -10,19 +10,16 @@
 #include "gridshell/grid.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <exception>
 #include <map>
-#include <mutex>
 #include <sstream>
-#include <thread>
 #include <unordered_map>
 
 #include "gridshell/errors.h"
 #include "gridshell/mesh_topology.h"
+#include "parallel.h"
 
 namespace gridshell {
 namespace {
@@ -222,50 +219,27 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
     stop_options[f].stop_at_targets = true;
     for (int v : second[f]) stop_options[f].targets.push_back(SurfacePoint::at_vertex(mesh, v));
   }
-  std::atomic<size_t> next{0}, done{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  std::atomic<bool> stop{false};
-  auto worker = [&] {
-    while (!stop) {
-      const size_t job = next++;
-      if (job >= jobs.size()) return;
-      try {
-        progress.check();
-        const auto [f, k] = jobs[job];
-        const Family family = static_cast<Family>(f);
-        const MemberPosition& pos = (*positions[f])[k];
-        Member m;
-        m.family = family;
-        m.index = k + 1;
-        m.u_start = pos.u1;
-        const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
-        const DistanceField field = solver.solve(start, stop_options[f]);
-        m.u_end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
-                             options.length_tolerance, m.index);
-        m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
-        for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
-        m.length = path_length(mesh, m.surface_path);
-        m.planar = {planar_boundary_point(planar, family, 0, m.u_start),
-                    planar_boundary_point(planar, family, 1, m.u_end)};
-        m.planar_length = (m.planar[1] - m.planar[0]).norm();
-        (*families[f])[k + 1] = std::move(m);
-        ++done;
-      } catch (...) {
-        std::lock_guard lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        stop = true;
-      }
-    }
-  };
-  int threads =
-      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::max(1, std::min<int>(threads, static_cast<int>(jobs.size())));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  detail::parallel_for(jobs.size(), options.threads, [&](size_t job) {
+    progress.check();
+    const auto [f, k] = jobs[job];
+    const Family family = static_cast<Family>(f);
+    const MemberPosition& pos = (*positions[f])[k];
+    Member m;
+    m.family = family;
+    m.index = k + 1;
+    m.u_start = pos.u1;
+    const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
+    const DistanceField field = solver.solve(start, stop_options[f]);
+    m.u_end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
+                         options.length_tolerance, m.index);
+    m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
+    for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
+    m.length = path_length(mesh, m.surface_path);
+    m.planar = {planar_boundary_point(planar, family, 0, m.u_start),
+                planar_boundary_point(planar, family, 1, m.u_end)};
+    m.planar_length = (m.planar[1] - m.planar[0]).norm();
+    (*families[f])[k + 1] = std::move(m);
+  });
   progress.report("grid: members", 1.0);
 
   // Crossings. Boundary crossings lie at member ends and follow from the parameters.

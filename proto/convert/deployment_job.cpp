@@ -18,6 +18,9 @@ void require(bool ok, const std::string& field, const std::string& problem) {
 
 bool positive(double v) { return std::isfinite(v) && v > 0; }
 
+/// lo <= value <= hi (false for NaN).
+bool within(double value, double lo, double hi) { return value >= lo && value <= hi; }
+
 }  // namespace
 
 double parse_length_unit(const std::string& unit, const std::string& field) {
@@ -53,10 +56,9 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
     o.set_material(o.material().empty() && overridden ? "custom" : preset.name);
   }
   // 1 kPa (soft foam) to 10 TPa (beyond diamond): outside, energies and stresses overflow.
-  require(positive(o.young_modulus()) && o.young_modulus() >= 1e3 && o.young_modulus() <= 1e13,
-          "young_modulus", "must be a number of pascals between 1e3 and 1e13");
-  require(positive(o.shear_modulus()) && o.shear_modulus() >= 1e3 && o.shear_modulus() <= 1e13,
-          "shear_modulus",
+  require(within(o.young_modulus(), 1e3, 1e13), "young_modulus",
+          "must be a number of pascals between 1e3 and 1e13");
+  require(within(o.shear_modulus(), 1e3, 1e13), "shear_modulus",
           "must be a number of pascals between 1e3 and 1e13; give it with the Young's modulus or "
           "pick a material");
   auto fill = [](double value, double fallback) { return value == 0 ? fallback : value; };
@@ -74,8 +76,8 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
   o.set_reference_extent(fill(o.reference_extent(), defaults.reference_extent));
   o.set_gradient_tolerance(fill(o.gradient_tolerance(), defaults.gradient_tolerance));
   if (o.max_iterations() == 0) o.set_max_iterations(defaults.max_iterations);
-  require(std::isfinite(o.friction_mu()) && o.friction_mu() > 0 && o.friction_mu() <= 100,
-          "friction_mu", "must be a positive number up to 100 (the paper's is 0.1)");
+  require(positive(o.friction_mu()) && o.friction_mu() <= 100, "friction_mu",
+          "must be a positive number up to 100 (the paper's is 0.1)");
   require(positive(o.friction_epsilon()) && o.friction_epsilon() < 0.5, "friction_epsilon",
           "must be in (0, 0.5)");
   for (const auto& [value, name] :
@@ -85,9 +87,8 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
         {o.anchor_direction_weight(), "anchor_direction_weight"},
         {o.notch_limit_weight(), "notch_limit_weight"}})
     require(positive(value) && value <= 1e6, name, "must be a positive number up to 1e6");
-  require(
-      positive(o.reference_extent()) && o.reference_extent() >= 1e-3 && o.reference_extent() <= 1e6,
-      "reference_extent", "must be between 1e-3 and 1e6");
+  require(within(o.reference_extent(), 1e-3, 1e6), "reference_extent",
+          "must be between 1e-3 and 1e6");
   require(positive(o.gradient_tolerance()) && o.gradient_tolerance() <= 1, "gradient_tolerance",
           "must be in (0, 1]");
   require(std::isfinite(o.edges_per_interval()) && o.edges_per_interval() >= 1 &&
@@ -96,10 +97,8 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
   require(o.max_iterations() >= 1 && o.max_iterations() <= 1000000, "max_iterations",
           "must be between 1 and 1000000");
   if (o.unit_in_meters() == 0) o.set_unit_in_meters(parse_length_unit(o.unit()));
-  require(
-      std::isfinite(o.unit_in_meters()) && o.unit_in_meters() >= 0 &&
-          (o.unit_in_meters() == 0 || (o.unit_in_meters() >= 1e-9 && o.unit_in_meters() <= 1e6)),
-      "unit_in_meters", "must be between 1e-9 and 1e6 metres (or 0 for unknown)");
+  require(o.unit_in_meters() == 0 || within(o.unit_in_meters(), 1e-9, 1e6), "unit_in_meters",
+          "must be between 1e-9 and 1e6 metres (or 0 for unknown)");
   return o;
 }
 

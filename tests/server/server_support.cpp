@@ -268,6 +268,18 @@ std::string patch_json(const v1::Mesh& mesh) {
   return to_json(request, false);
 }
 
+/// Adds bad inputs of one request type to `set`: each case edits a copy of `base` and is sent
+/// to `method`.
+template <class Request>
+auto case_adder(std::vector<BadInput>& set, Request base, const char* method) {
+  return [&set, base = std::move(base), method](
+             std::string name, const std::function<void(Request&)>& edit, std::string expected) {
+    Request request = base;
+    edit(request);
+    set.push_back({std::move(name), method, to_json(request, false), std::move(expected)});
+  };
+}
+
 }  // namespace
 
 std::vector<BadInput> bad_inputs() {
@@ -346,12 +358,7 @@ std::vector<BadInput> bad_inputs() {
 
   // Corners and options, on the plane example.
   const v1::DesignRequest base = design_request("plane", 16);
-  auto design_case = [&](std::string name, const std::function<void(v1::DesignRequest&)>& edit,
-                         std::string expected) {
-    v1::DesignRequest request = base;
-    edit(request);
-    set.push_back({std::move(name), "Design", to_json(request, false), std::move(expected)});
-  };
+  const auto design_case = case_adder(set, base, "Design");
   design_case(
       "ThreeCorners", [](auto& r) { r.mutable_corners()->mutable_vertices()->RemoveLast(); },
       "corners.vertices: expected 4 vertex indices, got 3");
@@ -434,40 +441,7 @@ std::vector<BadInput> bad_inputs() {
   v1::SimulateRequest simulate;
   *simulate.mutable_design() = small_design();
   simulate.mutable_options()->set_notches("on");
-  // Geodesic: the mesh checks are shared; the source and the engines are its own.
-  v1::GeodesicRequest geodesic;
-  *geodesic.mutable_mesh() = base.mesh();
-  auto geodesic_case = [&](std::string name, const std::function<void(v1::GeodesicRequest&)>& edit,
-                           std::string expected) {
-    v1::GeodesicRequest request = geodesic;
-    edit(request);
-    set.push_back({std::move(name), "Geodesic", to_json(request, false), std::move(expected)});
-  };
-  geodesic_case(
-      "GeodesicSourceOutOfRange", [](auto& r) { r.set_source(1 << 20); },
-      "source: vertex index 1048576 is out of range");
-  geodesic_case(
-      "GeodesicNegativeSource", [](auto& r) { r.set_source(-1); },
-      "source: vertex index -1 is out of range");
-  geodesic_case(
-      "GeodesicUnknownMethod", [](auto& r) { r.set_method("fastest"); },
-      "method: unknown geodesic method 'fastest'");
-  geodesic_case(
-      "GeodesicUnknownReference", [](auto& r) { r.set_compare("exact"); },
-      "compare: unknown geodesic method 'exact'");
-  geodesic_case(
-      "GeodesicTooManyRepeats", [](auto& r) { r.set_repeat(100000); },
-      "repeat: must be between 1 and 1000");
-  geodesic_case(
-      "GeodesicEmptyMesh", [](auto& r) { r.mutable_mesh()->clear_positions(); },
-      "mesh.positions: empty");
-
-  auto simulate_case = [&](std::string name, const std::function<void(v1::SimulateRequest&)>& edit,
-                           std::string expected) {
-    v1::SimulateRequest request = simulate;
-    edit(request);
-    set.push_back({std::move(name), "Simulate", to_json(request, false), std::move(expected)});
-  };
+  const auto simulate_case = case_adder(set, simulate, "Simulate");
   simulate_case(
       "NoDesign", [](auto& r) { r.clear_design(); }, "design.");
   simulate_case(
@@ -507,15 +481,33 @@ std::vector<BadInput> bad_inputs() {
       },
       "design.members[2].surface");
 
+  // Geodesic: the mesh checks are shared; the source and the engines are its own.
+  v1::GeodesicRequest geodesic;
+  *geodesic.mutable_mesh() = base.mesh();
+  const auto geodesic_case = case_adder(set, geodesic, "Geodesic");
+  geodesic_case(
+      "GeodesicSourceOutOfRange", [](auto& r) { r.set_source(1 << 20); },
+      "source: vertex index 1048576 is out of range");
+  geodesic_case(
+      "GeodesicNegativeSource", [](auto& r) { r.set_source(-1); },
+      "source: vertex index -1 is out of range");
+  geodesic_case(
+      "GeodesicUnknownMethod", [](auto& r) { r.set_method("fastest"); },
+      "method: unknown geodesic method 'fastest'");
+  geodesic_case(
+      "GeodesicUnknownReference", [](auto& r) { r.set_compare("exact"); },
+      "compare: unknown geodesic method 'exact'");
+  geodesic_case(
+      "GeodesicTooManyRepeats", [](auto& r) { r.set_repeat(100000); },
+      "repeat: must be between 1 and 1000");
+  geodesic_case(
+      "GeodesicEmptyMesh", [](auto& r) { r.mutable_mesh()->clear_positions(); },
+      "mesh.positions: empty");
+
   // Run: the design request inside, and the simulation options.
   v1::RunRequest run;
   *run.mutable_design() = base;
-  auto run_case = [&](std::string name, const std::function<void(v1::RunRequest&)>& edit,
-                      std::string expected) {
-    v1::RunRequest request = run;
-    edit(request);
-    set.push_back({std::move(name), "Run", to_json(request, false), std::move(expected)});
-  };
+  const auto run_case = case_adder(set, run, "Run");
   run_case(
       "RunWithoutMesh", [](auto& r) { r.mutable_design()->clear_mesh(); },
       "design.mesh.positions: empty");
