@@ -377,5 +377,67 @@ TEST(DiscreteRod, StrongToWeakBendingEnergyIsTheSquaredAspectRatio) {
   EXPECT_NEAR(bending(strong) / bending(weak), (w / t) * (w / t), 1e-9 * (w / t) * (w / t));
 }
 
+// ---------------------------------------------------------------------------------------------
+// The Newton solver's steps at a barrier.
+
+/// r = weight * log(upper - x): defined for x < upper only.
+struct UpperBarrier {
+  double weight, upper;
+  template <class T>
+  bool operator()(const T* x, T* r) const {
+    if (!(x[0] < T(upper))) return false;
+    r[0] = weight * log(T(upper) - x[0]);
+    return true;
+  }
+};
+/// r = weight * (x - target).
+struct Spring {
+  double weight, target;
+  template <class T>
+  bool operator()(const T* x, T* r) const {
+    r[0] = weight * (x[0] - T(target));
+    return true;
+  }
+};
+
+TEST(NewtonSolver, BarrierCoordinateAtItsBoundDoesNotShortenTheOthersSteps) {
+  // x is pulled towards 2 but lives in x < 1 (a slider reaching the end of its edge); y, on
+  // its own, wants to go to 3. The Newton step takes x past its bound. Holding x at the
+  // fraction to the boundary must leave y its full Newton step (y = 3 up to the damping), not
+  // the 47.5% a uniformly shortened step would give it.
+  double x = 0, y = 0;
+  ceres::AutoDiffCostFunction<UpperBarrier, 1, 1> barrier(new UpperBarrier{0.1, 1.0});
+  ceres::AutoDiffCostFunction<Spring, 1, 1> pull(new Spring{10, 2});
+  ceres::AutoDiffCostFunction<Spring, 1, 1> spring(new Spring{1, 3});
+  std::vector<NewtonSolver::Term> terms(3);
+  terms[0].cost = &barrier;
+  terms[0].parameters = {&x};
+  terms[0].upper = 1.0;
+  terms[0].numeric_curvature = true;  // the exact Hessian near the bound
+  terms[1].cost = &pull;
+  terms[1].parameters = {&x};
+  terms[2].cost = &spring;
+  terms[2].parameters = {&y};
+  NewtonSolver solver({{&x, 1}, {&y, 1}}, terms, {});
+  ASSERT_TRUE(solver.evaluate());
+  const NewtonSolver::StepResult step = solver.step();
+  ASSERT_TRUE(step.accepted);
+  EXPECT_EQ(step.trials, 1);
+  EXPECT_NEAR(y, 3.0, 1e-3);
+  EXPECT_GT(x, 0.9);  // 95% of the way to the bound
+  EXPECT_LT(x, 1.0);
+  // And it converges to the minimum inside the domain (x = 0.99928: barrier and pull balance).
+  solver.set_exact_hessian(true);
+  for (int it = 0; it < 50 && solver.gradient_max_norm() > 1e-10; ++it) {
+    ASSERT_TRUE(solver.evaluate());
+    if (solver.gradient_max_norm() <= 1e-10) break;
+    ASSERT_TRUE(solver.step().accepted);
+  }
+  ASSERT_TRUE(solver.evaluate());
+  EXPECT_LT(solver.gradient_max_norm(), 1e-8);
+  EXPECT_NEAR(y, 3.0, 1e-12);
+  EXPECT_NEAR(x, 0.999277274, 1e-9);
+}
+
 }  // namespace
 }  // namespace gridshell

@@ -1,5 +1,6 @@
 #include "newton_solver.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <atomic>
@@ -10,6 +11,13 @@
 #include <unordered_map>
 
 namespace gridshell {
+namespace {
+/// Fraction to the boundary: a barrier coordinate moves at most this fraction of the way to
+/// the bound of its domain in one step.
+constexpr double kToBoundary = 0.95;
+/// Held steps for at most this many barrier coordinates at once (one solve each).
+constexpr int kMaxHeld = 64;
+}  // namespace
 
 struct NewtonSolver::Impl {
   std::vector<std::pair<double*, int>> blocks;
@@ -289,6 +297,86 @@ void NewtonSolver::write(const Eigen::VectorXd& x) const {
     for (int a = 0; a < size; ++a) pointer[a] = x[k++];
 }
 
+double NewtonSolver::barrier_fraction(const Eigen::VectorXd& d) const {
+  const Impl& m = *impl_;
+  double alpha = 1;
+  for (const Term& term : m.terms) {
+    if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
+    const auto it = m.offset_of.find(term.parameters[0]);
+    if (it == m.offset_of.end()) continue;
+    const double value = *term.parameters[0], step = d[it->second];
+    if (step < 0 && std::isfinite(term.lower))
+      alpha = std::min(alpha, kToBoundary * (value - term.lower) / -step);
+    if (step > 0 && std::isfinite(term.upper))
+      alpha = std::min(alpha, kToBoundary * (term.upper - value) / step);
+  }
+  return alpha;
+}
+
+double NewtonSolver::trust_fraction(const Eigen::VectorXd& d) const {
+  const Impl& m = *impl_;
+  double alpha = 1;
+  for (size_t b = 0, k = 0; b < m.limits.size(); k += m.blocks[b].second, ++b)
+    if (m.limits[b] > 0) {
+      const double longest = d.segment(k, m.blocks[b].second).cwiseAbs().maxCoeff();
+      if (longest > m.limits[b]) alpha = std::min(alpha, m.limits[b] / longest);
+    }
+  return alpha;
+}
+
+bool NewtonSolver::held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) {
+  const Impl& m = *impl_;
+  // The barrier coordinates that d would take (nearly) out of their domain, each with its
+  // step limited to the fraction to the boundary (the tightest of its terms').
+  std::vector<std::pair<int, double>> held;
+  for (const Term& term : m.terms) {
+    if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
+    const auto it = m.offset_of.find(term.parameters[0]);
+    if (it == m.offset_of.end()) continue;
+    const int i = it->second;
+    const double value = *term.parameters[0];
+    double limit = d[i];
+    if (d[i] < 0 && std::isfinite(term.lower))
+      limit = std::max(limit, -kToBoundary * (value - term.lower));
+    if (d[i] > 0 && std::isfinite(term.upper))
+      limit = std::min(limit, kToBoundary * (term.upper - value));
+    if (limit == d[i]) continue;
+    const auto same = std::find_if(held.begin(), held.end(), [&](auto& h) { return h.first == i; });
+    if (same == held.end())
+      held.emplace_back(i, limit);
+    else if (std::abs(limit) < std::abs(same->second))
+      same->second = limit;
+  }
+  const int k = static_cast<int>(held.size());
+  if (k == 0 || k > kMaxHeld) return false;
+  // Minimize the damped model g.p + p.A.p/2 (A = H + lambda D, factorized) subject to
+  // p_i = limit_i for the held i: p = d + Y mu with Y = A^-1 E (E: their unit vectors, one
+  // solve each with the factorization at hand) and mu from E^T Y mu = limit - E^T d (E^T Y is
+  // a principal submatrix of A^-1, positive definite).
+  Eigen::MatrixXd Y(d.size(), k), S(k, k);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(d.size()), r(k);
+  for (int j = 0; j < k; ++j) {
+    e[held[j].first] = 1;
+    Y.col(j) = m.cholesky.solve(e);
+    e[held[j].first] = 0;
+  }
+  for (int j = 0; j < k; ++j) {
+    for (int l = 0; l < k; ++l) S(j, l) = Y(held[j].first, l);
+    r[j] = held[j].second - d[held[j].first];
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+  if (ldlt.info() != Eigen::Success) return false;
+  p = d + Y * ldlt.solve(r);
+  if (!p.allFinite()) return false;
+  // Other barrier coordinates may now go (nearly) out of their domains in turn, and the trust
+  // radii apply: shorten the whole step for those (the held ones are at their fraction
+  // already: ~1 for them).
+  const double trust = trust_fraction(p);
+  p_untrimmed_ = trust >= 1;
+  p *= std::min(barrier_fraction(p), trust);
+  return true;
+}
+
 NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
   Impl& m = *impl_;
   StepResult result;
@@ -319,27 +407,11 @@ NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
       continue;
     }
     const Eigen::VectorXd d = m.cholesky.solve(-m.gradient);
-    // The step taken is alpha d: the fraction to the boundary of every barrier's domain, and
-    // the trust radii.
-    double alpha = 1;
-    for (const Term& term : m.terms) {
-      if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
-      const auto it = m.offset_of.find(term.parameters[0]);
-      if (it == m.offset_of.end()) continue;
-      const double value = *term.parameters[0], step = d[it->second];
-      if (step < 0 && std::isfinite(term.lower))
-        alpha = std::min(alpha, 0.95 * (value - term.lower) / -step);
-      if (step > 0 && std::isfinite(term.upper))
-        alpha = std::min(alpha, 0.95 * (term.upper - value) / step);
-    }
-    // Trust radii: shorten the step along the same direction (no new factorization).
-    double alpha_trust = 1;
-    for (size_t b = 0, k = 0; b < m.limits.size(); k += m.blocks[b].second, ++b)
-      if (m.limits[b] > 0) {
-        const double longest = d.segment(k, m.blocks[b].second).cwiseAbs().maxCoeff();
-        if (longest > m.limits[b]) alpha_trust = std::min(alpha_trust, m.limits[b] / longest);
-      }
-    alpha = std::min(alpha, alpha_trust);
+    // The fraction to the boundary of every barrier's domain (uniform: the step alpha d) and
+    // the trust radii (alpha_trust d: shorten the step along the same direction).
+    const double alpha_barrier = barrier_fraction(d);
+    const double alpha_trust = trust_fraction(d);
+    const double alpha = std::min(alpha_barrier, alpha_trust);
     const Eigen::VectorXd Hd = m.hessian.selfadjointView<Eigen::Upper>() * d;
     const double gd = m.gradient.dot(d), dHd = d.dot(Hd);
     if (!(gd < 0) || !d.allFinite()) {  // not a descent direction: damp more
@@ -347,31 +419,53 @@ NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
       nu_ *= 2;
       continue;
     }
-    // Try the (shortened) step, then back off along it twice before damping more: a cost
-    // evaluation is far cheaper than another factorization.
     const double rounding = 1e-13 * std::abs(cost_);
-    double step = std::max(alpha, 0.0);
-    for (int attempt = 0; attempt < 3; ++attempt, step *= 0.5) {
-      const double predicted = -(step * gd + 0.5 * step * step * dHd);
+    // The gain ratio of the trial x0 + p against the quadratic model (gp = g.p, pHp = p.H.p),
+    // or -1 if the cost cannot be evaluated there or the model predicts no decrease.
+    const auto gain = [&](const Eigen::VectorXd& p, double gp, double pHp) {
+      const double predicted = -(gp + 0.5 * pHp);
       double trial = 0;
-      write(x0 + step * d);
-      const bool ok = predicted > 0 && evaluate_cost(&trial);
-      double rho = ok ? (cost_ - trial) / predicted : -1;
+      write(x0 + p);
+      if (!(predicted > 0) || !evaluate_cost(&trial)) return -1.0;
       // Near the minimum the predicted decrease drops below the cost's rounding: accept a step
       // that does not raise the cost beyond rounding and let the gradient decide convergence.
-      if (ok && predicted < rounding && trial <= cost_ + rounding) rho = 1;
-      if (ok && rho > 1e-4) {
-        // Less damping when the model predicted the first trial well. A step shortened by the
-        // fraction to a barrier's boundary still validates the model (it is the same quadratic
-        // model along d); one shortened by a trust radius or by backtracking does not.
-        if (attempt == 0 && alpha_trust >= 1)
-          lambda_ = std::max(options_.min_lambda,
-                             lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
-        nu_ = 2;
-        result.accepted = true;
-        result.relative_step = (step * d.array().abs() / (1 + x0.array().abs())).maxCoeff();
-        return result;
+      if (predicted < rounding && trial <= cost_ + rounding) return 1.0;
+      return (cost_ - trial) / predicted;
+    };
+    // Less damping when the model predicted a first trial well. A step shortened by the
+    // fraction to a barrier's boundary still validates the model (the same quadratic model
+    // along the direction tried); one shortened by a trust radius or by backtracking does not.
+    const auto accept = [&](const Eigen::VectorXd& p, double rho, bool validates_model) {
+      if (validates_model)
+        lambda_ = std::max(options_.min_lambda,
+                           lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)));
+      nu_ = 2;
+      result.accepted = true;
+      result.relative_step = (p.array().abs() / (1 + x0.array().abs())).maxCoeff();
+      return result;
+    };
+    constexpr double kMinGain = 1e-4;
+    if (alpha_barrier < alpha_trust) {
+      // A barrier coordinate (a sliding connection reaching the end of its edge) binds: first
+      // the step that holds only those coordinates back, the rest taking the minimizer of the
+      // same damped model, then backtracking along it once.
+      Eigen::VectorXd p;
+      if (held_step(d, p)) {
+        const Eigen::VectorXd Hp = m.hessian.selfadjointView<Eigen::Upper>() * p;
+        const double gp = m.gradient.dot(p), pHp = p.dot(Hp);
+        double scale = 1;
+        for (int attempt = 0; attempt < 2; ++attempt, scale *= 0.5) {
+          const double rho = gain(scale * p, scale * gp, scale * scale * pHp);
+          if (rho > kMinGain) return accept(scale * p, rho, attempt == 0 && p_untrimmed_);
+        }
       }
+    }
+    // The (shortened) step along d, then back off along it twice before damping more: a cost
+    // evaluation is far cheaper than another factorization.
+    double step = std::max(alpha, 0.0);
+    for (int attempt = 0; attempt < 3; ++attempt, step *= 0.5) {
+      const double rho = gain(step * d, step * gd, step * step * dHd);
+      if (rho > kMinGain) return accept(step * d, rho, attempt == 0 && alpha_trust >= 1);
     }
     write(x0);
     lambda_ = std::max(lambda_ * nu_, 1e-8);

@@ -39,9 +39,11 @@ class NewtonSolver {
     /// Without `curvature`: in exact-Hessian mode, take sum_i r_i Hess(r_i) by forward
     /// differences of the term's exact Jacobian. Otherwise the term contributes J^T J only.
     bool numeric_curvature = false;
-    /// Domain of a barrier term's first parameter (a block of size 1): a step is shortened so
-    /// that the parameter keeps 5% of its distance to these bounds (fraction to the boundary,
-    /// as in interior-point methods) instead of being rejected.
+    /// Domain of a barrier term's first parameter (a block of size 1): the parameter keeps 5%
+    /// of its distance to these bounds in a step (fraction to the boundary, as in
+    /// interior-point methods) instead of the step being rejected. First only the parameters
+    /// that would go further are held there and the rest take the minimizer of the damped
+    /// model with those fixed; if that trial fails, the whole step is shortened uniformly.
     double lower = -std::numeric_limits<double>::infinity();
     double upper = std::numeric_limits<double>::infinity();
   };
@@ -97,6 +99,15 @@ class NewtonSolver {
 
  private:
   bool evaluate_cost(double* cost) const;
+  /// Largest fraction of the step d that keeps every barrier coordinate within the fraction to
+  /// the boundary of its domain (at most 1).
+  double barrier_fraction(const Eigen::VectorXd& d) const;
+  /// Largest fraction of the step d within every block's trust radius (at most 1).
+  double trust_fraction(const Eigen::VectorXd& d) const;
+  /// The step that holds the barrier coordinates d would take out of their domains at their
+  /// fraction to the boundary and minimizes the damped model over the rest (cut to the barriers
+  /// and trust radii). False if no coordinate is held or the small system fails.
+  bool held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p);
   void write(const Eigen::VectorXd& x) const;
   Eigen::VectorXd read() const;
 
@@ -105,6 +116,7 @@ class NewtonSolver {
   Options options_;
   double cost_ = 0;
   double lambda_ = 1e-4, nu_ = 2;
+  bool p_untrimmed_ = false;  ///< the last held step was not cut by a trust radius
 };
 
 }  // namespace gridshell
