@@ -762,6 +762,11 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
   // Gauss-Newton plus geometric stiffness far from the equilibrium (robust, cheap); the full
   // Hessian close to it (quadratic convergence along the soft modes).
   bool exact = false;
+  bool sliding = false;
+  for (const Joint& joint : joints_)
+    for (const Slider& s : joint.end) sliding = sliding || s.sliding;
+  const double exact_below =
+      sliding ? options_.exact_hessian_below : options_.exact_hessian_below_fixed;
   while (true) {
     if (rebuild) {
       newton.reset();
@@ -792,7 +797,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
         std::log(first / std::max(run.gradient_norm, tolerance)) / std::log(first / tolerance);
     best = std::clamp(std::max(best, fraction), 0.0, 0.99);
     progress.report(stage, best);
-    if (!exact && run.gradient_norm < options_.exact_hessian_below) {
+    if (!exact && run.gradient_norm < exact_below) {
       exact = true;
       newton->set_exact_hessian(true);
       if (!newton->evaluate())
