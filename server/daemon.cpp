@@ -1,5 +1,6 @@
 #include "daemon.h"
 
+#include <grpc/support/log.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -10,9 +11,11 @@
 #include <openssl/x509.h>
 
 #include <atomic>
+#include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <vector>
 
 #include "auth.h"
 #include "gridshell/errors.h"
@@ -22,6 +25,37 @@
 
 namespace gridshell::server {
 namespace {
+
+// gRPC's own log lines (a failed bind, a malformed connection) go into the daemon's JSON log
+// as {"event": "grpc", ...} instead of raw text between its lines; the last error is kept per
+// thread to name the reason when the listening port cannot be opened.
+std::mutex grpc_log_mutex;
+/// The started daemons' log functions (guarded by grpc_log_mutex); gRPC's lines go to the most
+/// recently started one still running.
+std::vector<std::pair<const void*, std::function<void(nlohmann::json)>>> grpc_log_sinks;
+thread_local std::string last_grpc_error;
+
+void route_grpc_log(gpr_log_func_args* args) {
+  const bool error = args->severity == GPR_LOG_SEVERITY_ERROR;
+  if (error) last_grpc_error = args->message ? args->message : "";
+  std::lock_guard lock(grpc_log_mutex);
+  if (grpc_log_sinks.empty()) return;
+  grpc_log_sinks.back().second(
+      {{"event", "grpc"},
+       {"severity", error ? "error" : (args->severity == GPR_LOG_SEVERITY_INFO ? "info" : "debug")},
+       {"message", args->message ? args->message : ""},
+       {"source", std::string(args->file ? args->file : "") + ":" + std::to_string(args->line)}});
+}
+
+/// The operating system's reason in a gRPC error text (`os_error:"Address already in use"`).
+std::string os_error_in(const std::string& text) {
+  const std::string key = "os_error:\"";
+  const std::size_t at = text.find(key);
+  if (at == std::string::npos) return {};
+  const std::size_t end = text.find('"', at + key.size());
+  return end == std::string::npos ? std::string{}
+                                  : text.substr(at + key.size(), end - at - key.size());
+}
 
 constexpr const char* kServiceName = "gridshell.v1.Gridshell";
 
@@ -162,7 +196,12 @@ void Daemon::start() {
   std::call_once(plugins, [] {
     grpc::EnableDefaultHealthCheckService(true);
     grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+    gpr_set_log_function(route_grpc_log);
   });
+  {
+    std::lock_guard lock(grpc_log_mutex);
+    grpc_log_sinks.emplace_back(&d, [&d](nlohmann::json line) { d.log(std::move(line)); });
+  }
   std::shared_ptr<grpc::ServerCredentials> credentials;
   if (!o.tls_cert.empty()) {
     grpc::SslServerCredentialsOptions ssl;
@@ -188,9 +227,13 @@ void Daemon::start() {
   builder.SetMaxReceiveMessageSize(max_message);
   builder.SetMaxSendMessageSize(max_message);
   builder.RegisterService(d.service.get());
+  last_grpc_error.clear();
   d.server = builder.BuildAndStart();
-  if (!d.server || d.grpc_port == 0)
-    throw InvalidInput("--listen: cannot listen on " + o.listen + " (address in use?)");
+  if (!d.server || d.grpc_port == 0) {
+    const std::string reason = os_error_in(last_grpc_error);
+    throw InvalidInput("--listen: cannot listen on " + o.listen + ": " +
+                       (reason.empty() ? "the address cannot be bound" : reason));
+  }
 
   if (!o.http.empty()) {
     HttpOptions http;
@@ -250,6 +293,10 @@ void Daemon::shutdown() {
       std::chrono::milliseconds(static_cast<long long>(d.options.shutdown_grace_seconds * 1000)));
   if (d.server) d.server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   if (d.gateway) d.gateway->stop();
+  {
+    std::lock_guard log_lock(grpc_log_mutex);
+    std::erase_if(grpc_log_sinks, [&d](const auto& sink) { return sink.first == &d; });
+  }
   const JobQueue::Stats stats = d.queue->stats();
   d.log({{"event", "stopped"},
          {"succeeded", stats.succeeded},
