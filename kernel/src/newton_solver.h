@@ -55,7 +55,7 @@ class NewtonSolver {
     int threads = 1;
     /// Exact-Hessian mode: recompute the numeric curvature every this many evaluations and
     /// reuse it in between (it varies slowly; a lagged Hessian keeps fast convergence).
-    int curvature_refresh = 3;
+    int curvature_refresh = 8;
   };
 
   struct StepResult {
