@@ -161,9 +161,9 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
 
   // Unknowns are numbered block by block, the blocks in a fill-reducing order: approximate
   // minimum degree on the graph of blocks that share a term (a block's unknowns stay
-  // consecutive, and the graph is 2-3x smaller than the unknowns'; the factor's fill is the
-  // same as with AMD on the unknowns). The Hessian is assembled in its factorization order and
-  // the Cholesky needs no permutation.
+  // consecutive, and the graph is 2-3x smaller than the unknowns'; the factor's fill was within
+  // 1.5% of AMD on the unknowns on the examples). The Hessian is assembled in its factorization
+  // order and the Cholesky needs no permutation.
   {
     std::vector<Eigen::Triplet<double>> graph;
     for (const std::vector<int>& tb : term_blocks)
