@@ -80,22 +80,23 @@ void check_address(const std::string& address, const char* option) {
 /// Checks that `cert_pem` holds a PEM certificate chain and `key_pem` the private key of its
 /// first certificate, so that the daemon never starts with TLS it cannot use (an empty or
 /// wrong file must not silently mean "no TLS", nor fail later as "cannot listen").
-void check_tls_pair(const std::string& cert_pem, const std::string& key_pem) {
-  auto bio = [](const std::string& text) {
-    return std::unique_ptr<BIO, decltype(&BIO_free)>(
-        BIO_new_mem_buf(text.data(), static_cast<int>(text.size())), &BIO_free);
-  };
-  auto cert_bio = bio(cert_pem);
-  std::unique_ptr<X509, decltype(&X509_free)> cert(
-      PEM_read_bio_X509(cert_bio.get(), nullptr, nullptr, nullptr), &X509_free);
+/// The first PEM object of type T in `text` (read by `read`, owned with `free`), or null; the
+/// OpenSSL error queue is left empty either way.
+template <class T, class Read, class Free>
+std::unique_ptr<T, Free> read_pem(const std::string& text, Read read, Free free) {
+  const std::unique_ptr<BIO, decltype(&BIO_free)> bio(
+      BIO_new_mem_buf(text.data(), static_cast<int>(text.size())), &BIO_free);
+  std::unique_ptr<T, Free> object(bio ? read(bio.get(), nullptr, nullptr, nullptr) : nullptr, free);
   ERR_clear_error();
+  return object;
+}
+
+void check_tls_pair(const std::string& cert_pem, const std::string& key_pem) {
+  const auto cert = read_pem<X509>(cert_pem, PEM_read_bio_X509, X509_free);
   if (!cert)
     throw InvalidInput(
         "--tls-cert: no PEM certificate in the file (expected -----BEGIN CERTIFICATE-----)");
-  auto key_bio = bio(key_pem);
-  std::unique_ptr<EVP_PKEY, decltype(&EVP_PKEY_free)> key(
-      PEM_read_bio_PrivateKey(key_bio.get(), nullptr, nullptr, nullptr), &EVP_PKEY_free);
-  ERR_clear_error();
+  const auto key = read_pem<EVP_PKEY>(key_pem, PEM_read_bio_PrivateKey, EVP_PKEY_free);
   if (!key)
     throw InvalidInput(
         "--tls-key: no unencrypted PEM private key in the file (expected -----BEGIN ... PRIVATE "

@@ -459,9 +459,9 @@ struct Coupling {
 };
 
 TEST(NewtonSolver, OneUndampedStepSolvesAQuadraticWhateverTheBlockOrder) {
-  // Blocks of sizes 3, 1, 2, 3, 1 coupled in overlapping groups (a block repeated in no term,
-  // one block in three terms): the solver numbers the unknowns in its own fill-reducing order,
-  // so a wrong mapping of blocks, pattern or local Hessians would show as a wrong step.
+  // Blocks of sizes 3, 1, 2, 3, 1 coupled in overlapping groups of one to three blocks (most
+  // blocks in three terms): the solver numbers the unknowns in its own fill-reducing order, so
+  // a wrong mapping of blocks, pattern or local Hessians would show as a wrong step.
   std::mt19937 rng(7);
   std::normal_distribution<double> n(0, 1);
   const std::vector<int> sizes{3, 1, 2, 3, 1};

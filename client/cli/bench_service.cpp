@@ -24,6 +24,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/errors.h"
@@ -167,7 +168,7 @@ Level run_level(const std::string& address, const v1::DesignRequest& request, in
 
 }  // namespace
 
-int bench_service(const std::string& out, bool no_write, int repeats, SectionWriter write_section) {
+int bench_service(const std::string& out, bool no_write, int repeats) {
   const std::string dir =
       (fs::temp_directory_path() / ("gridshell-bench-" + std::to_string(getpid()))).string();
   fs::create_directories(dir);
@@ -347,11 +348,7 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
     table << line;
   }
   table << "\nCommand: `gridshell bench service --repeats " << rounds << "`\n";
-  std::cout << table.str();
-  if (!no_write) {
-    write_section(out, "service", table.str());
-    std::cerr << "wrote " << out << "\n";
-  }
+  publish_section(out, "service", table.str(), no_write);
   std::error_code ignored;
   fs::remove_all(dir, ignored);
   return 0;
@@ -359,7 +356,7 @@ int bench_service(const std::string& out, bool no_write, int repeats, SectionWri
 
 #else
 
-int bench_service(const std::string&, bool, int, SectionWriter) {
+int bench_service(const std::string&, bool, int) {
   throw InvalidInput(
       "bench service: this gridshell was built without gRPC "
       "(GRIDSHELL_BUILD_SERVER=OFF)");

@@ -105,11 +105,7 @@ int bench_simulate(int repeats, const std::string& out, bool no_write) {
     std::cerr << buffer;
   }
   table << "\nCommand: `gridshell bench simulate --repeats " << repeats << "`\n";
-  std::cout << table.str();
-  if (!no_write) {
-    write_section(out, "simulate", table.str());
-    std::cerr << "wrote " << out << "\n";
-  }
+  publish_section(out, "simulate", table.str(), no_write);
   return 0;
 }
 
@@ -161,11 +157,7 @@ int bench_resolution(const std::vector<double>& edges, int repeats, const std::s
   table << "\nCommand: `gridshell bench resolution --edges";
   for (size_t i = 0; i < edges.size(); ++i) table << (i ? "," : " ") << edges[i];
   table << " --repeats " << repeats << "`\n";
-  std::cout << table.str();
-  if (!no_write) {
-    write_section(out, "resolution", table.str());
-    std::cerr << "wrote " << out << "\n";
-  }
+  publish_section(out, "resolution", table.str(), no_write);
   return 0;
 }
 

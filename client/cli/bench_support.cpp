@@ -3,6 +3,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "gridshell/mesh_io.h"
@@ -45,6 +46,14 @@ void write_section(const std::string& path, const std::string& name, const std::
   else
     text += "\n" + section + "\n";
   write_file_atomically(path, text);
+}
+
+void publish_section(const std::string& path, const std::string& name, const std::string& table,
+                     bool no_write) {
+  std::cout << table;
+  if (no_write) return;
+  write_section(path, name, table);
+  std::cerr << "wrote " << path << "\n";
 }
 
 }  // namespace gridshell::cli

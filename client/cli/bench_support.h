@@ -13,6 +13,10 @@ std::string cpu_name();
 std::string today();
 /// Replaces the text between `<!-- bench NAME begin/end -->` in the file (or appends it).
 void write_section(const std::string& path, const std::string& name, const std::string& body);
+/// Prints a benchmark's table on stdout and, unless `no_write`, writes it as section `name` of
+/// the file `path` (saying so on stderr).
+void publish_section(const std::string& path, const std::string& name, const std::string& table,
+                     bool no_write);
 
 /// `gridshell bench simulate`: the seven paper-like examples designed with default options and
 /// simulated without and with notches, `repeats` times each; medians next to Table 1.

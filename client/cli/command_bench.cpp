@@ -178,11 +178,7 @@ int bench_geodesic(const BenchArguments& args) {
   table << load_line(load_start);
   table << "\nCommand: `gridshell bench geodesic --sources " << args.sources << " --cgal-sources "
         << args.cgal_sources << "`\n";
-  std::cout << table.str();
-  if (!args.no_write) {
-    write_section(args.out, "geodesic", table.str());
-    std::cerr << "wrote " << args.out << "\n";
-  }
+  publish_section(args.out, "geodesic", table.str(), args.no_write);
   return 0;
 }
 
@@ -255,11 +251,7 @@ int bench_design(const BenchArguments& args) {
   }
   table << load_line(load_start);
   table << "\nCommand: `gridshell bench design --repeats " << args.repeats << "`\n";
-  std::cout << table.str();
-  if (!args.no_write) {
-    write_section(args.out, "design", table.str());
-    std::cerr << "wrote " << args.out << "\n";
-  }
+  publish_section(args.out, "design", table.str(), args.no_write);
   return 0;
 }
 
@@ -302,8 +294,7 @@ Command add_bench_command(CLI::App& app) {
         if (!(e >= 1 && e <= 64)) throw InvalidInput("--edges: each must be between 1 and 64");
       return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
     }
-    if (args->what == "service")
-      return bench_service(args->out, args->no_write, args->repeats, write_section);
+    if (args->what == "service") return bench_service(args->out, args->no_write, args->repeats);
     return args->what == "design" ? bench_design(*args) : bench_geodesic(*args);
   };
 }

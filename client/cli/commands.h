@@ -73,9 +73,7 @@ void print_deployment_summary(const v1::Deployment& deployment);
 Command add_health_command(CLI::App& app);
 
 /// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client
-/// count; `write_section` replaces a marked section of the benchmarks file.
-using SectionWriter = void (*)(const std::string& path, const std::string& name,
-                               const std::string& body);
-int bench_service(const std::string& out, bool no_write, int repeats, SectionWriter write_section);
+/// count; the table goes to section "service" of `out`.
+int bench_service(const std::string& out, bool no_write, int repeats);
 
 }  // namespace gridshell::cli

@@ -245,9 +245,9 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
       for (size_t q = 0; q < sizes.size(); ++q) {
         const int A = term_blocks[t][p], B = term_blocks[t][q];
         if (A < 0 || B < 0 || m.block_offset[A] > m.block_offset[B]) continue;
-        // Each unordered pair of unknowns once: the entry (row, col) with row <= col, taken
-        // from the local (p, q) with row < col, or the first of equal locals when the same
-        // block repeats in the term.
+        // Each local entry that maps to an upper entry (row <= col) adds to it; a diagonal
+        // entry only from its own local diagonal (as when a block repeats in the term: its
+        // off-diagonal local copies of a diagonal entry are not counted twice).
         const bool same = A == B;
         // The rows of block A in B's columns start here (relative to each column's start).
         int start = rows_above[B];
@@ -369,19 +369,35 @@ void NewtonSolver::write(const Eigen::VectorXd& x) const {
     for (int a = 0; a < m.blocks[b].second; ++a) m.blocks[b].first[a] = x[m.block_offset[b] + a];
 }
 
-double NewtonSolver::barrier_fraction(const Eigen::VectorXd& d) const {
+std::vector<std::pair<int, double>> NewtonSolver::barrier_limits(const Eigen::VectorXd& d) const {
   const Impl& m = *impl_;
-  double alpha = 1;
+  std::vector<std::pair<int, double>> limits;
   for (const Term& term : m.terms) {
     if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
     const auto it = m.offset_of.find(term.parameters[0]);
     if (it == m.offset_of.end()) continue;
-    const double value = *term.parameters[0], step = d[it->second];
-    if (step < 0 && std::isfinite(term.lower))
-      alpha = std::min(alpha, kToBoundary * (value - term.lower) / -step);
-    if (step > 0 && std::isfinite(term.upper))
-      alpha = std::min(alpha, kToBoundary * (term.upper - value) / step);
+    const int i = it->second;
+    const double value = *term.parameters[0];
+    double limit = d[i];
+    if (d[i] < 0 && std::isfinite(term.lower))
+      limit = std::max(limit, -kToBoundary * (value - term.lower));
+    if (d[i] > 0 && std::isfinite(term.upper))
+      limit = std::min(limit, kToBoundary * (term.upper - value));
+    if (limit == d[i]) continue;
+    // A coordinate in several barrier terms (friction and notch limit): the tightest.
+    const auto same =
+        std::find_if(limits.begin(), limits.end(), [&](const auto& l) { return l.first == i; });
+    if (same == limits.end())
+      limits.emplace_back(i, limit);
+    else if (std::abs(limit) < std::abs(same->second))
+      same->second = limit;
   }
+  return limits;
+}
+
+double NewtonSolver::barrier_fraction(const Eigen::VectorXd& d) const {
+  double alpha = 1;
+  for (const auto& [i, limit] : barrier_limits(d)) alpha = std::min(alpha, limit / d[i]);
   return alpha;
 }
 
@@ -396,29 +412,9 @@ double NewtonSolver::trust_fraction(const Eigen::VectorXd& d) const {
   return alpha;
 }
 
-bool NewtonSolver::held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) {
+bool NewtonSolver::held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) const {
   const Impl& m = *impl_;
-  // The barrier coordinates that d would take (nearly) out of their domain, each with its
-  // step limited to the fraction to the boundary (the tightest of its terms').
-  std::vector<std::pair<int, double>> held;
-  for (const Term& term : m.terms) {
-    if (!std::isfinite(term.lower) && !std::isfinite(term.upper)) continue;
-    const auto it = m.offset_of.find(term.parameters[0]);
-    if (it == m.offset_of.end()) continue;
-    const int i = it->second;
-    const double value = *term.parameters[0];
-    double limit = d[i];
-    if (d[i] < 0 && std::isfinite(term.lower))
-      limit = std::max(limit, -kToBoundary * (value - term.lower));
-    if (d[i] > 0 && std::isfinite(term.upper))
-      limit = std::min(limit, kToBoundary * (term.upper - value));
-    if (limit == d[i]) continue;
-    const auto same = std::find_if(held.begin(), held.end(), [&](auto& h) { return h.first == i; });
-    if (same == held.end())
-      held.emplace_back(i, limit);
-    else if (std::abs(limit) < std::abs(same->second))
-      same->second = limit;
-  }
+  const std::vector<std::pair<int, double>> held = barrier_limits(d);
   const int k = static_cast<int>(held.size());
   if (k == 0 || k > kMaxHeld) return false;
   // Minimize the damped model g.p + p.A.p/2 (A = H + lambda D, factorized) subject to
@@ -439,14 +435,7 @@ bool NewtonSolver::held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) {
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
   if (ldlt.info() != Eigen::Success) return false;
   p = d + Y * ldlt.solve(r);
-  if (!p.allFinite()) return false;
-  // Other barrier coordinates may now go (nearly) out of their domains in turn, and the trust
-  // radii apply: shorten the whole step for those (the held ones are at their fraction
-  // already: ~1 for them).
-  const double trust = trust_fraction(p);
-  p_untrimmed_ = trust >= 1;
-  p *= std::min(barrier_fraction(p), trust);
-  return true;
+  return p.allFinite();
 }
 
 NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
@@ -523,12 +512,16 @@ NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
       // same damped model, then backtracking along it once.
       Eigen::VectorXd p;
       if (held_step(d, p)) {
+        // Other barrier coordinates may now go (nearly) out of their domains in turn (the held
+        // ones are at their fraction: ~1 for them), and the trust radii apply.
+        const double p_trust = trust_fraction(p);
+        p *= std::min(barrier_fraction(p), p_trust);
         const Eigen::VectorXd Hp = m.hessian.selfadjointView<Eigen::Upper>() * p;
         const double gp = m.gradient.dot(p), pHp = p.dot(Hp);
         double scale = 1;
         for (int attempt = 0; attempt < 2; ++attempt, scale *= 0.5) {
           const double rho = gain(scale * p, scale * gp, scale * scale * pHp);
-          if (rho > kMinGain) return accept(scale * p, rho, attempt == 0 && p_untrimmed_);
+          if (rho > kMinGain) return accept(scale * p, rho, attempt == 0 && p_trust >= 1);
         }
       }
     }

@@ -99,15 +99,18 @@ class NewtonSolver {
 
  private:
   bool evaluate_cost(double* cost) const;
+  /// The barrier coordinates that the step d would take beyond the fraction to the boundary of
+  /// their domain, each with the step limited to that fraction (unknown index, limited step).
+  std::vector<std::pair<int, double>> barrier_limits(const Eigen::VectorXd& d) const;
   /// Largest fraction of the step d that keeps every barrier coordinate within the fraction to
   /// the boundary of its domain (at most 1).
   double barrier_fraction(const Eigen::VectorXd& d) const;
   /// Largest fraction of the step d within every block's trust radius (at most 1).
   double trust_fraction(const Eigen::VectorXd& d) const;
-  /// The step that holds the barrier coordinates d would take out of their domains at their
-  /// fraction to the boundary and minimizes the damped model over the rest (cut to the barriers
-  /// and trust radii). False if no coordinate is held or the small system fails.
-  bool held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p);
+  /// The step that holds the coordinates of barrier_limits(d) at their limits and minimizes the
+  /// damped model over the rest. False if none is held, too many are, or the small system
+  /// fails.
+  bool held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) const;
   void write(const Eigen::VectorXd& x) const;
   Eigen::VectorXd read() const;
 
@@ -116,7 +119,6 @@ class NewtonSolver {
   Options options_;
   double cost_ = 0;
   double lambda_ = 1e-4, nu_ = 2;
-  bool p_untrimmed_ = false;  ///< the last held step was not cut by a trust radius
 };
 
 }  // namespace gridshell

@@ -13,13 +13,13 @@ using Vec3 = Eigen::Vector3d;
 /// Three vertex indices of a triangle, counter-clockwise seen from the side the normal points to.
 using Face = std::array<int, 3>;
 
-/// A triangle mesh as plain data: #V vertex positions and #F triangles indexing them.
-/// Lengths are in the mesh's own units. The kernel never keeps a mesh in global state.
 /// Largest coordinate magnitude accepted in meshes and points. gridshell works in double
 /// precision with tolerances relative to the model's size; beyond this, squared distances and
 /// areas lose their meaning long before they overflow (at ~1e154).
 constexpr double kMaxCoordinate = 1e15;
 
+/// A triangle mesh as plain data: #V vertex positions and #F triangles indexing them.
+/// Lengths are in the mesh's own units. The kernel never keeps a mesh in global state.
 struct TriangleMesh {
   std::vector<Vec3> vertices;  ///< #V positions
   std::vector<Face> faces;     ///< #F triangles, indices into `vertices`
