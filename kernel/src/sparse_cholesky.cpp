@@ -1,0 +1,316 @@
+#include "sparse_cholesky.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace gridshell {
+
+void BlockCholesky::analyze(const Eigen::SparseMatrix<double>& upper,
+                            const std::vector<int>& block_sizes) {
+  const int n = static_cast<int>(upper.cols());
+  const int* ap = upper.outerIndexPtr();
+  const int* ai = upper.innerIndexPtr();
+  n_ = n;
+  ok_ = false;
+  start_.clear();
+  size_.clear();
+  int at = 0;
+  for (int size : block_sizes)
+    for (int left = size; left > 0; left -= kMaxBlock) {
+      start_.push_back(at);
+      size_.push_back(std::min(left, kMaxBlock));
+      at += size_.back();
+    }
+  if (at != n) throw std::invalid_argument("BlockCholesky: block sizes do not sum to the size");
+  const int nb = blocks_ = static_cast<int>(start_.size());
+  block_of_.resize(n);
+  for (int b = 0; b < nb; ++b)
+    for (int j = 0; j < size_[b]; ++j) block_of_[start_[b] + j] = b;
+  // A's block pattern above the diagonal block.
+  std::vector<int> flag(nb, -1);
+  pattern_p_.assign(nb + 1, 0);
+  pattern_i_.clear();
+  for (int K = 0; K < nb; ++K) {
+    flag[K] = K;
+    for (int c = start_[K]; c < start_[K] + size_[K]; ++c)
+      for (int p = ap[c]; p < ap[c + 1]; ++p) {
+        const int I = block_of_[ai[p]];
+        if (flag[I] != K) {
+          flag[I] = K;
+          pattern_i_.push_back(I);
+        }
+      }
+    pattern_p_[K + 1] = static_cast<int>(pattern_i_.size());
+  }
+  // Block elimination tree and the factor's block pattern (counts and value sizes).
+  parent_.assign(nb, -1);
+  std::vector<int> ancestor(nb, -1), count(nb, 0), values(nb, 0);
+  for (int K = 0; K < nb; ++K)
+    for (int p = pattern_p_[K]; p < pattern_p_[K + 1]; ++p)
+      for (int I = pattern_i_[p]; I != -1 && I < K;) {
+        const int next = ancestor[I];
+        ancestor[I] = K;
+        if (next == -1) parent_[I] = K;
+        I = next;
+      }
+  std::fill(flag.begin(), flag.end(), -1);
+  for (int K = 0; K < nb; ++K) {
+    flag[K] = K;
+    for (int p = pattern_p_[K]; p < pattern_p_[K + 1]; ++p)
+      for (int I = pattern_i_[p]; I < K && flag[I] != K; I = parent_[I]) {
+        flag[I] = K;
+        ++count[I];
+        values[I] += size_[K] * size_[I];
+      }
+  }
+  lp_.assign(nb + 1, 0);
+  vp_.assign(nb + 1, 0);
+  dp_.assign(nb + 1, 0);
+  for (int I = 0; I < nb; ++I) {
+    lp_[I + 1] = lp_[I] + count[I];
+    vp_[I + 1] = vp_[I] + values[I];
+    dp_[I + 1] = dp_[I] + size_[I] * size_[I];
+  }
+  li_.resize(lp_[nb]);
+  lv_.resize(lp_[nb]);
+  lx_.resize(vp_[nb]);
+  dx_.resize(dp_[nb]);
+  flag_.assign(nb, -1);
+  stack_.resize(nb);
+  next_.resize(nb);
+  vnext_.resize(nb);
+  x_.assign(static_cast<size_t>(n) * kMaxBlock, 0.0);
+}
+
+template <int BI>
+void BlockCholesky::eliminate(int K, int I, double* D) {
+  constexpr int M = kMaxBlock;
+  const int bk = size_[K], ci = start_[I];
+  double* x = x_.data();
+  // Y = L_II^-1 x_I (BI x bk), then x_I = 0. Rows of x and Y are kMaxBlock wide whatever bk
+  // is: the columns beyond bk hold zeros and stay zero, and the fixed-length loops vectorize.
+  double y[BI * M];
+  const double* L = dx_.data() + dp_[I];
+#pragma GCC unroll 4
+  for (int a = 0; a < BI; ++a) {
+    const double inverse = 1.0 / L[a * BI + a];
+#pragma GCC unroll 4
+    for (int c = 0; c < M; ++c) {
+      double v = x[(ci + a) * M + c];
+      for (int b = 0; b < a; ++b) v -= L[a * BI + b] * y[b * M + c];
+      y[a * M + c] = v * inverse;
+    }
+  }
+  std::fill(x + ci * M, x + (ci + BI) * M, 0.0);
+  // x_R -= L(R, I) Y for the entries of column I so far (rows above K).
+  const double* values = lx_.data();
+  for (int e = lp_[I]; e < next_[I]; ++e) {
+    const int br = size_[li_[e]];
+    const double* B = values + lv_[e];
+    double* row = x + start_[li_[e]] * M;
+    for (int a = 0; a < br; ++a, row += M, B += BI) {
+      double r[M];
+#pragma GCC unroll 4
+      for (int c = 0; c < M; ++c) r[c] = row[c];
+#pragma GCC unroll 4
+      for (int b = 0; b < BI; ++b)
+#pragma GCC unroll 4
+        for (int c = 0; c < M; ++c) r[c] -= B[b] * y[b * M + c];
+#pragma GCC unroll 4
+      for (int c = 0; c < M; ++c) row[c] = r[c];
+    }
+  }
+  // D -= Y^T Y; store L(K, I) = Y^T (bk x BI).
+  for (int c = 0; c < bk; ++c)
+    for (int d = 0; d <= c; ++d) {
+      double s = 0;
+#pragma GCC unroll 4
+      for (int a = 0; a < BI; ++a) s += y[a * M + c] * y[a * M + d];
+      D[c * M + d] -= s;
+    }
+  const int e = next_[I]++, offset = vnext_[I];
+  vnext_[I] += bk * BI;
+  li_[e] = K;
+  lv_[e] = offset;
+  double* out = lx_.data() + offset;
+  for (int c = 0; c < bk; ++c)
+#pragma GCC unroll 4
+    for (int a = 0; a < BI; ++a) out[c * BI + a] = y[a * M + c];
+}
+
+bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
+  ok_ = false;
+  const int nb = blocks_;
+  const int* ap = upper.outerIndexPtr();
+  const int* ai = upper.innerIndexPtr();
+  const double* ax = upper.valuePtr();
+  for (int I = 0; I < nb; ++I) {
+    next_[I] = lp_[I];
+    vnext_[I] = vp_[I];
+  }
+  std::fill(flag_.begin(), flag_.end(), -1);
+  double* x = x_.data();  // row r of the current block row's right-hand side: x[r * kMaxBlock]
+  constexpr int M = kMaxBlock;
+  for (int K = 0; K < nb; ++K) {
+    const int bk = size_[K], ck = start_[K];
+    double D[M * M] = {};  // the diagonal block, row-major (lower part used)
+    for (int c = 0; c < bk; ++c)
+      for (int p = ap[ck + c]; p < ap[ck + c + 1]; ++p) {
+        const int r = ai[p];
+        if (r >= ck) {
+          D[c * M + (r - ck)] = ax[p];  // (c, r - ck) with r - ck <= c: lower, row-major
+        } else {
+          x[r * M + c] = ax[p];
+        }
+      }
+    // The block row's pattern: etree paths from A's blocks up to K, in topological order.
+    int top = nb;
+    flag_[K] = K;
+    for (int p = pattern_p_[K]; p < pattern_p_[K + 1]; ++p) {
+      int I = pattern_i_[p], length = 0;
+      for (; I < K && flag_[I] != K; I = parent_[I]) {
+        stack_[length++] = I;
+        flag_[I] = K;
+      }
+      while (length > 0) stack_[--top] = stack_[--length];
+    }
+    for (int q = top; q < nb; ++q) {
+      const int I = stack_[q];
+      switch (size_[I]) {
+        case 1:
+          eliminate<1>(K, I, D);
+          break;
+        case 2:
+          eliminate<2>(K, I, D);
+          break;
+        case 3:
+          eliminate<3>(K, I, D);
+          break;
+        default:
+          eliminate<4>(K, I, D);
+          break;
+      }
+    }
+    // Dense Cholesky of the diagonal block.
+    double* L = dx_.data() + dp_[K];
+    for (int c = 0; c < bk; ++c) {
+      for (int d = 0; d <= c; ++d) {
+        double s = D[c * M + d];
+        for (int b = 0; b < d; ++b) s -= L[c * bk + b] * L[d * bk + b];
+        if (c == d) {
+          if (!(s > 0) || !std::isfinite(s)) return false;
+          L[c * bk + c] = std::sqrt(s);
+        } else {
+          L[c * bk + d] = s / L[d * bk + d];
+        }
+      }
+      for (int d = c + 1; d < bk; ++d) L[c * bk + d] = 0;
+    }
+  }
+  ok_ = true;
+  return true;
+}
+
+template <int BJ>
+void BlockCholesky::forward(int J, double* z, int k) const {
+  // z (row-major, k right-hand sides per unknown): y_J = L_JJ^-1 y_J, then y_R -= L(R, J) y_J.
+  const int cj = start_[J];
+  const double* L = dx_.data() + dp_[J];
+  double* yj = z + static_cast<size_t>(cj) * k;
+#pragma GCC unroll 4
+  for (int a = 0; a < BJ; ++a) {
+    const double inverse = 1.0 / L[a * BJ + a];
+    for (int c = 0; c < k; ++c) {
+      double v = yj[a * k + c];
+      for (int b = 0; b < a; ++b) v -= L[a * BJ + b] * yj[b * k + c];
+      yj[a * k + c] = v * inverse;
+    }
+  }
+  for (int e = lp_[J]; e < lp_[J + 1]; ++e) {
+    const int br = size_[li_[e]];
+    const double* B = lx_.data() + lv_[e];
+    double* row = z + static_cast<size_t>(start_[li_[e]]) * k;
+    for (int a = 0; a < br; ++a, row += k, B += BJ)
+      for (int c = 0; c < k; ++c) {
+        double v = row[c];
+#pragma GCC unroll 4
+        for (int b = 0; b < BJ; ++b) v -= B[b] * yj[b * k + c];
+        row[c] = v;
+      }
+  }
+}
+
+template <int BJ>
+void BlockCholesky::backward(int J, double* z, int k) const {
+  // x_J = L_JJ^-T (y_J - sum_R L(R, J)^T x_R).
+  const int cj = start_[J];
+  double* yj = z + static_cast<size_t>(cj) * k;
+  for (int e = lp_[J]; e < lp_[J + 1]; ++e) {
+    const int br = size_[li_[e]];
+    const double* B = lx_.data() + lv_[e];
+    const double* row = z + static_cast<size_t>(start_[li_[e]]) * k;
+    for (int a = 0; a < br; ++a, row += k, B += BJ)
+      for (int c = 0; c < k; ++c)
+#pragma GCC unroll 4
+        for (int b = 0; b < BJ; ++b) yj[b * k + c] -= B[b] * row[c];
+  }
+  const double* L = dx_.data() + dp_[J];
+#pragma GCC unroll 4
+  for (int a = BJ - 1; a >= 0; --a) {
+    const double inverse = 1.0 / L[a * BJ + a];
+    for (int c = 0; c < k; ++c) {
+      double v = yj[a * k + c];
+      for (int b = a + 1; b < BJ; ++b) v -= L[b * BJ + a] * yj[b * k + c];
+      yj[a * k + c] = v * inverse;
+    }
+  }
+}
+
+Eigen::MatrixXd BlockCholesky::solve_many(const Eigen::MatrixXd& b) const {
+  const int k = static_cast<int>(b.cols());
+  // Row-major copy: the k right-hand sides of one unknown are contiguous.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> z = b;
+  double* data = z.data();
+  for (int J = 0; J < blocks_; ++J) switch (size_[J]) {
+      case 1:
+        forward<1>(J, data, k);
+        break;
+      case 2:
+        forward<2>(J, data, k);
+        break;
+      case 3:
+        forward<3>(J, data, k);
+        break;
+      default:
+        forward<4>(J, data, k);
+        break;
+    }
+  for (int J = blocks_ - 1; J >= 0; --J) switch (size_[J]) {
+      case 1:
+        backward<1>(J, data, k);
+        break;
+      case 2:
+        backward<2>(J, data, k);
+        break;
+      case 3:
+        backward<3>(J, data, k);
+        break;
+      default:
+        backward<4>(J, data, k);
+        break;
+    }
+  return z;
+}
+
+Eigen::VectorXd BlockCholesky::solve(const Eigen::VectorXd& b) const {
+  return solve_many(b).col(0);
+}
+
+long BlockCholesky::factor_nonzeros() const {
+  long diagonal = 0;
+  for (int s : size_) diagonal += s * (s + 1) / 2;
+  return static_cast<long>(lx_.size()) + diagonal;
+}
+
+}  // namespace gridshell

@@ -1,0 +1,136 @@
+// The Newton solver's block sparse Cholesky (kernel/src/sparse_cholesky.h) against Eigen's
+// SimplicialLLT, the oracle: same solutions for any block partition, the same factor with scalar
+// blocks, refactorization on the same pattern, and indefinite matrices rejected.
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCholesky>
+#include <random>
+
+#include "sparse_cholesky.h"
+
+namespace gridshell {
+namespace {
+
+/// A random symmetric positive definite matrix (upper triangle stored) with a band of width
+/// `band`, `extra` random couplings, and its last `arrow` unknowns coupled to everything (an
+/// arrowhead: a dense trailing block in the factor, like the grid's separators).
+Eigen::SparseMatrix<double> random_spd(int n, int band, int extra, int arrow, unsigned seed,
+                                       double shift = 1.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::uniform_int_distribution<int> index(0, n - 1);
+  std::vector<Eigen::Triplet<double>> entries;
+  auto couple = [&](int i, int j) {
+    if (i == j) return;
+    const double v = value(rng);
+    entries.emplace_back(i, j, v);
+    entries.emplace_back(j, i, v);
+  };
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j <= std::min(n - 1, i + band); ++j) couple(i, j);
+  for (int e = 0; e < extra; ++e) couple(index(rng), index(rng));
+  for (int a = n - arrow; a < n; ++a)
+    for (int j = 0; j < n; j += 3) couple(a, j);
+  Eigen::SparseMatrix<double> full(n, n);
+  full.setFromTriplets(entries.begin(), entries.end());
+  // Diagonal: the row's absolute sum plus `shift` (> 0: diagonally dominant, positive definite).
+  Eigen::VectorXd diagonal = Eigen::VectorXd::Constant(n, shift);
+  for (int k = 0; k < full.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(full, k); it; ++it)
+      diagonal[it.row()] += std::abs(it.value());
+  for (int i = 0; i < n; ++i) full.coeffRef(i, i) = diagonal[i];
+  Eigen::SparseMatrix<double> upper = full.triangularView<Eigen::Upper>();
+  upper.makeCompressed();
+  return upper;
+}
+
+double relative_difference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).norm() / b.norm();
+}
+
+/// Block sizes 1-5 summing to n (5 exceeds the maximum and is split by the factorization).
+std::vector<int> random_blocks(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> size(1, 5);
+  std::vector<int> sizes;
+  for (int left = n; left > 0;) {
+    sizes.push_back(std::min(left, size(rng)));
+    left -= sizes.back();
+  }
+  return sizes;
+}
+
+TEST(BlockCholesky, SolvesLikeEigensSimplicialLltForAnyBlockPartition) {
+  const int n = 400;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Eigen::SparseMatrix<double> A = random_spd(n, 4, 300, seed == 3 ? 40 : 0, seed);
+    Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
+        oracle(A);
+    ASSERT_EQ(oracle.info(), Eigen::Success);
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -2.0, 1.0).array().sin();
+    const Eigen::VectorXd expected = oracle.solve(b);
+    const Eigen::SparseMatrix<double> full = A.selfadjointView<Eigen::Upper>();
+    for (const std::vector<int>& sizes :
+         {std::vector<int>(n, 1), std::vector<int>(n / 4, 4), random_blocks(n, seed)}) {
+      BlockCholesky cholesky;
+      cholesky.analyze(A, sizes);
+      ASSERT_TRUE(cholesky.factorize(A));
+      const Eigen::VectorXd x = cholesky.solve(b);
+      EXPECT_LT(relative_difference(x, expected), 1e-12) << "seed " << seed;
+      EXPECT_LT((full * x - b).norm() / b.norm(), 1e-12) << "seed " << seed;
+      // The block factor holds the scalar one and at most the zeros inside its blocks.
+      EXPECT_GE(cholesky.factor_nonzeros(), oracle.matrixL().nestedExpression().nonZeros());
+    }
+    // Scalar blocks: exactly the simplicial factor.
+    BlockCholesky scalar;
+    scalar.analyze(A, std::vector<int>(n, 1));
+    EXPECT_EQ(scalar.factor_nonzeros(), oracle.matrixL().nestedExpression().nonZeros());
+  }
+}
+
+TEST(BlockCholesky, SolvesManyRightHandSidesAtOnceLikeOneAtATime) {
+  const int n = 250;
+  const Eigen::SparseMatrix<double> A = random_spd(n, 6, 150, 20, 4);
+  BlockCholesky cholesky;
+  cholesky.analyze(A, random_blocks(n, 4));
+  ASSERT_TRUE(cholesky.factorize(A));
+  std::mt19937 rng(6);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd B(n, 7);
+  for (int i = 0; i < B.size(); ++i) B.data()[i] = normal(rng);
+  const Eigen::MatrixXd X = cholesky.solve_many(B);
+  ASSERT_EQ(X.rows(), n);
+  ASSERT_EQ(X.cols(), 7);
+  const Eigen::SparseMatrix<double> full = A.selfadjointView<Eigen::Upper>();
+  for (int c = 0; c < B.cols(); ++c) {
+    const Eigen::VectorXd one = cholesky.solve(B.col(c));
+    EXPECT_LT((X.col(c) - one).norm(), 1e-14 * one.norm()) << c;
+    EXPECT_LT((full * X.col(c) - B.col(c)).norm(), 1e-12 * B.col(c).norm()) << c;
+  }
+}
+
+TEST(BlockCholesky, RefactorizesAndRejectsIndefiniteMatrices) {
+  const int n = 300;
+  const Eigen::SparseMatrix<double> A = random_spd(n, 5, 200, 30, 5);
+  BlockCholesky cholesky;
+  cholesky.analyze(A, random_blocks(n, 8));
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  for (double scale : {1.0, 3.0}) {
+    Eigen::SparseMatrix<double> B = A * scale;
+    ASSERT_TRUE(cholesky.factorize(B));
+    Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
+        oracle(B);
+    EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << scale;
+  }
+  for (int row : {0, 150, n - 1}) {
+    Eigen::SparseMatrix<double> B = A;
+    B.coeffRef(row, row) = -B.coeffRef(row, row);
+    EXPECT_FALSE(cholesky.factorize(B)) << "row " << row;
+    EXPECT_FALSE(cholesky.ok());
+  }
+  EXPECT_TRUE(cholesky.factorize(A));
+  EXPECT_THROW(cholesky.analyze(A, {n - 1}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace gridshell
