@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -11,13 +10,16 @@
 #include <thread>
 #include <unordered_map>
 
+#include "sparse_cholesky.h"
+
 namespace gridshell {
 namespace {
 /// Fraction to the boundary: a barrier coordinate moves at most this fraction of the way to
 /// the bound of its domain in one step.
 constexpr double kToBoundary = 0.95;
-/// Held steps for at most this many barrier coordinates at once (one solve each).
+/// Held steps for at most this many barrier coordinates at once (a right-hand side each).
 constexpr int kMaxHeld = 64;
+
 }  // namespace
 
 struct NewtonSolver::Impl {
@@ -40,8 +42,7 @@ struct NewtonSolver::Impl {
   std::vector<int> diagonal;            // value index of each diagonal entry
   Eigen::VectorXd gradient;
   // The unknowns are numbered in a fill-reducing order already (see the constructor).
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
-      cholesky;
+  BlockCholesky cholesky;
   int threads = 1;
   std::vector<std::vector<double>> chunk_values;  // evaluate(): per-chunk Hessian values
   std::vector<Eigen::VectorXd> chunk_gradients;
@@ -164,17 +165,35 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
   // consecutive, and the graph is 2-3x smaller than the unknowns'; the factor's fill was within
   // 1.5% of AMD on the unknowns on the examples). The Hessian is assembled in its factorization
   // order and the Cholesky needs no permutation.
-  {
-    std::vector<Eigen::Triplet<double>> graph;
-    for (const std::vector<int>& tb : term_blocks)
-      for (int x : tb)
+  // The graph of blocks: per block, itself and every block it shares a term with (sorted).
+  std::vector<std::vector<int>> adjacent(nb);
+  for (int b = 0; b < nb; ++b) adjacent[b].push_back(b);
+  for (const std::vector<int>& tb : term_blocks)
+    for (int x : tb)
+      if (x >= 0)
         for (int y : tb)
-          if (x >= 0 && y >= 0) graph.emplace_back(x, y, 1.0);
-    for (int b = 0; b < nb; ++b) graph.emplace_back(b, b, 1.0);
-    Eigen::SparseMatrix<double> G(nb, nb);
-    G.setFromTriplets(graph.begin(), graph.end());
+          if (y >= 0 && y != x) adjacent[x].push_back(y);
+  size_t edges = 0;
+  for (std::vector<int>& list : adjacent) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    edges += list.size();
+  }
+  {
+    // AMD on the (symmetric) graph as it is; AMDOrdering would symmetrize it once more.
+    Eigen::SparseMatrix<int> G(nb, nb);
+    G.resizeNonZeros(static_cast<Eigen::Index>(edges));
+    int k = 0;
+    for (int b = 0; b < nb; ++b) {
+      G.outerIndexPtr()[b] = k;
+      for (int a : adjacent[b]) {
+        G.innerIndexPtr()[k] = a;
+        G.valuePtr()[k++] = 1;
+      }
+    }
+    G.outerIndexPtr()[nb] = k;
     Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
-    Eigen::AMDOrdering<int>()(G, order);  // order.indices()[k]: the block eliminated k-th
+    Eigen::internal::minimum_degree_ordering(G, order);  // indices()[k]: the block eliminated k-th
     m.block_offset.assign(nb, 0);
     for (int k = 0; k < nb; ++k) {
       const int b = order.indices()[k];
@@ -188,17 +207,15 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
   // B hold, in this order, every unknown of each block A numbered before B that shares a term
   // with it (`above[B]`, by offset), then B's own unknowns up to the diagonal.
   std::vector<std::vector<int>> above(nb);
-  for (const std::vector<int>& tb : term_blocks)
-    for (int x : tb)
-      for (int y : tb)
-        if (x >= 0 && y >= 0 && m.block_offset[x] < m.block_offset[y]) above[y].push_back(x);
+  for (int B = 0; B < nb; ++B)
+    for (int A : adjacent[B])
+      if (m.block_offset[A] < m.block_offset[B]) above[B].push_back(A);
   std::vector<std::vector<int>> prefix(nb);  // per B: rows before each block of above[B]
   std::vector<int> rows_above(nb, 0);
   for (int B = 0; B < nb; ++B) {
     auto& list = above[B];
     std::sort(list.begin(), list.end(),
               [&](int x, int y) { return m.block_offset[x] < m.block_offset[y]; });
-    list.erase(std::unique(list.begin(), list.end()), list.end());
     for (int A : list) {
       prefix[B].push_back(rows_above[B]);
       rows_above[B] += m.blocks[A].second;
@@ -266,7 +283,14 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
           }
       }
   }
-  m.cholesky.analyzePattern(m.hessian);
+  {
+    // The factorization's blocks: the parameter blocks, in the order of their unknowns.
+    std::vector<int> sizes(m.unknowns, 0), block_sizes;
+    for (int b = 0; b < nb; ++b) sizes[m.block_offset[b]] = m.blocks[b].second;
+    for (int size : sizes)
+      if (size > 0) block_sizes.push_back(size);
+    m.cholesky.analyze(m.hessian, block_sizes);
+  }
   m.gradient = Eigen::VectorXd::Zero(m.unknowns);
 }
 
@@ -418,16 +442,13 @@ bool NewtonSolver::held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) const
   const int k = static_cast<int>(held.size());
   if (k == 0 || k > kMaxHeld) return false;
   // Minimize the damped model g.p + p.A.p/2 (A = H + lambda D, factorized) subject to
-  // p_i = limit_i for the held i: p = d + Y mu with Y = A^-1 E (E: their unit vectors, one
-  // solve each with the factorization at hand) and mu from E^T Y mu = limit - E^T d (E^T Y is
-  // a principal submatrix of A^-1, positive definite).
-  Eigen::MatrixXd Y(d.size(), k), S(k, k);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(d.size()), r(k);
-  for (int j = 0; j < k; ++j) {
-    e[held[j].first] = 1;
-    Y.col(j) = m.cholesky.solve(e);
-    e[held[j].first] = 0;
-  }
+  // p_i = limit_i for the held i: p = d + Y mu with Y = A^-1 E (E: their unit vectors, all
+  // solved at once with the factorization at hand) and mu from E^T Y mu = limit - E^T d (E^T Y
+  // is a principal submatrix of A^-1, positive definite).
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(d.size(), k), S(k, k);
+  Eigen::VectorXd r(k);
+  for (int j = 0; j < k; ++j) E(held[j].first, j) = 1;
+  const Eigen::MatrixXd Y = m.cholesky.solve_many(E);
   for (int j = 0; j < k; ++j) {
     for (int l = 0; l < k; ++l) S(j, l) = Y(held[j].first, l);
     r[j] = held[j].second - d[held[j].first];
@@ -461,8 +482,7 @@ NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
     ++result.trials;
     std::copy(h, h + m.hessian.nonZeros(), A.valuePtr());
     for (int i : m.diagonal) A.valuePtr()[i] += lambda_ * std::max(std::abs(h[i]), floor);
-    m.cholesky.factorize(A);
-    if (m.cholesky.info() != Eigen::Success) {
+    if (!m.cholesky.factorize(A)) {
       lambda_ = std::max(lambda_ * nu_, 1e-8);
       nu_ *= 2;
       continue;
