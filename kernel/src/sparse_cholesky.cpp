@@ -3,8 +3,27 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace gridshell {
+namespace {
+/// Calls f(std::integral_constant<int, S>()) for the block size S = size (1 to kMaxBlock), so
+/// that the kernels are compiled for each size.
+template <typename F>
+void by_block_size(int size, F&& f) {
+  static_assert(BlockCholesky::kMaxBlock == 4);
+  switch (size) {
+    case 1:
+      return f(std::integral_constant<int, 1>());
+    case 2:
+      return f(std::integral_constant<int, 2>());
+    case 3:
+      return f(std::integral_constant<int, 3>());
+    default:
+      return f(std::integral_constant<int, 4>());
+  }
+}
+}  // namespace
 
 void BlockCholesky::analyze(const Eigen::SparseMatrix<double>& upper,
                             const std::vector<int>& block_sizes) {
@@ -177,20 +196,7 @@ bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
     }
     for (int q = top; q < nb; ++q) {
       const int I = stack_[q];
-      switch (size_[I]) {
-        case 1:
-          eliminate<1>(K, I, D);
-          break;
-        case 2:
-          eliminate<2>(K, I, D);
-          break;
-        case 3:
-          eliminate<3>(K, I, D);
-          break;
-        default:
-          eliminate<4>(K, I, D);
-          break;
-      }
+      by_block_size(size_[I], [&](auto bi) { eliminate<bi()>(K, I, D); });
     }
     // Dense Cholesky of the diagonal block.
     double* L = dx_.data() + dp_[K];
@@ -272,34 +278,10 @@ Eigen::MatrixXd BlockCholesky::solve_many(const Eigen::MatrixXd& b) const {
   // Row-major copy: the k right-hand sides of one unknown are contiguous.
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> z = b;
   double* data = z.data();
-  for (int J = 0; J < blocks_; ++J) switch (size_[J]) {
-      case 1:
-        forward<1>(J, data, k);
-        break;
-      case 2:
-        forward<2>(J, data, k);
-        break;
-      case 3:
-        forward<3>(J, data, k);
-        break;
-      default:
-        forward<4>(J, data, k);
-        break;
-    }
-  for (int J = blocks_ - 1; J >= 0; --J) switch (size_[J]) {
-      case 1:
-        backward<1>(J, data, k);
-        break;
-      case 2:
-        backward<2>(J, data, k);
-        break;
-      case 3:
-        backward<3>(J, data, k);
-        break;
-      default:
-        backward<4>(J, data, k);
-        break;
-    }
+  for (int J = 0; J < blocks_; ++J)
+    by_block_size(size_[J], [&](auto bj) { forward<bj()>(J, data, k); });
+  for (int J = blocks_ - 1; J >= 0; --J)
+    by_block_size(size_[J], [&](auto bj) { backward<bj()>(J, data, k); });
   return z;
 }
 
