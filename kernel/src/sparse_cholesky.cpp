@@ -102,20 +102,20 @@ void BlockCholesky::analyze(const Eigen::SparseMatrix<double>& upper,
   x_.assign(static_cast<size_t>(n) * kMaxBlock, 0.0);
 }
 
-template <int BI>
+template <int BI, int BK>
 void BlockCholesky::eliminate(int K, int I, double* D) {
   constexpr int M = kMaxBlock;
-  const int bk = size_[K], ci = start_[I];
+  const int ci = start_[I];
   double* x = x_.data();
-  // Y = L_II^-1 x_I (BI x bk), then x_I = 0. Rows of x and Y are kMaxBlock wide whatever bk
-  // is: the columns beyond bk hold zeros and stay zero, and the fixed-length loops vectorize.
+  // Y = L_II^-1 x_I (BI x BK), then x_I = 0. Rows of x are kMaxBlock wide whatever BK is (the
+  // columns beyond it hold zeros); the loops over BK columns are unrolled at compile time.
   double y[BI * M];
   const double* L = dx_.data() + dp_[I];
 #pragma GCC unroll 4
   for (int a = 0; a < BI; ++a) {
     const double inverse = 1.0 / L[a * BI + a];
 #pragma GCC unroll 4
-    for (int c = 0; c < M; ++c) {
+    for (int c = 0; c < BK; ++c) {
       double v = x[(ci + a) * M + c];
       for (int b = 0; b < a; ++b) v -= L[a * BI + b] * y[b * M + c];
       y[a * M + c] = v * inverse;
@@ -131,17 +131,17 @@ void BlockCholesky::eliminate(int K, int I, double* D) {
     for (int a = 0; a < br; ++a, row += M, B += BI) {
       double r[M];
 #pragma GCC unroll 4
-      for (int c = 0; c < M; ++c) r[c] = row[c];
+      for (int c = 0; c < BK; ++c) r[c] = row[c];
 #pragma GCC unroll 4
       for (int b = 0; b < BI; ++b)
 #pragma GCC unroll 4
-        for (int c = 0; c < M; ++c) r[c] -= B[b] * y[b * M + c];
+        for (int c = 0; c < BK; ++c) r[c] -= B[b] * y[b * M + c];
 #pragma GCC unroll 4
-      for (int c = 0; c < M; ++c) row[c] = r[c];
+      for (int c = 0; c < BK; ++c) row[c] = r[c];
     }
   }
-  // D -= Y^T Y; store L(K, I) = Y^T (bk x BI).
-  for (int c = 0; c < bk; ++c)
+  // D -= Y^T Y; store L(K, I) = Y^T (BK x BI).
+  for (int c = 0; c < BK; ++c)
     for (int d = 0; d <= c; ++d) {
       double s = 0;
 #pragma GCC unroll 4
@@ -149,11 +149,11 @@ void BlockCholesky::eliminate(int K, int I, double* D) {
       D[c * M + d] -= s;
     }
   const int e = next_[I]++, offset = vnext_[I];
-  vnext_[I] += bk * BI;
+  vnext_[I] += BK * BI;
   li_[e] = K;
   lv_[e] = offset;
   double* out = lx_.data() + offset;
-  for (int c = 0; c < bk; ++c)
+  for (int c = 0; c < BK; ++c)
 #pragma GCC unroll 4
     for (int a = 0; a < BI; ++a) out[c * BI + a] = y[a * M + c];
 }
@@ -196,7 +196,9 @@ bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
     }
     for (int q = top; q < nb; ++q) {
       const int I = stack_[q];
-      by_block_size(size_[I], [&](auto bi) { eliminate<bi()>(K, I, D); });
+      by_block_size(size_[I], [&](auto bi) {
+        by_block_size(bk, [&](auto bk_) { eliminate<bi(), bk_()>(K, I, D); });
+      });
     }
     // Dense Cholesky of the diagonal block.
     double* L = dx_.data() + dp_[K];

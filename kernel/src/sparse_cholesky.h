@@ -46,10 +46,10 @@ class BlockCholesky {
   std::vector<double> lx_;                    // L(R, I) blocks, row-major size[R] x size[I]
   std::vector<int> dp_;                       // per block: offset of its diagonal factor
   std::vector<double> dx_;                    // diagonal factors, row-major, lower
-  /// Block row K's step for block column I in its pattern (BI = size of block I): L(K, I)
+  /// Block row K's step for block column I in its pattern (BI, BK: sizes of I and K): L(K, I)
   /// from the right-hand side x_I, the updates x_R -= L(R, I) L(K, I)^T over the entries of
   /// column I so far, and D -= L(K, I) L(K, I)^T for the diagonal block.
-  template <int BI>
+  template <int BI, int BK>
   void eliminate(int K, int I, double* D);
   /// Forward / backward substitution for block J (size BJ) on k row-major right-hand sides.
   template <int BJ>
