@@ -3,6 +3,7 @@
 // blocks, refactorization on the same pattern, and indefinite matrices rejected.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <random>
 
@@ -107,6 +108,24 @@ TEST(BlockCholesky, SolvesManyRightHandSidesAtOnceLikeOneAtATime) {
     EXPECT_LT((X.col(c) - one).norm(), 1e-14 * one.norm()) << c;
     EXPECT_LT((full * X.col(c) - B.col(c)).norm(), 1e-12 * B.col(c).norm()) << c;
   }
+}
+
+TEST(BlockCholesky, InverseSubmatrixEqualsTheDenseInversesEntries) {
+  const int n = 200;
+  const Eigen::SparseMatrix<double> A = random_spd(n, 5, 120, 15, 12);
+  BlockCholesky cholesky;
+  cholesky.analyze(A, random_blocks(n, 12));
+  ASSERT_TRUE(cholesky.factorize(A));
+  const Eigen::MatrixXd inverse =
+      Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Upper>())).inverse();
+  const std::vector<int> unknowns = {0, 7, 8, 9, 57, 120, 121, 199, 3};
+  const Eigen::MatrixXd S = cholesky.inverse_submatrix(unknowns);
+  ASSERT_EQ(S.rows(), static_cast<int>(unknowns.size()));
+  for (size_t a = 0; a < unknowns.size(); ++a)
+    for (size_t b = 0; b < unknowns.size(); ++b)
+      EXPECT_NEAR(S(a, b), inverse(unknowns[a], unknowns[b]), 1e-12 * inverse.diagonal().maxCoeff())
+          << unknowns[a] << ", " << unknowns[b];
+  EXPECT_THROW(cholesky.inverse_submatrix({n}), std::invalid_argument);
 }
 
 TEST(BlockCholesky, RefactorizesAndRejectsIndefiniteMatrices) {

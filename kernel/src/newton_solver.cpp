@@ -442,20 +442,22 @@ bool NewtonSolver::held_step(const Eigen::VectorXd& d, Eigen::VectorXd& p) const
   const int k = static_cast<int>(held.size());
   if (k == 0 || k > kMaxHeld) return false;
   // Minimize the damped model g.p + p.A.p/2 (A = H + lambda D, factorized) subject to
-  // p_i = limit_i for the held i: p = d + Y mu with Y = A^-1 E (E: their unit vectors, all
-  // solved at once with the factorization at hand) and mu from E^T Y mu = limit - E^T d (E^T Y
-  // is a principal submatrix of A^-1, positive definite).
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(d.size(), k), S(k, k);
+  // p_i = limit_i for the held i: p = d + A^-1 E mu (E: their unit vectors) with mu from
+  // S mu = limit - E^T d, S = E^T A^-1 E (a principal submatrix of A^-1, positive definite;
+  // from k short forward substitutions), then one solve for A^-1 E mu.
+  std::vector<int> unknowns;
   Eigen::VectorXd r(k);
-  for (int j = 0; j < k; ++j) E(held[j].first, j) = 1;
-  const Eigen::MatrixXd Y = m.cholesky.solve_many(E);
   for (int j = 0; j < k; ++j) {
-    for (int l = 0; l < k; ++l) S(j, l) = Y(held[j].first, l);
+    unknowns.push_back(held[j].first);
     r[j] = held[j].second - d[held[j].first];
   }
+  const Eigen::MatrixXd S = m.cholesky.inverse_submatrix(unknowns);
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
   if (ldlt.info() != Eigen::Success) return false;
-  p = d + Y * ldlt.solve(r);
+  const Eigen::VectorXd mu = ldlt.solve(r);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(d.size());
+  for (int j = 0; j < k; ++j) v[unknowns[j]] = mu[j];
+  p = d + m.cholesky.solve(v);
   return p.allFinite();
 }
 

@@ -287,6 +287,33 @@ Eigen::MatrixXd BlockCholesky::solve_many(const Eigen::MatrixXd& b) const {
   return z;
 }
 
+Eigen::MatrixXd BlockCholesky::inverse_submatrix(const std::vector<int>& unknowns) const {
+  const int k = static_cast<int>(unknowns.size());
+  // Columns of W = L^-1 E, dense over the unknowns, and the union of the paths' blocks.
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n_, k);
+  std::vector<char> on_path(blocks_, 0);
+  std::vector<int> path_blocks;
+  for (int j = 0; j < k; ++j) {
+    const int unknown = unknowns[j];
+    if (unknown < 0 || unknown >= n_)
+      throw std::invalid_argument("BlockCholesky: unknown out of range");
+    double* z = W.col(j).data();
+    z[unknown] = 1;
+    for (int J = block_of_[unknown]; J != -1; J = parent_[J]) {
+      by_block_size(size_[J], [&](auto bj) { forward<bj()>(J, z, 1); });
+      if (!on_path[J]) {
+        on_path[J] = 1;
+        path_blocks.push_back(J);
+      }
+    }
+  }
+  std::vector<int> rows;
+  for (int J : path_blocks)
+    for (int r = start_[J]; r < start_[J] + size_[J]; ++r) rows.push_back(r);
+  const Eigen::MatrixXd C = W(rows, Eigen::all);
+  return C.transpose() * C;
+}
+
 Eigen::VectorXd BlockCholesky::solve(const Eigen::VectorXd& b) const {
   return solve_many(b).col(0);
 }

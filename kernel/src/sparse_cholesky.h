@@ -33,6 +33,11 @@ class BlockCholesky {
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   /// Solves A X = B for all columns of B at once (cheaper than one at a time).
   Eigen::MatrixXd solve_many(const Eigen::MatrixXd& b) const;
+  /// The principal submatrix of A^-1 at the given unknowns, E^T A^-1 E = W^T W with
+  /// W = L^-1 E: each column of W is nonzero only on the elimination-tree path from its unknown's
+  /// block to the root, so this costs k short forward substitutions and a k x k product over
+  /// the paths' rows instead of k full solves.
+  Eigen::MatrixXd inverse_submatrix(const std::vector<int>& unknowns) const;
   /// Stored entries of the factor (dense blocks, diagonal blocks' lower triangles).
   long factor_nonzeros() const;
 
