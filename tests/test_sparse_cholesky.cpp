@@ -89,12 +89,23 @@ TEST(BlockCholesky, SolvesLikeEigensSimplicialLltForAnyBlockPartition) {
   }
 }
 
+/// A random matrix (random_spd) factorized on a random block partition.
+struct Factored {
+  Eigen::SparseMatrix<double> A;
+  BlockCholesky cholesky;
+  bool ok = false;
+};
+Factored factored(int n, int band, int extra, int arrow, unsigned seed) {
+  Factored f{random_spd(n, band, extra, arrow, seed), {}};
+  f.cholesky.analyze(f.A, random_blocks(n, seed));
+  f.ok = f.cholesky.factorize(f.A);
+  return f;
+}
+
 TEST(BlockCholesky, SolvesManyRightHandSidesAtOnceLikeOneAtATime) {
   const int n = 250;
-  const Eigen::SparseMatrix<double> A = random_spd(n, 6, 150, 20, 4);
-  BlockCholesky cholesky;
-  cholesky.analyze(A, random_blocks(n, 4));
-  ASSERT_TRUE(cholesky.factorize(A));
+  const auto [A, cholesky, ok] = factored(n, 6, 150, 20, 4);
+  ASSERT_TRUE(ok);
   std::mt19937 rng(6);
   std::normal_distribution<double> normal;
   Eigen::MatrixXd B(n, 7);
@@ -112,10 +123,8 @@ TEST(BlockCholesky, SolvesManyRightHandSidesAtOnceLikeOneAtATime) {
 
 TEST(BlockCholesky, InverseSubmatrixEqualsTheDenseInversesEntries) {
   const int n = 200;
-  const Eigen::SparseMatrix<double> A = random_spd(n, 5, 120, 15, 12);
-  BlockCholesky cholesky;
-  cholesky.analyze(A, random_blocks(n, 12));
-  ASSERT_TRUE(cholesky.factorize(A));
+  const auto [A, cholesky, ok] = factored(n, 5, 120, 15, 12);
+  ASSERT_TRUE(ok);
   const Eigen::MatrixXd inverse =
       Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Upper>())).inverse();
   const std::vector<int> unknowns = {0, 7, 8, 9, 57, 120, 121, 199, 3};
