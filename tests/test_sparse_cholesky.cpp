@@ -82,10 +82,12 @@ TEST(BlockCholesky, SolvesLikeEigensSimplicialLltForAnyBlockPartition) {
       // The block factor holds the scalar one and at most the zeros inside its blocks.
       EXPECT_GE(cholesky.factor_nonzeros(), oracle.matrixL().nestedExpression().nonZeros());
     }
-    // Scalar blocks: exactly the simplicial factor.
+    // Scalar blocks without amalgamation: exactly the simplicial factor.
     BlockCholesky scalar;
-    scalar.analyze(A, std::vector<int>(n, 1));
+    scalar.analyze(A, std::vector<int>(n, 1), false);
+    ASSERT_TRUE(scalar.factorize(A));
     EXPECT_EQ(scalar.factor_nonzeros(), oracle.matrixL().nestedExpression().nonZeros());
+    EXPECT_LT(relative_difference(scalar.solve(b), expected), 1e-12);
   }
 }
 

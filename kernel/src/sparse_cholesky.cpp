@@ -26,22 +26,51 @@ void by_block_size(int size, F&& f) {
 }  // namespace
 
 void BlockCholesky::analyze(const Eigen::SparseMatrix<double>& upper,
-                            const std::vector<int>& block_sizes) {
+                            const std::vector<int>& block_sizes, bool amalgamate) {
+  std::vector<int> sizes;
+  int total = 0;
+  for (int size : block_sizes)
+    for (int left = size; left > 0; left -= kMaxBlock) {
+      sizes.push_back(std::min(left, kMaxBlock));
+      total += sizes.back();
+    }
+  if (total != upper.cols())
+    throw std::invalid_argument("BlockCholesky: block sizes do not sum to the size");
+  symbolic(upper, sizes);
+  if (!amalgamate) return;
+  // Amalgamation: a block whose elimination-tree parent is the next block and whose factor
+  // column has exactly the parent's structure plus the parent (a fundamental supernode) joins
+  // it while they fit in kMaxBlock: fewer, larger block products. The merged block's rows may
+  // hold zeros in columns that reach only its first part (measured on the deployment Hessians:
+  // sphere notched 1.30 -> 1.19 s, torus-wide without 1.13 -> 1.09 s, median of 5).
+  std::vector<int> merged;
+  for (int J = 0; J < blocks_;) {
+    int size = size_[J];
+    while (J + 1 < blocks_ && parent_[J] == J + 1 && size + size_[J + 1] <= kMaxBlock &&
+           lp_[J + 1] - lp_[J] == lp_[J + 2] - lp_[J + 1] + 1) {
+      size += size_[J + 1];
+      ++J;
+    }
+    merged.push_back(size);
+    ++J;
+  }
+  if (static_cast<int>(merged.size()) < blocks_) symbolic(upper, merged);
+}
+
+void BlockCholesky::symbolic(const Eigen::SparseMatrix<double>& upper,
+                             const std::vector<int>& sizes) {
   const int n = static_cast<int>(upper.cols());
   const int* ap = upper.outerIndexPtr();
   const int* ai = upper.innerIndexPtr();
   n_ = n;
   ok_ = false;
   start_.clear();
-  size_.clear();
+  size_ = sizes;
   int at = 0;
-  for (int size : block_sizes)
-    for (int left = size; left > 0; left -= kMaxBlock) {
-      start_.push_back(at);
-      size_.push_back(std::min(left, kMaxBlock));
-      at += size_.back();
-    }
-  if (at != n) throw std::invalid_argument("BlockCholesky: block sizes do not sum to the size");
+  for (int size : sizes) {
+    start_.push_back(at);
+    at += size;
+  }
   const int nb = blocks_ = static_cast<int>(start_.size());
   block_of_.resize(n);
   for (int b = 0; b < nb; ++b)

@@ -25,8 +25,11 @@ class BlockCholesky {
 
   /// Symbolic analysis of a symmetric matrix given by its upper triangle (column-major, sorted,
   /// diagonal present), in elimination order, with its unknowns grouped into consecutive blocks
-  /// of the given sizes (summing to the matrix size; larger blocks are split).
-  void analyze(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& block_sizes);
+  /// of the given sizes (summing to the matrix size; larger blocks are split). With
+  /// `amalgamate`, a block joins the next one where that is its elimination-tree parent with the
+  /// same column structure below (explicit zeros appear only in rows of the merged block).
+  void analyze(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& block_sizes,
+               bool amalgamate = true);
   /// Numeric factorization; false if the matrix is not (numerically) positive definite.
   bool factorize(const Eigen::SparseMatrix<double>& upper);
   bool ok() const { return ok_; }
@@ -54,6 +57,8 @@ class BlockCholesky {
   /// Block row K's step for block column I in its pattern (BI, BK: sizes of I and K): L(K, I)
   /// from the right-hand side x_I, the updates x_R -= L(R, I) L(K, I)^T over the entries of
   /// column I so far, and D -= L(K, I) L(K, I)^T for the diagonal block.
+  /// Elimination tree, patterns and storage for the given partition (each size <= kMaxBlock).
+  void symbolic(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& sizes);
   template <int BI, int BK>
   void eliminate(int K, int I, double* D);
   /// Forward / backward substitution for block J (size BJ) on k row-major right-hand sides.
