@@ -152,13 +152,22 @@ TEST(BlockCholesky, RefactorizesAndRejectsIndefiniteMatrices) {
         oracle(B);
     EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << scale;
   }
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
+      oracle(A);
   for (int row : {0, 150, n - 1}) {
     Eigen::SparseMatrix<double> B = A;
     B.coeffRef(row, row) = -B.coeffRef(row, row);
     EXPECT_FALSE(cholesky.factorize(B)) << "row " << row;
     EXPECT_FALSE(cholesky.ok());
+    EXPECT_THROW(cholesky.solve(b), std::logic_error);
+    // A failed factorization leaves nothing behind: the next one is exact again.
+    ASSERT_TRUE(cholesky.factorize(A)) << "row " << row;
+    EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << "row " << row;
   }
-  EXPECT_TRUE(cholesky.factorize(A));
+  EXPECT_THROW(cholesky.solve(Eigen::VectorXd::Ones(n + 1)), std::invalid_argument);
+  // A matrix with another pattern than the analysed one, or of another size, is refused.
+  EXPECT_THROW(cholesky.factorize(random_spd(n, 2, 0, 0, 5)), std::invalid_argument);
+  EXPECT_THROW(cholesky.factorize(random_spd(n + 1, 5, 200, 30, 5)), std::invalid_argument);
   EXPECT_THROW(cholesky.analyze(A, {n - 1}), std::invalid_argument);
 }
 

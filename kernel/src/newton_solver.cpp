@@ -19,7 +19,6 @@ namespace {
 constexpr double kToBoundary = 0.95;
 /// Held steps for at most this many barrier coordinates at once (a right-hand side each).
 constexpr int kMaxHeld = 64;
-
 }  // namespace
 
 struct NewtonSolver::Impl {

@@ -64,6 +64,7 @@ void BlockCholesky::symbolic(const Eigen::SparseMatrix<double>& upper,
   const int* ai = upper.innerIndexPtr();
   n_ = n;
   ok_ = false;
+  analysed_nonzeros_ = upper.nonZeros();
   start_.clear();
   size_ = sizes;
   int at = 0;
@@ -189,6 +190,8 @@ void BlockCholesky::eliminate(int K, int I, double* D) {
 
 bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
   ok_ = false;
+  if (upper.cols() != n_ || upper.rows() != n_ || upper.nonZeros() != analysed_nonzeros_)
+    throw std::invalid_argument("BlockCholesky: the matrix does not have the analysed pattern");
   const int nb = blocks_;
   const int* ap = upper.outerIndexPtr();
   const int* ai = upper.innerIndexPtr();
@@ -305,6 +308,8 @@ void BlockCholesky::backward(int J, double* z, int k) const {
 }
 
 Eigen::MatrixXd BlockCholesky::solve_many(const Eigen::MatrixXd& b) const {
+  if (!ok_) throw std::logic_error("BlockCholesky: solve without a successful factorization");
+  if (b.rows() != n_) throw std::invalid_argument("BlockCholesky: right-hand side size");
   const int k = static_cast<int>(b.cols());
   // Row-major copy: the k right-hand sides of one unknown are contiguous.
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> z = b;
@@ -317,6 +322,7 @@ Eigen::MatrixXd BlockCholesky::solve_many(const Eigen::MatrixXd& b) const {
 }
 
 Eigen::MatrixXd BlockCholesky::inverse_submatrix(const std::vector<int>& unknowns) const {
+  if (!ok_) throw std::logic_error("BlockCholesky: inverse without a successful factorization");
   const int k = static_cast<int>(unknowns.size());
   // Columns of W = L^-1 E, dense over the unknowns, and the union of the paths' blocks.
   Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n_, k);

@@ -30,16 +30,19 @@ class BlockCholesky {
   /// same column structure below (explicit zeros appear only in rows of the merged block).
   void analyze(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& block_sizes,
                bool amalgamate = true);
-  /// Numeric factorization; false if the matrix is not (numerically) positive definite.
+  /// Numeric factorization of a matrix with the analysed pattern (std::invalid_argument if its
+  /// size or number of stored entries differs); false if it is not (numerically) positive
+  /// definite.
   bool factorize(const Eigen::SparseMatrix<double>& upper);
   bool ok() const { return ok_; }
+  /// Solves A x = b with the last successful factorization (std::logic_error without one).
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   /// Solves A X = B for all columns of B at once (cheaper than one at a time).
   Eigen::MatrixXd solve_many(const Eigen::MatrixXd& b) const;
   /// The principal submatrix of A^-1 at the given unknowns, E^T A^-1 E = W^T W with
   /// W = L^-1 E: each column of W is nonzero only on the elimination-tree path from its unknown's
   /// block to the root, so this costs k short forward substitutions and a k x k product over
-  /// the paths' rows instead of k full solves.
+  /// the paths' rows instead of k full solves. Needs a successful factorization.
   Eigen::MatrixXd inverse_submatrix(const std::vector<int>& unknowns) const;
   /// Stored entries of the factor (dense blocks, diagonal blocks' lower triangles).
   long factor_nonzeros() const;
@@ -54,11 +57,11 @@ class BlockCholesky {
   std::vector<double> lx_;                    // L(R, I) blocks, row-major size[R] x size[I]
   std::vector<int> dp_;                       // per block: offset of its diagonal factor
   std::vector<double> dx_;                    // diagonal factors, row-major, lower
+  /// Elimination tree, patterns and storage for the given partition (each size <= kMaxBlock).
+  void symbolic(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& sizes);
   /// Block row K's step for block column I in its pattern (BI, BK: sizes of I and K): L(K, I)
   /// from the right-hand side x_I, the updates x_R -= L(R, I) L(K, I)^T over the entries of
   /// column I so far, and D -= L(K, I) L(K, I)^T for the diagonal block.
-  /// Elimination tree, patterns and storage for the given partition (each size <= kMaxBlock).
-  void symbolic(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& sizes);
   template <int BI, int BK>
   void eliminate(int K, int I, double* D);
   /// Forward / backward substitution for block J (size BJ) on k row-major right-hand sides.
@@ -66,8 +69,11 @@ class BlockCholesky {
   void forward(int J, double* z, int k) const;
   template <int BJ>
   void backward(int J, double* z, int k) const;
-  mutable std::vector<int> flag_, stack_, next_, vnext_;
-  mutable std::vector<double> x_;  // n x kMaxBlock workspace
+  long analysed_nonzeros_ = 0;  // of the matrix given to analyze()
+  // factorize() workspaces; x_ (n x kMaxBlock) is all zero between calls, also after a failure
+  // (every entry a row scatters into lies in that row's pattern and is cleared there).
+  std::vector<int> flag_, stack_, next_, vnext_;
+  std::vector<double> x_;
   bool ok_ = false;
 };
 
