@@ -82,7 +82,9 @@
 // through the window's ancestors (one point per edge crossing), then through pseudo-source
 // vertices to the source. Without keep_windows the windows live in per-thread scratch memory
 // reused by the next solve, and only the windows entering the targets' faces are collected to
-// evaluate the targets. With stop_at_targets the propagation stops once the popped key exceeds
+// evaluate the targets; such a solve (without stop_at_targets) also propagates in batches per
+// half-edge instead of one window at a time (see "Batch propagation" below: 2.3-4x faster, the
+// same rules except M, equal to the ordered propagation up to rounding). With stop_at_targets the propagation stops once the popped key exceeds
 // an upper bound of the distance anywhere in the targets' closed faces (max corner distance +
 // longest edge): every window or vertex event that could still lower a distance there has a key
 // below that distance, so it has already been processed (its children exist).
@@ -588,6 +590,13 @@ struct Scratch {
   std::vector<char> target_face;
   std::vector<int> target_windows;
   EventQueue heap;
+  // Batch propagation (see Propagator::run_batch).
+  std::vector<int> next;     ///< per window: the next window pending on the same half-edge
+  std::vector<int> head;     ///< per half-edge: its first pending window, -1 if none
+  std::vector<int> fifo;     ///< half-edges whose pending windows are ready to propagate
+  std::vector<char> state;   ///< per vertex: kInside once popped
+  std::vector<char> queued;  ///< per half-edge: in fifo
+  std::vector<int> batch;    ///< the windows of the list being propagated
 };
 
 /// Scratch memory is kept for the next solve on the thread, unless it grew large (a big mesh).
@@ -618,6 +627,12 @@ class Propagator {
         target_face_(scratch.target_face),
         target_windows_(scratch.target_windows),
         heap_(scratch.heap),
+        next_(scratch.next),
+        head_(scratch.head),
+        fifo_(scratch.fifo),
+        state_(scratch.state),
+        queued_(scratch.queued),
+        batch_ids_(scratch.batch),
         margin_(m.margin) {
     const int nv = m.mesh.vertex_count();
     dist_.assign(nv, kInf);
@@ -630,6 +645,15 @@ class Propagator {
     windows_.clear();
     windows_.reserve(m.window_hint.load(std::memory_order_relaxed));
     target_windows_.clear();
+    batch_ = !options.keep_windows && !options.stop_at_targets;
+    if (batch_) {
+      next_.clear();
+      head_.assign(m.half.size(), -1);
+      queued_.assign(m.half.size(), 0);
+      state_.assign(nv, 0);
+      fifo_.clear();
+      reemit_.clear();
+    }
     // Windows entering the targets' faces are collected when the field keeps no index of them.
     track_targets_ = !options.targets.empty() && !options.keep_windows;
     if (track_targets_ || options.stop_at_targets) {
@@ -659,9 +683,31 @@ class Propagator {
     if (d < dist_[v]) {
       dist_[v] = d;
       prov_[v] = provenance;
-      if (m_.pseudo[v] && !emitted_[v]) heap_.push(d, -1 - v);
+      if (batch_) {
+        if (state_[v] != kInside)
+          heap_.push(d, -1 - v);
+        else if (m_.pseudo[v])
+          reemit_.push_back(v);  // a pseudo-source improved after it emitted: emit again
+      } else if (m_.pseudo[v] && !emitted_[v]) {
+        heap_.push(d, -1 - v);
+      }
     }
   }
+  static constexpr char kInside = 2;
+  bool ready(int h) const {
+    const HalfEdge& e = m_.half[h];
+    return state_[e.va] == kInside || state_[e.vb] == kInside;
+  }
+  void make_ready(int h) {
+    if (h >= 0 && head_[h] >= 0 && !queued_[h]) {
+      queued_[h] = 1;
+      fifo_.push_back(h);
+    }
+  }
+  void append_pending(const Window& w);
+  void process_list(int h);
+  void drain();
+  void run_batch();
   /// Upper bound on the distance anywhere in the faces the solve must finish (stop_at_targets).
   double stop_bound() const;
   double incoming_angle(int u) const;
@@ -689,7 +735,15 @@ class Propagator {
   std::vector<char>& target_face_;
   std::vector<int>& target_windows_;
   EventQueue& heap_;
+  std::vector<int>& next_;
+  std::vector<int>& head_;
+  std::vector<int>& fifo_;
+  std::vector<char>& state_;
+  std::vector<char>& queued_;
+  std::vector<int>& batch_ids_;
+  std::vector<int> reemit_;
   const double margin_;
+  bool batch_ = false;
   bool track_targets_ = false;
   std::vector<int> stop_faces_, stop_vertices_;
 };
@@ -756,6 +810,10 @@ void Propagator::insert(Window& w) {
   if (w.b0 < 0) w.b0 = 0;
   if (w.b1 > length) w.b1 = length;
   if (!(w.b1 > w.b0)) return;
+  if (batch_) {
+    append_pending(w);
+    return;
+  }
   const double yy = w.sy * w.sy;
   double f0 = w.sigma + std::sqrt((w.b0 - w.sx) * (w.b0 - w.sx) + yy);
   double f1 = w.sigma + std::sqrt((w.b1 - w.sx) * (w.b1 - w.sx) + yy);
@@ -1145,6 +1203,10 @@ double Propagator::stop_bound() const {
 }
 
 void Propagator::run() {
+  if (batch_) {
+    run_batch();
+    return;
+  }
   const int nv = m_.mesh.vertex_count();
   std::uint64_t events = 0;
   double bound = kInf;
@@ -1175,6 +1237,132 @@ void Propagator::run() {
     const Window w = windows_[ev.id];
     if (!(w.b1 > w.b0)) continue;  // emptied by a better window meanwhile
     propagate(w, ev.id);
+  }
+  progress_.report("geodesic distances", 1.0);
+}
+
+// Batch propagation (the default for solves that keep no windows). The organisation of Qin et
+// al.'s VTP (ACM TOG 35(4), 2016): windows are not processed one at a time in key order but
+// collected per half-edge and propagated as a batch once one of the edge's end vertices has been
+// popped from a queue of vertices ordered by their (upper-bound) distance; a window's children
+// move on at once while their edge touches a popped vertex, so windows pile up on the edges just
+// ahead of the popped region and are decided together. No MMP trimming against other windows of
+// the edge: the pruning is by the vertex distances (rule E, from the end vertices' current upper
+// bounds) and by the barrier (rule B) of the best window through the edge seeing the opposite
+// corner, which now is the best of the whole batch (and of earlier batches on that half-edge).
+// Every rule compares with the length of a real path, so the order changes only how much is
+// pruned, never the result: a popped vertex may still improve (a pseudo-source then emits again
+// from its new distance), and the solve ends when no window is pending and no vertex is queued.
+void Propagator::append_pending(const Window& w) {
+  const int id = static_cast<int>(windows_.size());
+  windows_.push_back(w);
+  next_.push_back(head_[w.he]);
+  head_[w.he] = id;
+  if (!queued_[w.he] && ready(w.he)) {
+    queued_[w.he] = 1;
+    fifo_.push_back(w.he);
+  }
+}
+
+void Propagator::process_list(int h) {
+  int id = head_[h];
+  head_[h] = -1;
+  const HalfEdge& e = m_.half[h];
+  const double length = e.len, cx = e.cx, cy = e.cy;
+  const double da = dist_[e.va], db = dist_[e.vb];
+  const double tol = kVisibilityTolerance * length;
+  CornerRecord& rec = corner_[h];
+  double best = kInf;
+  int best_id = kFromSource;
+  batch_ids_.clear();
+  for (; id >= 0; id = next_[id]) {
+    Window& w = windows_[id];
+    const double yy = w.sy * w.sy;
+    double f0 = w.sigma + std::sqrt((w.b0 - w.sx) * (w.b0 - w.sx) + yy);
+    double f1 = w.sigma + std::sqrt((w.b1 - w.sx) * (w.b1 - w.sx) + yy);
+    if (!trim_by_endpoints(w, length, da, db, f0, f1)) {
+      w.b1 = w.b0;  // dominated by the end vertices everywhere
+      continue;
+    }
+    // The opposite corner C: straight through the window if it sees C (the barrier record),
+    // otherwise through the nearer end of the interval (a real path: an upper bound for C).
+    const double x = (w.sx * cy - w.sy * cx) / (cy - w.sy);
+    if (x >= w.b0 - tol && x <= w.b1 + tol) {
+      const double dc = w.sigma + hyp(cx - w.sx, cy - w.sy);
+      if (dc < rec.d) {
+        rec.d = dc;
+        rec.x = x;
+      }
+      if (dc < best) {
+        best = dc;
+        best_id = id;
+      }
+    } else {
+      const double end = x < w.b0 ? w.b0 : w.b1;
+      const double dc = (x < w.b0 ? f0 : f1) + hyp(cx - end, cy);
+      if (dc < best) {
+        best = dc;
+        best_id = kFromSource;  // no incoming direction for rule S
+      }
+    }
+    batch_ids_.push_back(id);
+  }
+  if (batch_ids_.empty()) return;
+  relax(e.vc, best, best_id);
+  const bool target = track_targets_ && target_face_[h / 3];
+  for (std::size_t k = 0; k < batch_ids_.size(); ++k) {
+    const int wid = batch_ids_[k];
+    if (target) target_windows_.push_back(wid);
+    const Window w = windows_[wid];  // a copy: propagating appends to windows_
+    propagate(w, wid);
+  }
+}
+
+void Propagator::drain() {
+  std::size_t next = 0;
+  while (true) {
+    while (!reemit_.empty()) {
+      const int u = reemit_.back();
+      reemit_.pop_back();
+      emit_vertex(u);
+    }
+    if (next == fifo_.size()) break;
+    const int h = fifo_[next++];
+    queued_[h] = 0;
+    process_list(h);
+  }
+  fifo_.clear();
+}
+
+void Propagator::run_batch() {
+  const int nv = m_.mesh.vertex_count();
+  progress_.report("geodesic distances", 0.0);
+  for (int v = 0; v < nv; ++v)
+    if (dist_[v] == 0.0 && prov_[v] == kFromSource && emitted_[v]) state_[v] = kInside;
+  std::uint64_t pops = 0;
+  int inside = 0;
+  drain();
+  while (!heap_.empty()) {
+    const int v = -1 - heap_.pop().id;
+    if (state_[v] == kInside) continue;
+    state_[v] = kInside;
+    ++inside;
+    if ((++pops & 1023) == 0) {
+      progress_.check();
+      if ((pops & 65535) == 0)
+        progress_.report("geodesic distances", nv ? 0.99 * inside / nv : 0.0);
+    }
+    if (m_.pseudo[v]) emit_vertex(v);
+    // The lists on the edges at v (both sides) are ready now.
+    for (int k = m_.vf_start[v]; k < m_.vf_start[v + 1]; ++k) {
+      const int a = m_.vf_half[k];             // v -> v[i+1]
+      const int b = a - a % 3 + prev3(a % 3);  // v[i+2] -> v
+      make_ready(a);
+      make_ready(m_.half[a].twin);
+      make_ready(b);
+      make_ready(m_.half[b].twin);
+    }
+    drain();
   }
   progress_.report("geodesic distances", 1.0);
 }
