@@ -588,6 +588,13 @@ struct HalfEdgeState {
   char ready = 0;   ///< an end vertex has been popped: windows propagate on arrival
 };
 
+/// A window of the batch being propagated: its slot, the crossing x of I->C with the edge and
+/// sigma + |I C| if it sees C (else negative).
+struct BatchEntry {
+  int id;
+  double x, corner;
+};
+
 /// Per-thread scratch memory of a solve (reused by the next solve on the same thread, so that
 /// repeated solves do not pay for fresh pages).
 struct Scratch {
@@ -600,13 +607,13 @@ struct Scratch {
   std::vector<int> target_windows;
   EventQueue heap;
   // Batch propagation (see Propagator::run_batch).
-  std::vector<HalfEdgeState> pending;         ///< per half-edge
-  std::vector<int> fifo;                      ///< half-edges whose pending windows are ready
-  std::vector<char> inside;                   ///< per vertex: popped
-  std::vector<std::pair<int, double>> batch;  ///< the list being propagated: window, d to C
-  std::vector<int> free;                      ///< recycled window slots
-  std::vector<Window> target_copies;          ///< windows that entered a target face
-  std::vector<double> incoming;               ///< per vertex: rule S's incoming direction
+  std::vector<HalfEdgeState> pending;  ///< per half-edge
+  std::vector<int> fifo;               ///< half-edges whose pending windows are ready
+  std::vector<char> inside;            ///< per vertex: popped
+  std::vector<BatchEntry> batch;       ///< the list being propagated
+  std::vector<int> free;               ///< recycled window slots
+  std::vector<Window> target_copies;   ///< windows that entered a target face
+  std::vector<double> incoming;        ///< per vertex: rule S's incoming direction
 };
 
 /// Scratch memory is kept for the next solve on the thread, unless it grew large (a big mesh).
@@ -716,6 +723,9 @@ class Propagator {
     }
   }
   void append_pending(const Window& w);
+  /// Batch propagation's propagate(): the same children, written straight into pending lists.
+  void propagate_batch(const Window& w, double x, double corner);
+  void push_child(int he, double len, double b0, double b1, double sx, double sy, double sigma);
   void process_list(int h);
   void edges_ready(int v);
   void drain();
@@ -753,7 +763,7 @@ class Propagator {
   std::vector<HalfEdgeState>& pending_;
   std::vector<int>& fifo_;
   std::vector<char>& inside_;
-  std::vector<std::pair<int, double>>& batch_list_;
+  std::vector<BatchEntry>& batch_list_;
   std::vector<int>& free_;
   std::vector<Window>& target_copies_;
   std::vector<double>& incoming_;
@@ -1301,6 +1311,83 @@ void Propagator::append_pending(const Window& w) {
   }
 }
 
+inline void Propagator::push_child(int he, double len, double b0, double b1, double sx, double sy,
+                                   double sigma) {
+  if (sy > 0) sy = 0;
+  if (b0 < 0) b0 = 0;
+  if (b1 > len) b1 = len;
+  if (!(b1 > b0)) return;
+  int id;
+  if (!free_.empty()) {
+    id = free_.back();
+    free_.pop_back();
+  } else {
+    id = static_cast<int>(windows_.size());
+    windows_.emplace_back();
+  }
+  Window& c = windows_[id];
+  c.b0 = b0;
+  c.b1 = b1;
+  c.sx = sx;
+  c.sy = sy;
+  c.sigma = sigma;
+  c.he = he;
+  HalfEdgeState& p = pending_[he];
+  c.next = p.head;
+  p.head = id;
+  if (p.ready && !p.queued) {
+    p.queued = 1;
+    fifo_.push_back(he);
+  }
+}
+
+void Propagator::propagate_batch(const Window& w, double x, double corner) {
+  // As propagate() (the same geometry), without the path fields; x is the crossing of I->C
+  // with the edge and corner sigma + |I C| if known (else negative).
+  const HalfEdge& h = m_.half[w.he];
+  const int f3 = w.he - w.he % 3, e = w.he % 3;
+  const HalfEdge& left = m_.half[f3 + prev3(e)];   // C -> A
+  const HalfEdge& right = m_.half[f3 + next3(e)];  // B -> C
+  const double length = h.len, cx = h.cx, cy = h.cy;
+  const double sx = w.sx, sy = w.sy;
+  double hi_left = std::min(w.b1, x), lo_right = std::max(w.b0, x);
+  const CornerRecord& rec = corner_[w.he];
+  // Rule B applies if rec.d + margin < sigma + |I C|; squared when both sides are positive.
+  bool barrier = false;
+  if (rec.d < kInf) {
+    if (corner >= 0) {
+      barrier = rec.d + margin_ < corner;
+    } else {
+      const double r = rec.d + margin_ - w.sigma;
+      barrier = r < 0 || r * r < (cx - sx) * (cx - sx) + (cy - sy) * (cy - sy);
+    }
+  }
+  if (barrier) {
+    hi_left = std::min(hi_left, rec.x);  // barrier X1-C (rule B)
+    lo_right = std::max(lo_right, rec.x);
+  }
+  if (hi_left > w.b0 && left.twin >= 0) {
+    const double l2 = left.len;
+    const double den = sy * cx;
+    const double b0 = l2 * (w.b0 * sy) / ((w.b0 - sx) * cy + den);
+    const double b1 = hi_left >= x ? l2 : l2 * (hi_left * sy) / ((hi_left - sx) * cy + den);
+    const double ux = h.u2x, uy = h.u2y;
+    push_child(left.twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, w.sigma);
+  }
+  if (lo_right < w.b1 && right.twin >= 0) {
+    const double l1 = right.len;
+    const double den = sy * (cx - length);
+    const auto t_of = [&](double b) {
+      return l1 * (1.0 - sy * (b - length) / ((b - sx) * cy + den));
+    };
+    const double b0 = lo_right <= x ? 0.0 : t_of(lo_right);
+    const double b1 = t_of(w.b1);
+    const double ux = h.u1x, uy = h.u1y;
+    const double dx = sx - cx, dy = sy - cy;
+    push_child(right.twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, w.sigma);
+  }
+}
+
 void Propagator::process_list(int h) {
   HalfEdgeState& p = pending_[h];
   int id = p.head;
@@ -1334,16 +1421,15 @@ void Propagator::process_list(int h) {
         best_id = id;
       }
     }
-    batch_list_.emplace_back(id, dc);
+    batch_list_.push_back(BatchEntry{id, x, dc});
   }
   if (batch_list_.empty()) return;
   if (!(best < kInf)) {
     // No window sees C: a path through the nearer end of an interval is still real, and C must
     // get a finite distance (it is popped later, so the windows beyond it move on).
-    for (const auto& [wid, dc] : batch_list_) {
-      const Window& w = windows_[wid];
-      const double x = (w.sx * cy - w.sy * cx) / (cy - w.sy);
-      const double end = x < w.b0 ? w.b0 : w.b1;
+    for (const BatchEntry& b : batch_list_) {
+      const Window& w = windows_[b.id];
+      const double end = b.x < w.b0 ? w.b0 : w.b1;
       best = std::min(best, w.sigma + hyp(end - w.sx, w.sy) + hyp(cx - end, cy));
     }
   }
@@ -1352,11 +1438,11 @@ void Propagator::process_list(int h) {
   relax(e.vc, best, best_id);
   const bool target = track_targets_ && target_face_[h / 3];
   for (std::size_t k = 0; k < batch_list_.size(); ++k) {
-    const auto [wid, dc] = batch_list_[k];
-    const Window w = windows_[wid];  // a copy: propagating appends to windows_
+    const BatchEntry b = batch_list_[k];
+    const Window w = windows_[b.id];  // a copy: its children may take the slot
     if (target) target_copies_.push_back(w);
-    free_.push_back(wid);  // its children may take the slot
-    propagate(w, wid, dc);
+    free_.push_back(b.id);
+    propagate_batch(w, b.x, b.corner);
   }
 }
 
