@@ -2,8 +2,12 @@
 //
 // For each family, R source points at u1_i = i/(R-1) on the first boundary get one exact
 // single-source solve each for the R target points u2_j on the second boundary. The solves ask
-// only for those targets (SolveOptions: no windows kept, stop once the targets' faces are
-// final), which gives the same exact distances as querying a complete field. The 2R solves (both
+// only for those targets and keep no windows (SolveOptions), which gives the same exact distances
+// as querying a complete field and lets the engine propagate in batches (geodesic_fast.cpp, 2.5-4x
+// faster than its window-ordered propagation). They do not stop at the targets: the targets lie on
+// the opposite boundary, beyond which little of the patch is left (no vertex of the examples'
+// patches is farther from a row's source than that row's farthest target), and only the ordered
+// propagation can stop early. The 2R solves (both
 // families) are independent: worker threads take them from an atomic counter and write to
 // distinct matrix rows, so the result does not depend on the number of threads or on scheduling.
 //
@@ -134,7 +138,6 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
     sources[f].resize(R);
     targets[f].targets.resize(R);
     targets[f].keep_windows = false;
-    targets[f].stop_at_targets = true;
     for (int i = 0; i < R; ++i) {
       const double t = static_cast<double>(i) / (R - 1);
       sources[f][i] = point_on_chain(mesh, first, t);
