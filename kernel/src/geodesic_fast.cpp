@@ -663,7 +663,8 @@ class Propagator {
     windows_.clear();
     windows_.reserve(m.window_hint.load(std::memory_order_relaxed));
     target_windows_.clear();
-    batch_ = !options.keep_windows && !options.stop_at_targets;
+    batch_ = !options.stop_at_targets;
+    recycle_ = batch_ && !options.keep_windows;
     if (batch_) {
       pending_.assign(m.half.size(), HalfEdgeState{});
       inside_.assign(nv, 0);
@@ -724,8 +725,9 @@ class Propagator {
   }
   void append_pending(const Window& w);
   /// Batch propagation's propagate(): the same children, written straight into pending lists.
-  void propagate_batch(const Window& w, double x, double corner);
-  void push_child(int he, double len, double b0, double b1, double sx, double sy, double sigma);
+  void propagate_batch(const Window& w, int id, double x, double corner);
+  void push_child(int he, double len, double b0, double b1, double sx, double sy, double sigma,
+                  int parent, int root, std::int8_t exit);
   void process_list(int h);
   void edges_ready(int v);
   void drain();
@@ -769,7 +771,8 @@ class Propagator {
   std::vector<double>& incoming_;
   std::vector<int> reemit_;
   const double margin_;
-  bool batch_ = false;
+  bool batch_ = false;    ///< batch propagation (see run_batch)
+  bool recycle_ = false;  ///< batch propagation without keeping windows: slots are reused
   bool track_targets_ = false;
   std::vector<int> stop_faces_, stop_vertices_;
 };
@@ -1312,7 +1315,7 @@ void Propagator::append_pending(const Window& w) {
 }
 
 inline void Propagator::push_child(int he, double len, double b0, double b1, double sx, double sy,
-                                   double sigma) {
+                                   double sigma, int parent, int root, std::int8_t exit) {
   if (sy > 0) sy = 0;
   if (b0 < 0) b0 = 0;
   if (b1 > len) b1 = len;
@@ -1332,6 +1335,9 @@ inline void Propagator::push_child(int he, double len, double b0, double b1, dou
   c.sy = sy;
   c.sigma = sigma;
   c.he = he;
+  c.parent = parent;
+  c.root = root;
+  c.exit = exit;
   HalfEdgeState& p = pending_[he];
   c.next = p.head;
   p.head = id;
@@ -1341,7 +1347,7 @@ inline void Propagator::push_child(int he, double len, double b0, double b1, dou
   }
 }
 
-void Propagator::propagate_batch(const Window& w, double x, double corner) {
+void Propagator::propagate_batch(const Window& w, int id, double x, double corner) {
   // As propagate() (the same geometry), without the path fields; x is the crossing of I->C
   // with the edge and corner sigma + |I C| if known (else negative).
   const HalfEdge& h = m_.half[w.he];
@@ -1372,7 +1378,7 @@ void Propagator::propagate_batch(const Window& w, double x, double corner) {
     const double b0 = l2 * (w.b0 * sy) / ((w.b0 - sx) * cy + den);
     const double b1 = hi_left >= x ? l2 : l2 * (hi_left * sy) / ((hi_left - sx) * cy + den);
     const double ux = h.u2x, uy = h.u2y;
-    push_child(left.twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, w.sigma);
+    push_child(left.twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, w.sigma, id, w.root, 2);
   }
   if (lo_right < w.b1 && right.twin >= 0) {
     const double l1 = right.len;
@@ -1384,7 +1390,8 @@ void Propagator::propagate_batch(const Window& w, double x, double corner) {
     const double b1 = t_of(w.b1);
     const double ux = h.u1x, uy = h.u1y;
     const double dx = sx - cx, dy = sy - cy;
-    push_child(right.twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, w.sigma);
+    push_child(right.twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, w.sigma, id, w.root,
+               1);
   }
 }
 
@@ -1426,11 +1433,13 @@ void Propagator::process_list(int h) {
   if (batch_list_.empty()) return;
   if (!(best < kInf)) {
     // No window sees C: a path through the nearer end of an interval is still real, and C must
-    // get a finite distance (it is popped later, so the windows beyond it move on).
+    // get a finite distance (it is popped later, so the windows beyond it move on). Plus the
+    // margin: such a path bends inside an edge, so it is never a shortest path, and with the
+    // margin a real one always replaces it (with its provenance, for paths and rule S).
     for (const BatchEntry& b : batch_list_) {
       const Window& w = windows_[b.id];
       const double end = b.x < w.b0 ? w.b0 : w.b1;
-      best = std::min(best, w.sigma + hyp(end - w.sx, w.sy) + hyp(cx - end, cy));
+      best = std::min(best, w.sigma + hyp(end - w.sx, w.sy) + hyp(cx - end, cy) + margin_);
     }
   }
   if (best < dist_[e.vc] && best_id >= 0 && m_.pseudo[e.vc])
@@ -1440,9 +1449,11 @@ void Propagator::process_list(int h) {
   for (std::size_t k = 0; k < batch_list_.size(); ++k) {
     const BatchEntry b = batch_list_[k];
     const Window w = windows_[b.id];  // a copy: its children may take the slot
-    if (target) target_copies_.push_back(w);
-    free_.push_back(b.id);
-    propagate_batch(w, b.x, b.corner);
+    if (recycle_) {
+      if (target) target_copies_.push_back(w);
+      free_.push_back(b.id);
+    }
+    propagate_batch(w, b.id, b.x, b.corner);
   }
 }
 
@@ -1492,10 +1503,14 @@ void Propagator::run_batch() {
     edges_ready(v);
     drain();
   }
-  // evaluate_targets() reads windows_[target_windows_]: the copies of the target faces' windows.
-  windows_.swap(target_copies_);
-  target_windows_.resize(windows_.size());
-  for (std::size_t k = 0; k < target_windows_.size(); ++k) target_windows_[k] = static_cast<int>(k);
+  if (recycle_) {
+    // evaluate_targets() reads windows_[target_windows_]: the copies of the target faces'
+    // windows (the slots have been reused).
+    windows_.swap(target_copies_);
+    target_windows_.resize(windows_.size());
+    for (std::size_t k = 0; k < target_windows_.size(); ++k)
+      target_windows_[k] = static_cast<int>(k);
+  }
   progress_.report("geodesic distances", 1.0);
 }
 
