@@ -4,9 +4,10 @@
 // is moved (from the value read off the sampled cladding function) to the root of
 //   phi(u2) = d_surface(p(u1), q(u2)) - |p̄(u1) q̄(u2)|
 // by safeguarded secant/bisection on one distance field from p(u1), so that criterion (i) holds
-// to the tolerance asked for, not only to the map's resolution. That field is solved only until
-// it is final on the faces around the second boundary (SolveOptions::stop_at_targets with the
-// boundary's vertices as targets): every distance and path asked for lies there.
+// to the tolerance asked for, not only to the map's resolution. That field is a complete one (with
+// windows, for distances to boundary points and the path): the batch propagation it gets is
+// faster than the window-ordered one that could stop once the faces around the second boundary
+// are final, since little of the patch lies beyond that boundary.
 #include "gridshell/grid.h"
 
 #include <algorithm>
@@ -212,13 +213,6 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
                                               family_boundary(patch, Family::H, 0)};
   const std::array<std::vector<int>, 2> second{family_boundary(patch, Family::G, 1),
                                                family_boundary(patch, Family::H, 1)};
-  // The opposite boundary's vertices: a member solve is final on their faces, which hold every
-  // point of the boundary (refine_end) and the end of every path.
-  std::array<SolveOptions, 2> stop_options;
-  for (int f = 0; f < 2; ++f) {
-    stop_options[f].stop_at_targets = true;
-    for (int v : second[f]) stop_options[f].targets.push_back(SurfacePoint::at_vertex(mesh, v));
-  }
   detail::parallel_for(jobs.size(), options.threads, [&](size_t job) {
     progress.check();
     const auto [f, k] = jobs[job];
@@ -229,7 +223,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
     m.index = k + 1;
     m.u_start = pos.u1;
     const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
-    const DistanceField field = solver.solve(start, stop_options[f]);
+    const DistanceField field = solver.solve(start);
     m.u_end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
                          options.length_tolerance, m.index);
     m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
