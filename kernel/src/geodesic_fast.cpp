@@ -158,6 +158,10 @@ struct HalfEdge {
   int va, vb, vc;        ///< vertices A, B, C
   std::int8_t flip;      ///< 1 if it runs against its undirected edge's orientation
   std::int8_t has_exit;  ///< a window on it can have children (a neighbour across CA or BC)
+  /// The exits, copied here so that a propagation reads one record: the twins of C -> A (left)
+  /// and B -> C (right), -1 on the boundary, and their lengths.
+  int left_twin, right_twin;
+  double left_len, right_len;
 };
 
 /// Everything a solve shares; immutable after construction.
@@ -231,6 +235,10 @@ std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
       HalfEdge& h = m->half[3 * f + e];
       h.ox = h.oy = 0;
       h.has_exit = m->half[3 * f + prev3(e)].twin >= 0 || m->half[3 * f + next3(e)].twin >= 0;
+      h.left_twin = m->half[3 * f + prev3(e)].twin;
+      h.right_twin = m->half[3 * f + next3(e)].twin;
+      h.left_len = m->half[3 * f + prev3(e)].len;
+      h.right_len = m->half[3 * f + next3(e)].len;
       if (h.twin < 0) continue;
       const Vec3& a = mesh.vertices[h.va];
       const Vec3 ex = (mesh.vertices[h.vb] - a) / h.len;
@@ -1351,9 +1359,6 @@ void Propagator::propagate_batch(const Window& w, int id, double x, double corne
   // As propagate() (the same geometry), without the path fields; x is the crossing of I->C
   // with the edge and corner sigma + |I C| if known (else negative).
   const HalfEdge& h = m_.half[w.he];
-  const int f3 = w.he - w.he % 3, e = w.he % 3;
-  const HalfEdge& left = m_.half[f3 + prev3(e)];   // C -> A
-  const HalfEdge& right = m_.half[f3 + next3(e)];  // B -> C
   const double length = h.len, cx = h.cx, cy = h.cy;
   const double sx = w.sx, sy = w.sy;
   double hi_left = std::min(w.b1, x), lo_right = std::max(w.b0, x);
@@ -1372,16 +1377,17 @@ void Propagator::propagate_batch(const Window& w, int id, double x, double corne
     hi_left = std::min(hi_left, rec.x);  // barrier X1-C (rule B)
     lo_right = std::max(lo_right, rec.x);
   }
-  if (hi_left > w.b0 && left.twin >= 0) {
-    const double l2 = left.len;
+  if (hi_left > w.b0 && h.left_twin >= 0) {
+    const double l2 = h.left_len;
     const double den = sy * cx;
     const double b0 = l2 * (w.b0 * sy) / ((w.b0 - sx) * cy + den);
     const double b1 = hi_left >= x ? l2 : l2 * (hi_left * sy) / ((hi_left - sx) * cy + den);
     const double ux = h.u2x, uy = h.u2y;
-    push_child(left.twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, w.sigma, id, w.root, 2);
+    push_child(h.left_twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, w.sigma, id, w.root,
+               2);
   }
-  if (lo_right < w.b1 && right.twin >= 0) {
-    const double l1 = right.len;
+  if (lo_right < w.b1 && h.right_twin >= 0) {
+    const double l1 = h.right_len;
     const double den = sy * (cx - length);
     const auto t_of = [&](double b) {
       return l1 * (1.0 - sy * (b - length) / ((b - sx) * cy + den));
@@ -1390,7 +1396,7 @@ void Propagator::propagate_batch(const Window& w, int id, double x, double corne
     const double b1 = t_of(w.b1);
     const double ux = h.u1x, uy = h.u1y;
     const double dx = sx - cx, dy = sy - cy;
-    push_child(right.twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, w.sigma, id, w.root,
+    push_child(h.right_twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, w.sigma, id, w.root,
                1);
   }
 }
@@ -1436,11 +1442,11 @@ void Propagator::process_list(int h) {
     // get a finite distance (it is popped later, so the windows beyond it move on). Plus the
     // margin: such a path bends inside an edge, so it is never a shortest path, and with the
     // margin a real one always replaces it (with its provenance, for paths and rule S).
-    for (const BatchEntry& b : batch_list_) {
-      const Window& w = windows_[b.id];
-      const double end = b.x < w.b0 ? w.b0 : w.b1;
-      best = std::min(best, w.sigma + hyp(end - w.sx, w.sy) + hyp(cx - end, cy) + margin_);
-    }
+    // Any one real path will do (the first window's).
+    const BatchEntry& b = batch_list_.front();
+    const Window& w = windows_[b.id];
+    const double end = b.x < w.b0 ? w.b0 : w.b1;
+    best = w.sigma + hyp(end - w.sx, w.sy) + hyp(cx - end, cy) + margin_;
   }
   if (best < dist_[e.vc] && best_id >= 0 && m_.pseudo[e.vc])
     incoming_[e.vc] = window_angle(e.vc, windows_[best_id]);
@@ -1460,12 +1466,13 @@ void Propagator::process_list(int h) {
 void Propagator::edges_ready(int v) {
   // The lists on the edges at v (both sides).
   for (int k = m_.vf_start[v]; k < m_.vf_start[v + 1]; ++k) {
-    const int a = m_.vf_half[k];             // v -> v[i+1]
-    const int b = a - a % 3 + prev3(a % 3);  // v[i+2] -> v
+    // Each face's v -> v[i+1] and its twin; v[i+2] -> v is the next face's v -> v[i+1] (or its
+    // twin), except on the boundary.
+    const int a = m_.vf_half[k];  // v -> v[i+1]
     make_ready(a);
     make_ready(m_.half[a].twin);
-    make_ready(b);
-    make_ready(m_.half[b].twin);
+    const int b = a - a % 3 + prev3(a % 3);  // v[i+2] -> v
+    if (m_.half[b].twin < 0) make_ready(b);
   }
 }
 
