@@ -1452,14 +1452,16 @@ void Propagator::process_list(int h) {
     incoming_[e.vc] = window_angle(e.vc, windows_[best_id]);
   relax(e.vc, best, best_id);
   const bool target = track_targets_ && target_face_[h / 3];
+  // Room for every child of the batch (at most two per window), so that windows_ does not move
+  // while a window propagates from its slot; its slot is freed only afterwards.
+  const std::size_t room = windows_.size() + 2 * batch_list_.size();
+  if (windows_.capacity() < room) windows_.reserve(std::max(room, 2 * windows_.capacity()));
   for (std::size_t k = 0; k < batch_list_.size(); ++k) {
     const BatchEntry b = batch_list_[k];
-    const Window w = windows_[b.id];  // a copy: its children may take the slot
-    if (recycle_) {
-      if (target) target_copies_.push_back(w);
-      free_.push_back(b.id);
-    }
+    const Window& w = windows_[b.id];
+    if (target) target_copies_.push_back(w);
     propagate_batch(w, b.id, b.x, b.corner);
+    if (recycle_) free_.push_back(b.id);
   }
 }
 
