@@ -753,6 +753,11 @@ class Propagator {
                          double& f1) const;
   /// `corner`: sigma + |I C| if the caller has it, else negative.
   void propagate(const Window& w, int id, double corner = -1);
+  /// The (at most two) children of w across its face, by rule B's barrier: calls
+  /// emit(half-edge, its length, b0, b1, image x, image y, exit) for each non-empty one. x is the
+  /// crossing of I->C with the edge, corner as for propagate().
+  template <class Emit>
+  void children(const Window& w, double x, double corner, Emit&& emit) const;
   /// Inserts into the edge's sorted list; `hint` is an index at or after the insertion position.
   void insert_slot(int edge, double lo, double hi, int id, int flip, int hint);
 
@@ -981,57 +986,21 @@ void Propagator::insert(Window& w) {
 
 void Propagator::propagate(const Window& w, int id, double corner) {
   const HalfEdge& h = m_.half[w.he];
-  const int f3 = w.he - w.he % 3, e = w.he % 3;
-  const HalfEdge& left = m_.half[f3 + prev3(e)];   // C -> A
-  const HalfEdge& right = m_.half[f3 + next3(e)];  // B -> C
-  const double length = h.len, cx = h.cx, cy = h.cy;
-  const double sx = w.sx, sy = w.sy;
-  // Crossing of the line I->C with the edge: entries left of it exit through C->A, entries
-  // right of it through B->C.
-  const double x = (sx * cy - sy * cx) / (cy - sy);
-  double hi_left = std::min(w.b1, x), lo_right = std::max(w.b0, x);
-  const CornerRecord& rec = corner_[w.he];
-  if (rec.d < kInf && rec.d + margin_ < (corner >= 0 ? corner : w.sigma + hyp(cx - sx, cy - sy))) {
-    hi_left = std::min(hi_left, rec.x);  // barrier X1-C (rule B)
-    lo_right = std::max(lo_right, rec.x);
-  }
-  if (hi_left > w.b0 && left.twin >= 0) {
-    // Ray through (b,0) meets A + s (C - A) at s = b sy / ((b - sx) cy + sy cx).
-    const double l2 = left.len;
-    const auto t_of = [&](double b) { return l2 * (b * sy) / ((b - sx) * cy + sy * cx); };
-    Window c;
-    c.b0 = t_of(w.b0);
-    c.b1 = hi_left >= x ? l2 : t_of(hi_left);
-    const double ux = h.u2x, uy = h.u2y;
-    c.sx = sx * ux + sy * uy;
-    c.sy = ux * sy - uy * sx;
-    c.sigma = w.sigma;
-    c.he = left.twin;
-    c.parent = id;
-    c.root = w.root;
-    c.exit = 2;
-    insert(c);
-  }
-  if (lo_right < w.b1 && right.twin >= 0) {
-    // Ray through (b,0) meets B + s (C - B) at s = sy (b - L) / ((b - sx) cy + sy (cx - L)).
-    const double l1 = right.len;
-    const auto t_of = [&](double b) {
-      return l1 * (1.0 - sy * (b - length) / ((b - sx) * cy + sy * (cx - length)));
-    };
-    Window c;
-    c.b0 = lo_right <= x ? 0.0 : t_of(lo_right);
-    c.b1 = t_of(w.b1);
-    const double ux = h.u1x, uy = h.u1y;
-    const double dx = sx - cx, dy = sy - cy;
-    c.sx = dx * ux + dy * uy;
-    c.sy = ux * dy - uy * dx;
-    c.sigma = w.sigma;
-    c.he = right.twin;
-    c.parent = id;
-    c.root = w.root;
-    c.exit = 1;
-    insert(c);
-  }
+  const double x = (w.sx * h.cy - w.sy * h.cx) / (h.cy - w.sy);
+  children(w, x, corner,
+           [&](int he, double, double b0, double b1, double sx, double sy, std::int8_t exit) {
+             Window c;
+             c.b0 = b0;
+             c.b1 = b1;
+             c.sx = sx;
+             c.sy = sy;
+             c.sigma = w.sigma;
+             c.he = he;
+             c.parent = id;
+             c.root = w.root;
+             c.exit = exit;
+             insert(c);
+           });
 }
 
 /// The direction, as an angle in u's fan coordinate, in which the shortest path found to the
@@ -1355,12 +1324,12 @@ inline void Propagator::push_child(int he, double len, double b0, double b1, dou
   }
 }
 
-void Propagator::propagate_batch(const Window& w, int id, double x, double corner) {
-  // As propagate() (the same geometry), without the path fields; x is the crossing of I->C
-  // with the edge and corner sigma + |I C| if known (else negative).
+template <class Emit>
+void Propagator::children(const Window& w, double x, double corner, Emit&& emit) const {
   const HalfEdge& h = m_.half[w.he];
   const double length = h.len, cx = h.cx, cy = h.cy;
   const double sx = w.sx, sy = w.sy;
+  // Entries left of x exit through C->A, entries right of it through B->C.
   double hi_left = std::min(w.b1, x), lo_right = std::max(w.b0, x);
   const CornerRecord& rec = corner_[w.he];
   // Rule B applies if rec.d + margin < sigma + |I C|; squared when both sides are positive.
@@ -1378,15 +1347,16 @@ void Propagator::propagate_batch(const Window& w, int id, double x, double corne
     lo_right = std::max(lo_right, rec.x);
   }
   if (hi_left > w.b0 && h.left_twin >= 0) {
+    // Ray through (b,0) meets A + s (C - A) at s = b sy / ((b - sx) cy + sy cx).
     const double l2 = h.left_len;
     const double den = sy * cx;
     const double b0 = l2 * (w.b0 * sy) / ((w.b0 - sx) * cy + den);
     const double b1 = hi_left >= x ? l2 : l2 * (hi_left * sy) / ((hi_left - sx) * cy + den);
     const double ux = h.u2x, uy = h.u2y;
-    push_child(h.left_twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, w.sigma, id, w.root,
-               2);
+    emit(h.left_twin, l2, b0, b1, sx * ux + sy * uy, ux * sy - uy * sx, std::int8_t{2});
   }
   if (lo_right < w.b1 && h.right_twin >= 0) {
+    // Ray through (b,0) meets B + s (C - B) at s = sy (b - L) / ((b - sx) cy + sy (cx - L)).
     const double l1 = h.right_len;
     const double den = sy * (cx - length);
     const auto t_of = [&](double b) {
@@ -1396,9 +1366,15 @@ void Propagator::propagate_batch(const Window& w, int id, double x, double corne
     const double b1 = t_of(w.b1);
     const double ux = h.u1x, uy = h.u1y;
     const double dx = sx - cx, dy = sy - cy;
-    push_child(h.right_twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, w.sigma, id, w.root,
-               1);
+    emit(h.right_twin, l1, b0, b1, dx * ux + dy * uy, ux * dy - uy * dx, std::int8_t{1});
   }
+}
+
+void Propagator::propagate_batch(const Window& w, int id, double x, double corner) {
+  children(w, x, corner,
+           [&](int he, double len, double b0, double b1, double sx, double sy, std::int8_t exit) {
+             push_child(he, len, b0, b1, sx, sy, w.sigma, id, w.root, exit);
+           });
 }
 
 void Propagator::process_list(int h) {
