@@ -97,6 +97,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <sstream>
 
 #include "gridshell/errors.h"
@@ -164,6 +165,18 @@ struct HalfEdge {
   double left_len, right_len;
 };
 
+/// A window (see the file comment). 64 bytes.
+struct Window {
+  double b0, b1;     ///< interval on the edge, 0 <= b0 < b1 <= L (b0 == b1: emptied)
+  double sx, sy;     ///< source image, sy <= 0
+  double sigma;      ///< distance from the source to the image
+  int he;            ///< half-edge it lies on; it propagates into face he / 3
+  int parent;        ///< window it was propagated from, -1 for a window emitted by a source
+  int root;          ///< emitting pseudo-source vertex, -1 for the true source
+  std::int8_t exit;  ///< 1: lies on the parent's right exit (B->C), 2: left exit (C->A), 0: root
+  int next;          ///< batch propagation: the next window pending on the same half-edge
+};
+
 /// Everything a solve shares; immutable after construction.
 struct FastMesh {
   TriangleMesh mesh;
@@ -184,6 +197,10 @@ struct FastMesh {
   double bucket_width = 1;  ///< key width of the event queue's buckets
   /// Windows of the latest solve (+ slack), to reserve the next one's storage at once.
   mutable std::atomic<std::size_t> window_hint{0};
+  /// Window storage of complete fields that have been destroyed, for the next solves: fresh
+  /// memory costs a page fault per 4 KiB (as much as the solve itself on a 4k-vertex mesh).
+  mutable std::mutex pool_mutex;
+  mutable std::vector<std::vector<Window>> pool;
 };
 
 std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
@@ -330,18 +347,6 @@ std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
   return m;
 }
 
-/// A window (see the file comment). 64 bytes.
-struct Window {
-  double b0, b1;     ///< interval on the edge, 0 <= b0 < b1 <= L (b0 == b1: emptied)
-  double sx, sy;     ///< source image, sy <= 0
-  double sigma;      ///< distance from the source to the image
-  int he;            ///< half-edge it lies on; it propagates into face he / 3
-  int parent;        ///< window it was propagated from, -1 for a window emitted by a source
-  int root;          ///< emitting pseudo-source vertex, -1 for the true source
-  std::int8_t exit;  ///< 1: lies on the parent's right exit (B->C), 2: left exit (C->A), 0: root
-  int next;          ///< batch propagation: the next window pending on the same half-edge
-};
-
 /// Best window seeing the corner opposite a half-edge (for the barrier rule).
 struct CornerRecord {
   double d = kInf;  ///< sigma + |I C|
@@ -354,6 +359,7 @@ constexpr int kFromSource = -1;
 
 class FastField final : public DistanceField::Impl {
  public:
+  ~FastField() override;
   std::shared_ptr<const FastMesh> m;
   std::vector<Window> windows;
   std::vector<int> provenance;  ///< per vertex, see the codes above
@@ -1542,6 +1548,19 @@ void Propagator::evaluate_targets(const SurfacePoint& source) {
 // ---------------------------------------------------------------------------------------------
 // Queries
 
+FastField::~FastField() {
+  // Hand the window storage back to the mesh's pool: at most 4 buffers and 256 MiB in all, held
+  // until the solver is destroyed.
+  constexpr std::size_t kMaxBytes = std::size_t{256} << 20;
+  constexpr std::size_t kMaxBuffers = 4;
+  const std::size_t bytes = windows.capacity() * sizeof(Window);
+  if (!m || bytes == 0 || bytes > kMaxBytes) return;
+  std::lock_guard<std::mutex> lock(m->pool_mutex);
+  std::size_t held = bytes;
+  for (const std::vector<Window>& b : m->pool) held += b.capacity() * sizeof(Window);
+  if (m->pool.size() < kMaxBuffers && held <= kMaxBytes) m->pool.push_back(std::move(windows));
+}
+
 void FastField::build_index() {
   const int nf = static_cast<int>(m->half.size() / 3);
   face_start.assign(nf + 1, 0);
@@ -1722,6 +1741,13 @@ class FastSolver final : public GeodesicSolver::Impl {
     field->source = source;
     field->has_windows = options.keep_windows;
     thread_local Scratch scratch;
+    if (options.keep_windows) {
+      std::lock_guard<std::mutex> lock(data_->pool_mutex);
+      if (!data_->pool.empty()) {
+        field->windows = std::move(data_->pool.back());
+        data_->pool.pop_back();
+      }
+    }
     std::vector<Window>& windows = options.keep_windows ? field->windows : scratch.windows;
     {
       Propagator run(*data_, *field, windows, options, progress, scratch);
