@@ -82,10 +82,10 @@
 // through the window's ancestors (one point per edge crossing), then through pseudo-source
 // vertices to the source. Without keep_windows the windows live in per-thread scratch memory
 // reused by the next solve, and only the windows entering the targets' faces are collected to
-// evaluate the targets; such a solve (without stop_at_targets) also propagates in batches per
-// half-edge instead of one window at a time (see "Batch propagation" below: 2.3-4x faster, the
-// same rules except M, equal to the ordered propagation up to rounding). With stop_at_targets the
-// propagation stops once the popped key exceeds an upper bound of the distance anywhere in the
+// evaluate the targets. Every solve without stop_at_targets propagates in batches per half-edge
+// instead of one window at a time in key order as described above (see "Batch propagation"
+// below: 2.5-4x faster, the same rules except M and E, equal up to rounding). With stop_at_targets
+// the propagation stops once the popped key exceeds an upper bound of the distance anywhere in the
 // targets' closed faces (max corner distance + longest edge): every window or vertex event that
 // could still lower a distance there has a key below that distance, so it has already been
 // processed (its children exist).
@@ -1263,7 +1263,7 @@ void Propagator::run() {
   progress_.report("geodesic distances", 1.0);
 }
 
-// Batch propagation (the default for solves that keep no windows). The organisation of Qin et
+// Batch propagation (every solve without stop_at_targets). The organisation of Qin et
 // al.'s VTP (ACM TOG 35(4), 2016): windows are not processed one at a time in key order but
 // collected per half-edge and propagated as a batch once one of the edge's end vertices has been
 // popped from a queue of vertices ordered by their (upper-bound) distance; a window's children
@@ -1275,26 +1275,12 @@ void Propagator::run() {
 // with the length of a real path, so the order changes only how much is pruned, never the
 // result: a popped vertex may still improve (a pseudo-source then emits again from its new
 // distance, in the direction of its new path), and the solve ends when no window is pending and
-// no vertex is queued. A window's slot is recycled once it has propagated (the memory in use is
-// the wavefront's), so rule S's incoming direction is taken when a window sets a distance, and
-// the windows entering target faces are copied for evaluate_targets().
+// no vertex is queued. Without keep_windows a window's slot is recycled once it has propagated
+// (the memory in use is the wavefront's), so rule S's incoming direction is taken when a window
+// sets a distance, and the windows entering target faces are copied for evaluate_targets(); with
+// keep_windows every window stays, with its parent and root, for distance_to and path_to.
 void Propagator::append_pending(const Window& w) {
-  HalfEdgeState& p = pending_[w.he];
-  int id;
-  if (free_.empty()) {
-    id = static_cast<int>(windows_.size());
-    windows_.push_back(w);
-  } else {
-    id = free_.back();
-    free_.pop_back();
-    windows_[id] = w;
-  }
-  windows_[id].next = p.head;
-  p.head = id;
-  if (p.ready && !p.queued) {
-    p.queued = 1;
-    fifo_.push_back(w.he);
-  }
+  push_child(w.he, m_.half[w.he].len, w.b0, w.b1, w.sx, w.sy, w.sigma, w.parent, w.root, w.exit);
 }
 
 inline void Propagator::push_child(int he, double len, double b0, double b1, double sx, double sy,
