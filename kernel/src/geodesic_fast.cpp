@@ -1283,8 +1283,9 @@ void Propagator::append_pending(const Window& w) {
   push_child(w.he, m_.half[w.he].len, w.b0, w.b1, w.sx, w.sy, w.sigma, w.parent, w.root, w.exit);
 }
 
-inline void Propagator::push_child(int he, double len, double b0, double b1, double sx, double sy,
-                                   double sigma, int parent, int root, std::int8_t exit) {
+[[gnu::always_inline]] inline void Propagator::push_child(int he, double len, double b0, double b1,
+                                                          double sx, double sy, double sigma,
+                                                          int parent, int root, std::int8_t exit) {
   if (sy > 0) sy = 0;
   if (b0 < 0) b0 = 0;
   if (b1 > len) b1 = len;
