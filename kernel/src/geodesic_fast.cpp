@@ -671,15 +671,16 @@ class Propagator {
     prov_.assign(nv, kFromSource);
     emitted_.assign(nv, 0);
     corner_.assign(m.half.size(), CornerRecord{});
-    lists_.assign(m.edge_count, EdgeList{});
-    slots_.clear();
     heap_.reset(m.bucket_width);
     windows_.clear();
     windows_.reserve(m.window_hint.load(std::memory_order_relaxed));
     target_windows_.clear();
     batch_ = !options.stop_at_targets;
     recycle_ = batch_ && !options.keep_windows;
-    if (batch_) {
+    if (!batch_) {  // the edges' window lists of rule M
+      lists_.assign(m.edge_count, EdgeList{});
+      slots_.clear();
+    } else {
       pending_.assign(m.half.size(), HalfEdgeState{});
       inside_.assign(nv, 0);
       fifo_.clear();
