@@ -202,12 +202,11 @@ void JobQueue::cancel(const std::shared_ptr<Job>& job, StatusCode reason, std::s
       waiting_.erase(std::find(waiting_.begin(), waiting_.end(), job));
       job->state = Job::State::Done;
       job->started = job->stopped = job->cancel_time;
-      ++stats_.cancelled;
       finish_now = true;
       idle_.notify_all();
     }
   }
-  if (finish_now) finish(job, {reason, job->cancel_message}, nullptr);
+  if (finish_now) finish(job, {reason, job->cancel_message}, nullptr, Count::Cancelled);
 }
 
 void JobQueue::work() {
@@ -256,7 +255,6 @@ void JobQueue::work() {
       std::lock_guard lock(mutex_);
       job->stopped = Clock::now();
       job->state = Job::State::Done;
-      running_.erase(std::find(running_.begin(), running_.end(), job));
       if (job->cancel_reason != StatusCode::Ok && !status.ok()) {
         const double latency = ms_between(job->cancel_time, job->stopped);
         job->cancel_latency_ms = latency;
@@ -266,22 +264,13 @@ void JobQueue::work() {
         if (status.code == StatusCode::Cancelled)
           status = {job->cancel_reason, job->cancel_message};
       }
-      if (status.ok())
-        ++stats_.succeeded;
-      else if (status.code == StatusCode::Cancelled ||
-               status.code == StatusCode::DeadlineExceeded ||
-               (status.code == StatusCode::Unavailable && job->cancel_reason != StatusCode::Ok))
-        ++stats_.cancelled;
-      else
-        ++stats_.failed;
-      idle_.notify_all();
     }
-    finish(job, std::move(status), std::move(result));
+    finish(job, std::move(status), std::move(result), Count::Running);
   }
 }
 
 void JobQueue::finish(const std::shared_ptr<Job>& job, Status status,
-                      std::unique_ptr<google::protobuf::Message> result) {
+                      std::unique_ptr<google::protobuf::Message> result, Count count) {
   if (options_.log) {
     nlohmann::json line;
     line["time"] = utc_timestamp();
@@ -300,6 +289,23 @@ void JobQueue::finish(const std::shared_ptr<Job>& job, Status status,
     line["stages_ms"] = stages;
     if (job->cancel_latency_ms) line["cancel_ms"] = *job->cancel_latency_ms;
     write_log(line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  }
+  // The statistics count a job as ended only once its log line is written, so whoever sees
+  // the count change also finds the line.
+  if (count == Count::Cancelled) {
+    std::lock_guard lock(mutex_);
+    ++stats_.cancelled;
+  } else if (count == Count::Running) {
+    std::lock_guard lock(mutex_);
+    running_.erase(std::find(running_.begin(), running_.end(), job));
+    if (status.ok())
+      ++stats_.succeeded;
+    else if (status.code == StatusCode::Cancelled || status.code == StatusCode::DeadlineExceeded ||
+             (status.code == StatusCode::Unavailable && job->cancel_reason != StatusCode::Ok))
+      ++stats_.cancelled;
+    else
+      ++stats_.failed;
+    idle_.notify_all();
   }
   job->request.sink->finish(status, std::move(result));
 }

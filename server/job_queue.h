@@ -128,8 +128,10 @@ class JobQueue {
  private:
   void work();
   void watch_deadlines();
+  /// How finish() counts the job in the statistics (after its log line is written).
+  enum class Count { None, Cancelled, Running };
   void finish(const std::shared_ptr<Job>& job, Status status,
-              std::unique_ptr<google::protobuf::Message> result);
+              std::unique_ptr<google::protobuf::Message> result, Count count = Count::None);
 
   Options options_;
   std::atomic<std::uint64_t> next_id_{1};
