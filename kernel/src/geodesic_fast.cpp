@@ -1391,9 +1391,13 @@ void Propagator::process_list(int h) {
     const Window& w = windows_[id];
     // The opposite corner C seen straight through the window: a distance for C and the barrier
     // record (rule B), now the best of the whole batch before any of it propagates.
-    const double x = (w.sx * cy - w.sy * cx) / (cy - w.sy);
+    // x = num / den (den > 0); the division only for windows that see C: for the others only
+    // the side matters (children() treats x < b0 as -inf and x > b1 as +inf).
+    const double num = w.sx * cy - w.sy * cx, den = cy - w.sy;
+    double x = num < (w.b0 - tol) * den ? -kInf : (num > (w.b1 + tol) * den ? kInf : 0.0);
     double dc = -1;
-    if (x >= w.b0 - tol && x <= w.b1 + tol) {
+    if (x == 0.0) {
+      x = num / den;
       dc = w.sigma + hyp(cx - w.sx, cy - w.sy);
       if (dc < rec.d) {
         rec.d = dc;
