@@ -147,7 +147,6 @@ std::shared_ptr<Job> JobQueue::submit(JobRequest request) {
                      std::to_string(running_.size()) + " running); retry later"};
     }
     if (!refusal.ok()) {
-      ++stats_.rejected;
       job->state = Job::State::Done;
     } else {
       ++stats_.accepted;
@@ -165,7 +164,7 @@ std::shared_ptr<Job> JobQueue::submit(JobRequest request) {
   }
   if (!refusal.ok()) {
     job->started = job->stopped = Clock::now();
-    finish(job, std::move(refusal), nullptr);
+    finish(job, std::move(refusal), nullptr, Count::Rejected);
     return nullptr;
   }
   work_ready_.notify_one();
@@ -181,11 +180,7 @@ void JobQueue::refuse(JobRequest request, Status status) {
   if (job->request.id == 0) job->request.id = next_id();
   job->state = Job::State::Done;
   job->started = job->stopped = Clock::now();
-  {
-    std::lock_guard lock(mutex_);
-    ++stats_.rejected;
-  }
-  finish(job, std::move(status), nullptr);
+  finish(job, std::move(status), nullptr, Count::Rejected);
 }
 
 void JobQueue::cancel(const std::shared_ptr<Job>& job, StatusCode reason, std::string message) {
@@ -292,7 +287,10 @@ void JobQueue::finish(const std::shared_ptr<Job>& job, Status status,
   }
   // The statistics count a job as ended only once its log line is written, so whoever sees
   // the count change also finds the line.
-  if (count == Count::Cancelled) {
+  if (count == Count::Rejected) {
+    std::lock_guard lock(mutex_);
+    ++stats_.rejected;
+  } else if (count == Count::Cancelled) {
     std::lock_guard lock(mutex_);
     ++stats_.cancelled;
   } else if (count == Count::Running) {

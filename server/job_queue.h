@@ -128,10 +128,11 @@ class JobQueue {
  private:
   void work();
   void watch_deadlines();
-  /// How finish() counts the job in the statistics (after its log line is written).
-  enum class Count { None, Cancelled, Running };
+  /// How finish() counts the job in the statistics, after its log line is written: refused,
+  /// cancelled while waiting, or ended by a worker (succeeded, failed or cancelled by status).
+  enum class Count { Rejected, Cancelled, Running };
   void finish(const std::shared_ptr<Job>& job, Status status,
-              std::unique_ptr<google::protobuf::Message> result, Count count = Count::None);
+              std::unique_ptr<google::protobuf::Message> result, Count count);
 
   Options options_;
   std::atomic<std::uint64_t> next_id_{1};

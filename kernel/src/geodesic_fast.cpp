@@ -194,7 +194,7 @@ struct LargePageAllocator {
   LargePageAllocator(const LargePageAllocator<U>&) {}
   static std::size_t rounded(std::size_t bytes) { return (bytes + kHuge - 1) & ~(kHuge - 1); }
   T* allocate(std::size_t n) {
-    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T) - kHuge) throw std::bad_alloc();
+    if (n > (std::numeric_limits<std::size_t>::max() - kHuge) / sizeof(T)) throw std::bad_alloc();
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kThreshold) return static_cast<T*>(::operator new(bytes));
     void* p = std::aligned_alloc(kHuge, rounded(bytes));
@@ -1434,9 +1434,10 @@ void Propagator::process_list(int h) {
     // x = num / den (den > 0); the division only for windows that see C: for the others only
     // the side matters (children() treats x < b0 as -inf and x > b1 as +inf).
     const double num = w.sx * cy - w.sy * cx, den = cy - w.sy;
-    double x = num < (w.b0 - tol) * den ? -kInf : (num > (w.b1 + tol) * den ? kInf : 0.0);
+    const bool before = num<(w.b0 - tol) * den, after = num>(w.b1 + tol) * den;
+    double x = before ? -kInf : kInf;
     double dc = -1;
-    if (x == 0.0) {
+    if (!before && !after) {
       x = num / den;
       dc = w.sigma + hyp(cx - w.sx, cy - w.sy);
       if (dc < rec.d) {
