@@ -32,7 +32,7 @@
 #include <random>
 #include <sstream>
 
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell {
 namespace {

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell::server {
 

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "auth.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "grpc_service.h"
 #include "http_gateway.h"
 #include "methods.h"

@@ -15,7 +15,7 @@
 #include <thread>
 
 #include "auth.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/files.h"
 
 namespace gridshell::server {

@@ -5,7 +5,7 @@
 #include <new>
 #include <nlohmann/json.hpp>
 
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell::server {
 

@@ -26,7 +26,7 @@
 #include <thread>
 #include <vector>
 
-#include "gridshell/progress.h"
+#include "gridshell/mesh/progress.h"
 #include "gridshell/v1/requests.pb.h"
 #include "status.h"
 

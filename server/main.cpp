@@ -12,7 +12,7 @@
 #include <iostream>
 
 #include "daemon.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 
 int main(int argc, char** argv) {
   using namespace gridshell;

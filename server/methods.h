@@ -14,8 +14,8 @@
 #include <string>
 #include <utility>
 
-#include "gridshell/errors.h"
-#include "gridshell/progress.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/progress.h"
 #include "gridshell/requests.h"
 #include "gridshell/v1/requests.pb.h"
 #include "job_queue.h"

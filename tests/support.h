@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "gridshell/mesh.h"
+#include "gridshell/mesh/mesh.h"
 
 namespace gridshell::testing {
 

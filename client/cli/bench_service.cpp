@@ -27,7 +27,7 @@
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/requests.h"
 #include "remote.h"

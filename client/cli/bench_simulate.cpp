@@ -13,9 +13,9 @@
 
 #include "bench_support.h"
 #include "cli_support.h"
-#include "gridshell/design.h"
+#include "gridshell/design/design.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/simulation.h"
+#include "gridshell/simulation/simulation.h"
 #include "paper_table1.h"
 
 namespace gridshell::cli {

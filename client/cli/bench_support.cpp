@@ -6,7 +6,7 @@
 #include <iostream>
 #include <sstream>
 
-#include "gridshell/mesh_io.h"
+#include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {
 

@@ -10,7 +10,7 @@
 #include <iostream>
 #include <mutex>
 
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/files.h"
 #include "gridshell/requests.h"

@@ -7,10 +7,10 @@
 #include <optional>
 #include <string>
 
-#include "gridshell/mesh.h"
-#include "gridshell/mesh_io.h"
-#include "gridshell/patch.h"
-#include "gridshell/progress.h"
+#include "gridshell/mesh/mesh.h"
+#include "gridshell/mesh/mesh_io.h"
+#include "gridshell/design/patch.h"
+#include "gridshell/mesh/progress.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {

@@ -19,11 +19,11 @@
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/design.h"
-#include "gridshell/errors.h"
+#include "gridshell/design/design.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/geodesic.h"
-#include "gridshell/mesh_io.h"
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {
 namespace {

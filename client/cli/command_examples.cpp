@@ -3,9 +3,9 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh_io.h"
+#include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/requests.h"
 #include "gridshell/v1/reports.pb.h"
 #include "remote.h"

@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "remote.h"
 
 namespace gridshell::cli {

@@ -10,7 +10,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/deployment_job.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/files.h"
 #include "gridshell/requests.h"
 #include "remote.h"

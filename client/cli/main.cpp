@@ -8,7 +8,7 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "remote.h"
 
 namespace {

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <thread>
 
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 
 #ifdef GRIDSHELL_HAVE_GRPC
 #include <grpcpp/grpcpp.h>

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "gridshell/progress.h"
+#include "gridshell/mesh/progress.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {

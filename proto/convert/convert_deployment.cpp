@@ -3,8 +3,8 @@
 #include <cmath>
 #include <string>
 
-#include "gridshell/errors.h"
-#include "gridshell/mesh.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/mesh.h"
 
 namespace gridshell {
 namespace {

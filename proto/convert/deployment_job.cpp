@@ -6,8 +6,8 @@
 #include <thread>
 
 #include "gridshell/convert_deployment.h"
-#include "gridshell/deployment_export.h"
-#include "gridshell/errors.h"
+#include "gridshell/simulation/deployment_export.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell {
 namespace {

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "gridshell/errors.h"
-#include "gridshell/mesh_io.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell {
 

@@ -7,9 +7,9 @@
 #include <utility>
 
 #include "gridshell/convert.h"
-#include "gridshell/design_export.h"
-#include "gridshell/errors.h"
-#include "gridshell/geodesic.h"
+#include "gridshell/design/design_export.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/geodesic/geodesic.h"
 
 namespace gridshell {
 namespace {

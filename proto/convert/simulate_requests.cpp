@@ -3,7 +3,7 @@
 #include <utility>
 
 #include "gridshell/deployment_job.h"
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/requests.h"
 
 namespace gridshell {

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gridshell/errors.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/files.h"
 #include "server_support.h"
 #include "support.h"

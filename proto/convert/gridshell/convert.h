@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "gridshell/design.h"
+#include "gridshell/design/design.h"
 #include "gridshell/v1/design.pb.h"
 
 namespace gridshell {

@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "gridshell/design.h"
-#include "gridshell/simulation.h"
+#include "gridshell/design/design.h"
+#include "gridshell/simulation/simulation.h"
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/design.pb.h"
 

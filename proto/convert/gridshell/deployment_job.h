@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
-#include "gridshell/progress.h"
-#include "gridshell/simulation.h"
+#include "gridshell/mesh/progress.h"
+#include "gridshell/simulation/simulation.h"
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/design.pb.h"
 

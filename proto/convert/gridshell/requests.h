@@ -13,11 +13,11 @@
 #include <optional>
 #include <string>
 
-#include "gridshell/design.h"
-#include "gridshell/geodesic.h"
-#include "gridshell/mesh_io.h"
-#include "gridshell/progress.h"
-#include "gridshell/target_patch.h"
+#include "gridshell/design/design.h"
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/mesh_io.h"
+#include "gridshell/mesh/progress.h"
+#include "gridshell/design/target_patch.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell {

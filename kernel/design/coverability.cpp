@@ -1,0 +1,218 @@
+#include "gridshell/design/coverability.h"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "gridshell/mesh/curvature.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/mesh_topology.h"
+#include "gridshell/mesh/parallel.h"
+
+namespace gridshell {
+namespace {
+
+int interior_peak(const Patch& patch, const std::vector<double>& k) {
+  std::vector<char> boundary(patch.mesh.vertex_count(), 0);
+  for (const auto& side : patch.sides)
+    for (int v : side) boundary[v] = 1;
+  int peak = -1;
+  for (int v = 0; v < patch.mesh.vertex_count(); ++v)
+    if (!boundary[v] && (peak < 0 || k[v] > k[peak])) peak = v;
+  return peak;
+}
+
+}  // namespace
+
+GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver, const std::vector<double>& k,
+                     const Progress& progress) {
+  GapFactor gap;
+  gap.peak = interior_peak(patch, k);
+  if (gap.peak < 0) return gap;  // no interior vertex: nothing can be uncovered
+  const TriangleMesh& mesh = patch.mesh;
+  // The solves poll the cancellation flag (a daemon must stop within 200 ms, also on big meshes).
+  const std::vector<double> from_peak =
+      solver.distances(SurfacePoint::at_vertex(mesh, gap.peak), progress.checker());
+  // p1: boundary vertex closest to the peak, and the sides it lies on.
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& side : patch.sides)
+    for (int v : side)
+      if (from_peak[v] < best) {
+        best = from_peak[v];
+        gap.p1 = v;
+      }
+  const std::vector<double> from_p1 =
+      solver.distances(SurfacePoint::at_vertex(mesh, gap.p1), progress.checker());
+  gap.eta = 1.0;
+  for (int s = 0; s < 4; ++s) {
+    if (std::find(patch.sides[s].begin(), patch.sides[s].end(), gap.p1) == patch.sides[s].end())
+      continue;
+    const auto& opposite = patch.sides[(s + 2) % 4];
+    int q1 = -1;
+    double minimum = std::numeric_limits<double>::infinity();
+    for (int q : opposite) {
+      const double excess = from_peak[gap.p1] + from_peak[q] - from_p1[q];
+      if (excess < minimum) {
+        minimum = excess;
+        q1 = q;
+      }
+    }
+    const double eta = (from_peak[gap.p1] + from_peak[q1]) / from_p1[q1];
+    if (gap.q1 < 0 || eta > gap.eta) {
+      gap.eta = eta;
+      gap.q1 = q1;
+    }
+  }
+  return gap;
+}
+
+CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOptions& options,
+                                        const Progress& progress) {
+  CoverabilityReport report;
+  progress.report("coverability", 0.0);
+  const std::vector<double> k = gaussian_curvature(patch.mesh);
+  const int peak = interior_peak(patch, k);
+  report.gaussian_curvature_max_vertex = peak;
+  report.gaussian_curvature_max = peak >= 0 ? k[peak] : 0.0;
+  report.injectivity_bound = report.gaussian_curvature_max > 0
+                                 ? std::numbers::pi / std::sqrt(report.gaussian_curvature_max)
+                                 : std::numeric_limits<double>::infinity();
+  GeodesicSolver solver(patch.mesh, GeodesicOptions{options.method});
+  // Longest member: members join opposite sides (0-2 and 1-3); sample sources on one side.
+  const int samples = std::max(2, options.member_distance_samples);
+  std::vector<std::pair<int, int>> jobs;  // (source vertex, side it starts on)
+  for (int s = 0; s < 2; ++s) {
+    const auto& from = patch.sides[s];
+    for (int i = 0; i < samples; ++i)
+      jobs.push_back(
+          {from[static_cast<size_t>(std::lround(i * (from.size() - 1.0) / (samples - 1)))], s});
+  }
+  progress.report("coverability: member lengths", 0.1);
+  // The sources' solves in parallel, each into its own slot (deterministic for any thread count).
+  std::vector<double> longest(jobs.size(), 0.0);
+  const Progress checker = progress.checker();
+  detail::parallel_for(jobs.size(), options.threads, [&](size_t job) {
+    progress.check();
+    const auto [v, side] = jobs[job];
+    const std::vector<double> d = solver.distances(SurfacePoint::at_vertex(patch.mesh, v), checker);
+    for (int q : patch.sides[side + 2]) longest[job] = std::max(longest[job], d[q]);
+  });
+  for (double d : longest)
+    report.longest_member_distance = std::max(report.longest_member_distance, d);
+  report.injectivity_ok = report.longest_member_distance < report.injectivity_bound;
+  progress.report("coverability: gap factor", 0.9);
+  report.gap = gap_factor(patch, solver, k, progress);
+  progress.report("coverability", 1.0);
+  return report;
+}
+
+double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fixed, double step) {
+  const int n = mesh.vertex_count();
+  std::vector<int> free_index(n, -1);
+  int free_count = 0;
+  for (int v = 0; v < n; ++v)
+    if (!fixed[v]) free_index[v] = free_count++;
+  if (free_count == 0) return 0.0;
+  double edge_sum = 0;
+  int edge_count = 0;
+  std::vector<Eigen::Triplet<double>> triplets;
+  std::vector<double> mass(n, 0.0);
+  std::vector<Eigen::Triplet<double>> stiffness;  // L over all vertices
+  for (const Face& f : mesh.faces) {
+    const Vec3& a = mesh.vertices[f[0]];
+    const double area = 0.5 * (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm();
+    for (int i = 0; i < 3; ++i) {
+      mass[f[i]] += area / 3;
+      const int o = f[i], p = f[(i + 1) % 3], q = f[(i + 2) % 3];
+      const Vec3 u = mesh.vertices[p] - mesh.vertices[o], v = mesh.vertices[q] - mesh.vertices[o];
+      const double cot = u.dot(v) / std::max(u.cross(v).norm(), 1e-300);
+      const double w = 0.5 * cot;  // weight of edge (p,q), opposite vertex o
+      stiffness.push_back({p, q, -w});
+      stiffness.push_back({q, p, -w});
+      stiffness.push_back({p, p, w});
+      stiffness.push_back({q, q, w});
+      edge_sum += (mesh.vertices[p] - mesh.vertices[q]).norm();
+      ++edge_count;
+    }
+  }
+  const double mean_edge = edge_sum / edge_count;
+  const double h = step * mean_edge * mean_edge;
+  Eigen::SparseMatrix<double> L(n, n);
+  L.setFromTriplets(stiffness.begin(), stiffness.end());
+  // A = M + h L restricted to free vertices; right-hand side M x - h L_fixed x_fixed.
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free_count, 3);
+  for (int v = 0; v < n; ++v)
+    if (free_index[v] >= 0) {
+      triplets.push_back({free_index[v], free_index[v], mass[v]});
+      rhs.row(free_index[v]) = mass[v] * mesh.vertices[v].transpose();
+    }
+  for (int col = 0; col < L.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(L, col); it; ++it) {
+      const int r = static_cast<int>(it.row()), c = static_cast<int>(it.col());
+      if (free_index[r] < 0) continue;
+      if (free_index[c] >= 0)
+        triplets.push_back({free_index[r], free_index[c], h * it.value()});
+      else
+        rhs.row(free_index[r]) -= h * it.value() * mesh.vertices[c].transpose();
+    }
+  Eigen::SparseMatrix<double> A(free_count, free_count);
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::MatrixXd x;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  if (ldlt.info() == Eigen::Success) {
+    x = ldlt.solve(rhs);
+  } else {  // obtuse triangles can make the cotangent matrix indefinite; LU still solves it
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(A);
+    if (lu.info() != Eigen::Success) throw Infeasible("smoothing: the fairing system is singular");
+    x = lu.solve(rhs);
+  }
+  double moved = 0;
+  for (int v = 0; v < n; ++v)
+    if (free_index[v] >= 0) {
+      const Vec3 p = x.row(free_index[v]).transpose();
+      if (!p.allFinite()) throw Infeasible("smoothing produced non-finite positions");
+      moved = std::max(moved, (p - mesh.vertices[v]).norm());
+      mesh.vertices[v] = p;
+    }
+  return moved;
+}
+
+SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& options,
+                                       const Progress& progress) {
+  SmoothingResult result;
+  const TriangleMesh original = patch.mesh;
+  const MeshTopology topology = build_topology(patch.mesh);
+  std::vector<char> fixed(patch.mesh.vertex_count(), 0);
+  for (int v = 0; v < patch.mesh.vertex_count(); ++v) fixed[v] = topology.is_boundary_vertex[v];
+  auto eta_of = [&]() {
+    GeodesicSolver solver(patch.mesh, GeodesicOptions{options.method});
+    return gap_factor(patch, solver, gaussian_curvature(patch.mesh), progress).eta;
+  };
+  result.eta_before = result.eta_after = eta_of();
+  while (result.eta_after > options.eta_max) {
+    if (result.iterations >= options.max_smoothing_iterations) {
+      std::ostringstream msg;
+      msg << "smoothing: gap factor eta is still " << result.eta_after << " > eta_max "
+          << options.eta_max << " after " << result.iterations
+          << " iterations: the patch cannot be covered by shortest geodesics (paper 3.3); "
+             "choose corners closer together or a smoother surface";
+      throw Infeasible(msg.str());
+    }
+    progress.report("smoothing", std::min(1.0, static_cast<double>(result.iterations) /
+                                                   options.max_smoothing_iterations));
+    laplacian_smoothing_step(patch.mesh, fixed, options.smoothing_step);
+    ++result.iterations;
+    result.eta_after = eta_of();
+  }
+  for (int v = 0; v < patch.mesh.vertex_count(); ++v)
+    result.max_displacement =
+        std::max(result.max_displacement, (patch.mesh.vertices[v] - original.vertices[v]).norm());
+  return result;
+}
+
+}  // namespace gridshell

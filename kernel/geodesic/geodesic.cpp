@@ -1,0 +1,157 @@
+// gridshell — geodesic front end: surface points, method names, path length and the dispatch
+// from GeodesicSolver / DistanceField to the engines (geodesic_fast.cpp, geodesic_cgal.cpp,
+// geodesic_heat.cpp).
+#include "gridshell/geodesic/geodesic.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "geodesic_fast.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/mesh_topology.h"
+
+namespace gridshell {
+
+namespace geodesic_detail {
+
+SurfacePoint normalize_surface_point(const TriangleMesh& mesh, const SurfacePoint& point,
+                                     const char* what) {
+  if (point.face < 0 || point.face >= mesh.face_count()) {
+    std::ostringstream msg;
+    msg << what << " point: face " << point.face << " is out of range (the mesh has "
+        << mesh.face_count() << " faces)";
+    throw InvalidInput(msg.str());
+  }
+  const Vec3& w = point.barycentric;
+  const double sum = w[0] + w[1] + w[2];
+  if (!std::isfinite(sum) || w.minCoeff() < -1e-9 || std::abs(sum - 1.0) > 1e-9) {
+    std::ostringstream msg;
+    msg << what << " point: barycentric weights (" << w[0] << ", " << w[1] << ", " << w[2]
+        << ") in face " << point.face << " must be non-negative and sum to 1";
+    throw InvalidInput(msg.str());
+  }
+  SurfacePoint out = point;
+  for (int i = 0; i < 3; ++i)
+    if (out.barycentric[i] < 1e-14) out.barycentric[i] = 0.0;
+  out.barycentric /= out.barycentric.sum();
+  for (int i = 0; i < 3; ++i)
+    if (out.barycentric[(i + 1) % 3] == 0.0 && out.barycentric[(i + 2) % 3] == 0.0)
+      out.barycentric[i] = 1.0;
+  return out;
+}
+
+int zero_weight_count(const SurfacePoint& point) {
+  return (point.barycentric[0] == 0.0) + (point.barycentric[1] == 0.0) +
+         (point.barycentric[2] == 0.0);
+}
+
+}  // namespace geodesic_detail
+
+// ---------------------------------------------------------------------------------------------
+// Method names
+
+GeodesicMethod parse_geodesic_method(const std::string& name) {
+  if (name == "fast") return GeodesicMethod::Fast;
+  if (name == "cgal") return GeodesicMethod::Cgal;
+  if (name == "heat") return GeodesicMethod::Heat;
+  throw InvalidInput("unknown geodesic method '" + name + "' (expected fast, cgal or heat)");
+}
+
+std::string to_string(GeodesicMethod method) {
+  switch (method) {
+    case GeodesicMethod::Fast:
+      return "fast";
+    case GeodesicMethod::Cgal:
+      return "cgal";
+    case GeodesicMethod::Heat:
+      return "heat";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------------------------
+// DistanceField
+
+DistanceField::DistanceField(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
+DistanceField::~DistanceField() = default;
+DistanceField::DistanceField(DistanceField&&) noexcept = default;
+DistanceField& DistanceField::operator=(DistanceField&&) noexcept = default;
+
+const SurfacePoint& DistanceField::source() const { return impl_->source; }
+const std::vector<double>& DistanceField::vertex_distances() const { return impl_->distances; }
+const std::vector<double>& DistanceField::target_distances() const {
+  return impl_->target_distances;
+}
+double DistanceField::distance_to(const SurfacePoint& target) const {
+  return impl_->distance_to(target);
+}
+std::vector<SurfacePoint> DistanceField::path_to(const SurfacePoint& target) const {
+  return impl_->path_to(target);
+}
+
+// ---------------------------------------------------------------------------------------------
+// GeodesicSolver
+
+GeodesicSolver::GeodesicSolver(const TriangleMesh& mesh, GeodesicOptions options) {
+  for (const Vec3& p : mesh.vertices)
+    if (!p.allFinite()) throw InvalidInput("geodesic solver: the mesh has a non-finite vertex");
+  build_topology(mesh);  // throws InvalidInput for invalid indices / non-manifold meshes
+  switch (options.method) {
+    case GeodesicMethod::Fast:
+      impl_ = geodesic_detail::make_fast_solver(mesh);
+      break;
+    case GeodesicMethod::Cgal:
+      impl_ = geodesic_detail::make_cgal_solver(mesh);
+      break;
+    case GeodesicMethod::Heat:
+      impl_ = geodesic_detail::make_heat_solver(mesh);
+      break;
+  }
+  if (!impl_) throw InvalidInput("unknown geodesic method");
+  impl_->method = options.method;
+}
+
+GeodesicSolver::~GeodesicSolver() = default;
+GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
+GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
+
+const TriangleMesh& GeodesicSolver::mesh() const { return impl_->mesh; }
+GeodesicMethod GeodesicSolver::method() const { return impl_->method; }
+
+DistanceField GeodesicSolver::solve(const SurfacePoint& source, const Progress& progress) const {
+  return solve(source, SolveOptions{}, progress);
+}
+
+DistanceField GeodesicSolver::solve(const SurfacePoint& source, const SolveOptions& options,
+                                    const Progress& progress) const {
+  const SurfacePoint s = geodesic_detail::normalize_surface_point(impl_->mesh, source, "source");
+  if (options.stop_at_targets && options.targets.empty())
+    throw InvalidInput("geodesic solve: stop_at_targets needs at least one target");
+  SolveOptions checked = options;
+  for (SurfacePoint& t : checked.targets)
+    t = geodesic_detail::normalize_surface_point(impl_->mesh, t, "target");
+  return impl_->solve(s, checked, progress);
+}
+
+std::vector<double> GeodesicSolver::distances(const SurfacePoint& source,
+                                              const Progress& progress) const {
+  SolveOptions options;
+  options.keep_windows = false;
+  return solve(source, options, progress).vertex_distances();
+}
+
+std::vector<SurfacePoint> GeodesicSolver::shortest_path(const SurfacePoint& from,
+                                                        const SurfacePoint& to) const {
+  return solve(from).path_to(to);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+double path_length(const TriangleMesh& mesh, const std::vector<SurfacePoint>& path) {
+  double length = 0;
+  for (size_t i = 1; i < path.size(); ++i)
+    length += (path[i].position(mesh) - path[i - 1].position(mesh)).norm();
+  return length;
+}
+
+}  // namespace gridshell

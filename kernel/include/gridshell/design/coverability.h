@@ -1,0 +1,74 @@
+// gridshell — can the patch be covered by shortest geodesics? (paper Section 3.3)
+//
+// Shortest geodesics from one boundary leave gaps behind peaks of positive Gaussian curvature
+// (the cut locus). The injectivity bound pi/sqrt(Kmax) (Rauch comparison, eq. 1) is a quick
+// sufficient check; the gap factor eta measures how large the gap behind the curvature peak
+// is, and cotangent-Laplacian smoothing with a fixed boundary shrinks it until eta <= eta_max.
+#pragma once
+
+#include <vector>
+
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/design/patch.h"
+#include "gridshell/mesh/progress.h"
+
+namespace gridshell {
+
+struct CoverabilityOptions {
+  double eta_max = 1.0015;            // paper's empirical threshold
+  int max_smoothing_iterations = 60;  // cap; exceeding it is Infeasible (exit 3)
+  /// Implicit smoothing time step per iteration, in units of the squared mean edge length.
+  double smoothing_step = 0.5;
+  /// Sources per side when searching the longest boundary-to-boundary distance.
+  int member_distance_samples = 9;
+  GeodesicMethod method = GeodesicMethod::Fast;
+  /// Worker threads for those sources' solves; 0 = hardware concurrency (the result does not
+  /// depend on it).
+  int threads = 0;
+};
+
+/// The gap factor (paper 3.3) for one curvature peak.
+struct GapFactor {
+  double eta = 1.0;  ///< (d(p1,pmax) + d(pmax,q1)) / d(p1,q1) >= 1
+  int peak = -1;     ///< p_max: vertex of maximal Gaussian curvature
+  int p1 = -1;       ///< boundary vertex closest (geodesically) to the peak
+  int q1 = -1;       ///< vertex on the opposite side minimizing d(p1,pmax)+d(pmax,q)-d(p1,q)
+};
+
+struct CoverabilityReport {
+  double gaussian_curvature_max = 0;  ///< max over interior vertices (discrete, angle defect/area)
+  int gaussian_curvature_max_vertex = -1;
+  double injectivity_bound = 0;        ///< pi/sqrt(Kmax), +inf when Kmax <= 0
+  double longest_member_distance = 0;  ///< max geodesic distance between opposite sides (sampled)
+  bool injectivity_ok = true;          ///< longest_member_distance < injectivity_bound
+  GapFactor gap;
+};
+
+/// The gap factor at the vertex of maximal Gaussian curvature. With the paper's notation:
+/// p1 = closest boundary vertex to p_max, q ranges over the side opposite p1 (both opposite
+/// sides if p1 is a corner; the larger eta is returned). Cancellable through `progress`.
+GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver,
+                     const std::vector<double>& gaussian_curvature, const Progress& progress = {});
+
+/// Curvature, injectivity bound, longest member distance and gap factor of the patch.
+CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOptions& options = {},
+                                        const Progress& progress = {});
+
+/// One implicit cotangent-Laplacian fairing step (Desbrun et al. 1999): solves
+/// (M + h L) x' = M x for the free vertices, h = step * (mean edge length)^2; `fixed` vertices
+/// stay where they are. Returns the largest vertex displacement.
+double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fixed, double step);
+
+struct SmoothingResult {
+  int iterations = 0;
+  double eta_before = 1.0;
+  double eta_after = 1.0;
+  double max_displacement = 0;  ///< largest total vertex movement
+};
+
+/// Smooths the patch interior (boundary fixed) until eta <= eta_max. Throws Infeasible if the
+/// iteration cap is reached first.
+SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& options = {},
+                                       const Progress& progress = {});
+
+}  // namespace gridshell

@@ -1,0 +1,61 @@
+// gridshell — the whole grid design (paper Section 4): patch -> distance maps -> feasible ᾱ ->
+// cladding functions -> members -> grid with crossings and notches -> anchors.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "gridshell/design/anchors.h"
+#include "gridshell/design/cladding.h"
+#include "gridshell/design/distance_map.h"
+#include "gridshell/design/grid.h"
+#include "gridshell/design/members.h"
+#include "gridshell/design/planar_patch.h"
+#include "gridshell/design/target_patch.h"
+
+namespace gridshell {
+
+struct DesignOptions {
+  DesignOptions() { members.lamella_width = members.lamella_thickness = 0; }  // automatic
+  TargetPatchOptions patch;
+  DistanceMapOptions maps;
+  CladdingOptions cladding;
+  /// Member placement; count is overridden by members_g / members_h when > 0. A lamella width of
+  /// 0 means 1% of the longest patch side, a thickness of 0 a tenth of the width (w:t = 10:1).
+  MemberPlacementOptions members;
+  int members_g = 0;  // explicit inner g-member count (CLI --members-u), 0 = auto
+  int members_h = 0;  // explicit inner h-member count (CLI --members-v), 0 = auto
+  enum class Alpha { Min, Max, Value } alpha = Alpha::Min;  // paper default: ᾱ_min (compact)
+  double alpha_value = 0;  // radians, with Alpha::Value; must lie in the feasible range
+  GridOptions grid;
+  AnchorOptions anchors;
+};
+
+struct Design {
+  TargetPatch target;
+  DistanceMaps maps;
+  AlphaRange alpha_range;
+  double alpha = 0;              ///< spatial inner angle at corner c0
+  double alpha_bar = 0;          ///< chosen planar angle at c0
+  double lamella_width = 0;      ///< effective (after resolving 0 = automatic)
+  double lamella_thickness = 0;  ///< effective
+  PlanarPatch planar;
+  CladdingFunction cladding_g, cladding_h;
+  Grid grid;
+  std::vector<Anchor> anchors;
+  std::map<std::string, double> stage_seconds;  ///< timings; not part of the design's value
+};
+
+/// Parses --alpha: "min", "max", or an angle in radians ("1.2") or degrees ("70deg").
+/// Throws InvalidInput naming --alpha.
+void parse_alpha(const std::string& text, DesignOptions& options);
+
+/// The grid design on an already computed target patch.
+Design design_grid(TargetPatch target, const DesignOptions& options = {},
+                   const Progress& progress = {});
+
+/// Patch stage then grid design.
+Design make_design(const TriangleMesh& mesh, const CornerSpec& corners,
+                   const DesignOptions& options = {}, const Progress& progress = {});
+
+}  // namespace gridshell

@@ -1,0 +1,66 @@
+// gridshell — the grid: members as exact geodesics on the surface patch and straight segments in
+// the planar patch, and all their crossings (paper Sections 4.1, 4.4, 4.5).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "gridshell/design/distance_map.h"
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/design/members.h"
+#include "gridshell/design/patch.h"
+#include "gridshell/design/planar_patch.h"
+#include "gridshell/mesh/progress.h"
+
+namespace gridshell {
+
+/// One lamella: a member of family G or H, on both patches.
+struct Member {
+  Family family = Family::G;
+  int index = 0;  ///< 0 and n+1 are the boundary members, 1..n the inner ones, by u_start
+  bool boundary = false;
+  double u_start = 0;  ///< parameter on the family's first boundary (identical on both patches)
+  double u_end = 0;    ///< parameter on the second boundary
+  std::vector<SurfacePoint> surface_path;  ///< exact shortest geodesic on the patch, start first
+  std::vector<Vec3> surface;               ///< its positions
+  std::array<Vec2, 2> planar{};            ///< straight segment in the plane, start first
+  double length = 0;                       ///< surface polyline length
+  double planar_length = 0;
+};
+
+/// Where member g (family G) crosses member h (family H), on both patches.
+struct Crossing {
+  int g = 0, h = 0;  ///< member indices in their families
+  Vec3 surface_point = Vec3::Zero();
+  Vec2 planar_point = Vec2::Zero();
+  double s_g = 0, s_bar_g = 0;  ///< arc length along g on the surface / in the plane
+  double s_h = 0, s_bar_h = 0;
+  bool on_boundary = false;  ///< one of the two members is a boundary member
+  /// Notch lengths l = s - s̄ (paper 4.5): the connection may slide by l along the member, in the
+  /// direction of the sign. Zero on boundary crossings (criterion ii).
+  double notch_g() const { return on_boundary ? 0.0 : s_g - s_bar_g; }
+  double notch_h() const { return on_boundary ? 0.0 : s_h - s_bar_h; }
+};
+
+struct Grid {
+  std::vector<Member> g;  ///< g.front() is boundary c0-c3 (u=0), g.back() boundary c1-c2 (u=1)
+  std::vector<Member> h;  ///< h.front() is boundary c1-c0 (v=0), h.back() boundary c2-c3 (v=1)
+  std::vector<Crossing> crossings;  ///< every g with every h, sorted by (g, h)
+};
+
+struct GridOptions {
+  /// Each inner member's end parameter u_end is refined on the exact distances (not the sampled
+  /// map) until surface and planar lengths agree to this relative tolerance (criterion i).
+  double length_tolerance = 1e-10;
+  int threads = 0;  // 0 = hardware concurrency; the result does not depend on it
+};
+
+/// Builds both member families (boundary members + the placed inner members) and all crossings.
+/// Throws Infeasible if criterion (iii) fails: a g and an h do not cross exactly once on either
+/// patch, or two members of one family cross in the plane.
+Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPatch& planar,
+                const std::vector<MemberPosition>& g_members,
+                const std::vector<MemberPosition>& h_members, const GridOptions& options = {},
+                const Progress& progress = {});
+
+}  // namespace gridshell

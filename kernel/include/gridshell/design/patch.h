@@ -1,0 +1,82 @@
+// gridshell — the target patch (paper Sections 3.2-3.3, 4.1 criterion (iv)): four corners on the
+// target surface, joined by exact shortest geodesics; the mesh is cut along them and the
+// outside dropped.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/mesh.h"
+#include "gridshell/mesh/progress.h"
+
+namespace gridshell {
+
+/// How the user named the four corners (CLI `--corners`).
+struct CornerSpec {
+  enum class Kind {
+    Vertices,  ///< "i,j,k,l": vertex indices of the mesh
+    Points,    ///< "x,y,z;x,y,z;x,y,z;x,y,z": points, snapped to the closest surface point
+    Auto,      ///< "auto": the four boundary vertices with the sharpest turning angle
+  };
+  Kind kind = Kind::Auto;
+  std::array<int, 4> vertices{};
+  std::array<Vec3, 4> points{};
+  /// Corners given as vertex indices (e.g. an example surface's suggested corners).
+  static CornerSpec at_vertices(const std::array<int, 4>& vertices) {
+    CornerSpec spec;
+    spec.kind = Kind::Vertices;
+    spec.vertices = vertices;
+    return spec;
+  }
+};
+
+/// Parses the `--corners` syntax above. Throws InvalidInput naming `--corners` and the problem.
+CornerSpec parse_corners(const std::string& text);
+
+/// Four boundary vertices with the largest turning angle (pi minus the interior angle sum), in
+/// boundary order. Throws InvalidInput if the mesh has no boundary or fewer than 4 boundary
+/// vertices.
+std::array<int, 4> auto_corners(const TriangleMesh& mesh);
+
+/// The closest point on the surface to `point` (brute force over faces).
+SurfacePoint closest_surface_point(const TriangleMesh& mesh, const Vec3& point);
+
+struct PatchCutOptions {
+  /// Path points closer than this fraction of their edge's length to an edge end snap to that
+  /// vertex instead of creating a sliver triangle. Default 1e-6.
+  double snap_fraction = 1e-6;
+  GeodesicMethod method = GeodesicMethod::Fast;  // engine for the boundary geodesics
+};
+
+/// A patch cut out of a mesh: its own mesh, its four corners and four sides.
+struct Patch {
+  TriangleMesh mesh;
+  /// Corner vertices in `mesh`, counter-clockwise around the patch (interior to the left).
+  std::array<int, 4> corners{};
+  /// sides[i]: boundary vertex chain from corners[i] to corners[(i+1)%4], both included.
+  std::array<std::vector<int>, 4> sides;
+  /// For each patch vertex: the input-mesh vertex it came from, or -1 for vertices created by
+  /// the cut (points on edges, corners inside faces).
+  std::vector<int> input_vertex;
+  /// True when the user's corner order was clockwise and it was reversed to make it ccw.
+  bool corners_reversed = false;
+};
+
+/// Cuts the patch bounded by the exact shortest geodesics c0->c1->c2->c3->c0 out of `mesh`.
+/// Faces crossed by a boundary geodesic are split so the patch boundary consists of mesh edges.
+/// Throws Infeasible when the boundary geodesics touch or cross each other (criterion (iv)) and
+/// InvalidInput when corners coincide.
+Patch cut_patch(const TriangleMesh& mesh, const std::array<SurfacePoint, 4>& corners,
+                const PatchCutOptions& options = {}, const Progress& progress = {});
+
+/// Inner angle of the patch at each corner (sum of incident face angles), radians.
+std::array<double, 4> corner_angles(const Patch& patch);
+/// Length of each side (polyline length of sides[i]).
+std::array<double, 4> side_lengths(const Patch& patch);
+/// Criterion (iv): throws Infeasible naming the corner if an inner corner angle is >= pi.
+void check_convex_corners(const Patch& patch);
+
+}  // namespace gridshell

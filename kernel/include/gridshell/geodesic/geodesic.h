@@ -1,0 +1,117 @@
+// gridshell — exact polyhedral geodesic distances and shortest paths on a triangle mesh.
+//
+// Paper Sections 3.3 and 4.2 need many single-source exact distance fields per design. The
+// default engine (`GeodesicMethod::Fast`) is our own exact window-propagation algorithm
+// (kernel/src/geodesic_fast.cpp); CGAL's Surface_mesh_shortest_path (Xin-Wang) is kept as the
+// oracle (`Cgal`) and CGAL's heat method (`Heat`, approximate) for comparison.
+//
+// Usage: build one GeodesicSolver per mesh (precomputes connectivity and per-face geometry),
+// then call `solve` for as many sources as needed, from as many threads as wanted.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gridshell/mesh/mesh.h"
+#include "gridshell/mesh/progress.h"
+#include "gridshell/mesh/surface_point.h"
+
+namespace gridshell {
+
+enum class GeodesicMethod {
+  Fast,  ///< exact, our own window propagation (default)
+  Cgal,  ///< exact, CGAL Surface_mesh_shortest_path (oracle; slow)
+  Heat,  ///< approximate, CGAL Heat_method_3 (intrinsic Delaunay); distances only, no paths
+};
+
+/// "fast" | "cgal" | "heat"; throws InvalidInput naming the value otherwise.
+GeodesicMethod parse_geodesic_method(const std::string& name);
+std::string to_string(GeodesicMethod method);
+
+struct GeodesicOptions {
+  GeodesicMethod method = GeodesicMethod::Fast;  // default: our exact engine
+};
+
+/// What one single-source solve must provide. The defaults give a complete field: exact
+/// distances to every vertex and to any surface point, and shortest paths. A caller that needs
+/// less can say so and pay less (fast engine; CGAL and heat honour `targets` and ignore the rest).
+struct SolveOptions {
+  /// Surface points whose exact distances the caller needs; DistanceField::target_distances()
+  /// lists them in this order. Default: none.
+  std::vector<SurfacePoint> targets;
+  /// false: the field keeps no propagation windows, so it answers vertex_distances() and
+  /// target_distances() only (distance_to and path_to throw InvalidInput). Saves the windows'
+  /// memory (64 bytes each, about 40 per vertex on a 4k-vertex mesh), the query index and about
+  /// half the time. Default: true.
+  bool keep_windows = true;
+  /// true: the solve stops as soon as the distance field is final on every closed face that
+  /// contains a target, instead of covering the whole mesh. Then target_distances() are exact and,
+  /// with keep_windows, so are distance_to and path_to for points of those faces; all other
+  /// values are upper bounds (lengths of real paths, or +inf where not reached). Requires at
+  /// least one target. The fast engine then propagates windows one at a time in distance order,
+  /// 2.5-4x slower per window than its default batches: worth it only for targets near the
+  /// source. Default: false.
+  bool stop_at_targets = false;
+};
+
+/// Result of one single-source solve. Holds whatever the method needs to answer distance and
+/// path queries to arbitrary surface points afterwards (windows for the exact methods).
+class DistanceField {
+ public:
+  class Impl;
+  explicit DistanceField(std::shared_ptr<const Impl> impl);
+  ~DistanceField();
+  DistanceField(DistanceField&&) noexcept;
+  DistanceField& operator=(DistanceField&&) noexcept;
+
+  const SurfacePoint& source() const;
+  /// #V exact geodesic distances from the source to every vertex (+inf for vertices in another
+  /// connected component).
+  const std::vector<double>& vertex_distances() const;
+  /// Exact distances to SolveOptions::targets, in that order (empty without targets).
+  const std::vector<double>& target_distances() const;
+  /// Exact geodesic distance from the source to an arbitrary surface point.
+  double distance_to(const SurfacePoint& target) const;
+  /// Exact shortest path from the source to `target` as a polyline of surface points, source
+  /// first, target last; interior points lie on edges or at vertices (saddle / boundary vertices
+  /// the path turns around). Throws InvalidInput for the heat method.
+  std::vector<SurfacePoint> path_to(const SurfacePoint& target) const;
+
+ private:
+  std::shared_ptr<const Impl> impl_;
+};
+
+class GeodesicSolver {
+ public:
+  /// Precomputes what every solve on `mesh` shares. The mesh is copied. Throws InvalidInput for
+  /// a mesh with non-manifold edges or invalid face indices.
+  explicit GeodesicSolver(const TriangleMesh& mesh, GeodesicOptions options = {});
+  ~GeodesicSolver();
+  GeodesicSolver(GeodesicSolver&&) noexcept;
+  GeodesicSolver& operator=(GeodesicSolver&&) noexcept;
+
+  const TriangleMesh& mesh() const;
+  GeodesicMethod method() const;
+
+  /// Single-source distance field. Thread-safe (const); cancellable through `progress`.
+  DistanceField solve(const SurfacePoint& source, const Progress& progress = {}) const;
+  /// Single-source distance field restricted to what `options` asks for (see SolveOptions).
+  /// Throws InvalidInput for invalid targets or stop_at_targets without targets.
+  DistanceField solve(const SurfacePoint& source, const SolveOptions& options,
+                      const Progress& progress = {}) const;
+  /// Shorthand: exact distances from `source` to all vertices (a solve without windows).
+  std::vector<double> distances(const SurfacePoint& source, const Progress& progress = {}) const;
+  /// Shorthand: exact shortest path between two surface points (see DistanceField::path_to).
+  std::vector<SurfacePoint> shortest_path(const SurfacePoint& from, const SurfacePoint& to) const;
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Length of a polyline of surface points.
+double path_length(const TriangleMesh& mesh, const std::vector<SurfacePoint>& path);
+
+}  // namespace gridshell

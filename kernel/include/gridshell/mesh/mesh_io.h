@@ -1,0 +1,62 @@
+// gridshell — reading target meshes (OBJ, OFF, PLY, STL) and writing OBJ, with a load report.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "gridshell/mesh/mesh.h"
+
+namespace gridshell {
+
+struct MeshLoadOptions {
+  /// Reject meshes that are not a topological disk (exactly one boundary loop). Default: true,
+  /// as every gridshell target is a disk-like patch.
+  bool require_single_boundary = true;
+  /// Vertices closer than this (relative to the bounding-box diagonal) are merged. Default 1e-12.
+  double duplicate_tolerance = 1e-12;
+};
+
+/// What the loader found and repaired. Repairs never change the meaning of the surface.
+struct LoadReport {
+  std::string format;                 ///< "obj" | "off" | "ply" | "stl"
+  int file_vertices = 0;              ///< vertices as read from the file
+  int file_faces = 0;                 ///< polygons as read from the file
+  int polygons_triangulated = 0;      ///< faces with more than three corners, fan-split
+  int degenerate_faces_removed = 0;   ///< zero-area or repeated-index triangles dropped
+  int duplicate_vertices_merged = 0;  ///< coincident vertices welded to the first occurrence
+  int isolated_vertices_removed = 0;  ///< vertices no face uses
+  std::vector<std::string> warnings;  ///< one line per repair kind, ready to print
+  /// For each vertex of the file (0-based, file order): its index in the loaded mesh, or -1 if
+  /// it was removed. Merged duplicates map to the vertex they were welded to. When nothing was
+  /// removed this is the identity: vertex indices are kept in file order.
+  std::vector<int> vertex_of_file_vertex;
+};
+
+/// Reads a mesh; the format is chosen by the extension (case-insensitive): .obj .off .ply (ASCII
+/// and binary little/big endian) .stl (ASCII and binary). Polygons are triangulated.
+/// Throws InvalidInput with a message that starts with the file name and names the line or
+/// element for: missing or unreadable file, unknown extension, empty file or no faces,
+/// unparseable line/header/element, NaN/Inf coordinate, out-of-range index, non-manifold
+/// edge or vertex, no boundary (closed surface), more than one boundary loop.
+TriangleMesh load_mesh(const std::string& path, LoadReport* report = nullptr,
+                       const MeshLoadOptions& options = {});
+
+/// A mesh given as arrays in memory (the daemon's packed arrays): the same repairs, checks and
+/// report as `load_mesh`, with messages starting with `name` ("mesh: face 7: ...") and vertices
+/// and faces numbered from 0 in the given order. Throws InvalidInput for no vertices, a
+/// non-finite coordinate, no faces, an out-of-range index and every topology problem.
+TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& vertices,
+                              const std::vector<Face>& faces, LoadReport* report = nullptr,
+                              const MeshLoadOptions& options = {});
+
+/// The mesh as Wavefront OBJ text (shortest round-trip decimal coordinates, 1-based faces).
+std::string obj_text(const TriangleMesh& mesh);
+
+/// Writes a Wavefront OBJ atomically (temporary file in the same folder, then rename).
+void save_obj(const TriangleMesh& mesh, const std::string& path);
+
+/// Writes `contents` to `path` atomically (temporary file + rename). Throws InvalidInput naming
+/// the path if it cannot be written.
+void write_file_atomically(const std::string& path, const std::string& contents);
+
+}  // namespace gridshell

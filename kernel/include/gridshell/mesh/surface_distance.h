@@ -1,0 +1,35 @@
+// gridshell — distances from points to a triangle mesh (CGAL AABB tree), for the deviation of a
+// deployed grid from its target surface.
+#pragma once
+
+#include <memory>
+
+#include "gridshell/mesh/mesh.h"
+#include "gridshell/mesh/surface_point.h"
+
+namespace gridshell {
+
+/// Closest-point queries on a fixed triangle mesh. Build once (O(F log F)), query from any
+/// number of threads.
+class SurfaceDistance {
+ public:
+  /// The mesh is copied. Throws InvalidInput for a mesh without faces.
+  explicit SurfaceDistance(const TriangleMesh& mesh);
+  ~SurfaceDistance();
+  SurfaceDistance(SurfaceDistance&&) noexcept;
+  SurfaceDistance& operator=(SurfaceDistance&&) noexcept;
+
+  /// Euclidean distance from `point` to the closest point of the surface.
+  double distance(const Vec3& point) const;
+  /// The closest surface point (face and barycentric weights).
+  SurfacePoint closest(const Vec3& point) const;
+  /// Unit surface normal at the closest point: area-weighted vertex normals interpolated with
+  /// the barycentric weights.
+  Vec3 normal_at_closest(const Vec3& point) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace gridshell

@@ -1,0 +1,155 @@
+// gridshell — deployment simulation (paper Section 5): every lamella a discrete elastic rod
+// (Bergou et al. 2008/2010) with anisotropic rectangular cross-section, rotating and sliding
+// connections with the lamellas' thickness offset, anchors pinned to the target, notch limits
+// and pseudo-friction; the equilibrium found by Levenberg-Marquardt (Gauss-Newton) in Ceres.
+//
+// Units. Lengths are in the design's (mesh) units. Internally the model is scaled so that its
+// largest extent is `SimulationOptions::reference_extent` (100, the size of the paper's models)
+// and elastic energies use the material's moduli in pascal on that scale: this is the regime in
+// which the paper's dimensionless notch terms (E_n with weight 1/10, E_p with mu = 0.1,
+// eps = 1e-4) act as described (docs/decisions.md, "Deployment simulation"). The equilibrium
+// shape depends only on the ratio of the moduli, the cross-section and these terms, not on the
+// model's physical size.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "gridshell/design/anchors.h"
+#include "gridshell/design/grid.h"
+#include "gridshell/mesh/mesh.h"
+#include "gridshell/mesh/progress.h"
+
+namespace gridshell {
+
+/// An isotropic-enough lamella material: Young's modulus along the lamella and shear modulus,
+/// both in pascal.
+struct Material {
+  std::string name;
+  double young_modulus = 0;  ///< E, Pa
+  double shear_modulus = 0;  ///< G, Pa
+};
+
+/// The built-in materials (reference values; see docs/decisions.md), "lime-wood" first (the
+/// paper's models are lime wood lamellas).
+const std::vector<Material>& material_presets();
+/// A preset by name; throws InvalidInput listing the known names.
+Material material_by_name(const std::string& name);
+
+/// The minimizer. Both minimize the same energy built from the same Ceres residual blocks.
+enum class SimulationSolver {
+  /// Damped Newton: the Gauss-Newton Hessian plus the geometric stiffness of the rod edges and
+  /// the exact curvature of the notch terms, Levenberg-Marquardt damping, sparse Cholesky
+  /// (kernel/src/newton_solver.h explains why). Default.
+  Newton,
+  /// Ceres' Levenberg-Marquardt with sparse normal Cholesky (SuiteSparse): the reference.
+  Ceres,
+};
+
+struct SimulationOptions {
+  SimulationSolver solver = SimulationSolver::Newton;
+  Material material = material_presets().front();  // lime wood
+  bool notches = true;  // sliding connections within [s̄, s] at inner crossings
+  /// Where sliding connections start: at the geodesic crossing s (default: the grid laid on
+  /// the target's geodesics closes every connection), or at the planar arc length s̄.
+  enum class NotchStart { Geodesic, Planar } notch_start = NotchStart::Geodesic;
+  /// Pseudo-friction E_p (paper Section 5): weight mu and how far past an edge end a connection
+  /// may move within one solve.
+  double friction_mu = 0.1;
+  double friction_epsilon = 1e-4;
+  double notch_limit_weight = 0.1;  // the paper's 1/10 in E_n
+  /// Connection and anchor weights, relative to the stiffness of a rod edge in stretching
+  /// (position terms, EA / l̄) and in strong-axis bending (direction terms, EI_strong / l̄).
+  double connection_position_weight = 1;
+  double connection_direction_weight = 1;
+  double anchor_position_weight = 1;
+  double anchor_direction_weight = 1;
+  /// Rod resolution: edges per interval between consecutive crossings along a member (on
+  /// average; every rod has uniform edges). Default 2.
+  double edges_per_interval = 2;
+  double reference_extent = 100;  // model scale of the energy (see Units above)
+  /// Convergence: max-norm of the energy gradient (scaled model) below this, times the
+  /// reference force EI_weak / (1 unit)^2 of the scaled model. Default 1e-9.
+  double gradient_tolerance = 1e-9;
+  int max_iterations = 2000;  // Levenberg-Marquardt iterations in all, the cap
+  /// Newton solver: switch from the Gauss-Newton-plus-geometric-stiffness Hessian to the full
+  /// Hessian once the relative gradient norm is below this: 1e-3 when connections slide (with
+  /// notches), 3e-2 when none does (without notches); measured in docs/decisions.md.
+  double exact_hessian_below = 1e-3;
+  double exact_hessian_below_fixed = 3e-2;
+  /// Newton solver trust radii per step: vertex moves in rest edge lengths, twist changes in
+  /// radians (0 = unlimited). They keep the iterates on the deployment's branch.
+  double max_vertex_step = 0.25;
+  double max_twist_step = 2.0;
+  int max_outer_iterations = 200;  // frame updates / connection re-projections
+  int threads = 0;                 // Jacobian evaluation threads, 0 = hardware concurrency
+  /// The model's length unit in metres (0 = unknown): energies are then reported in joules.
+  double unit_in_meters = 0;
+};
+
+/// One deployed lamella.
+struct SimulatedLamella {
+  Family family = Family::G;
+  int index = 0;
+  bool boundary = false;
+  double rest_length = 0;
+  std::vector<Vec3> centerline;          ///< deployed vertices, start first
+  std::vector<Vec3> normals;             ///< unit material normal (thickness direction) per vertex
+  std::vector<Vec3> widths;              ///< unit width direction per vertex (normal x tangent)
+  std::vector<double> deviation;         ///< distance of each vertex to the target patch
+  double max_weak_curvature = 0;         ///< 1/length, bending out of the lamella's plane
+  double max_strong_curvature = 0;       ///< 1/length, bending in the lamella's plane
+  double max_twist_rate = 0;             ///< rad/length
+  double max_bending_stress = 0;         ///< Pa: E kappa_weak t / 2
+  double max_strong_bending_stress = 0;  ///< Pa: E kappa_strong w / 2
+  double max_torsion_stress = 0;         ///< Pa: G theta' t (thin rectangle)
+};
+
+/// Final state of one crossing's connection.
+struct SimulatedConnection {
+  int g = 0, h = 0;
+  bool sliding_g = false, sliding_h = false;  ///< had a notch on that member
+  double slide_g = 0, slide_h = 0;  ///< final rest arc length minus s̄ (0 without notches)
+  double notch_g = 0, notch_h = 0;  ///< s - s̄ (the notch's length and direction)
+  double gap = 0;  ///< |q_g - q_h + t m_g|: how far the connection is from being closed
+  /// Held at a vertex of that member's rod: a minimum where the energy has a kink along the
+  /// member (see docs/decisions.md, "Connections held at rod vertices").
+  bool at_vertex_g = false, at_vertex_h = false;
+};
+
+struct DeploymentRun {
+  bool notches = false;
+  std::vector<SimulatedLamella> lamellas;  ///< g members first, then h, by index
+  std::vector<SimulatedConnection> connections;
+  int grid_vertices = 0;  ///< |G_V|: rod vertices in all
+  double rms = 0;         ///< RMS distance of all rod vertices to the target patch
+  double max_deviation = 0;
+  /// Energy per term: stretch, bend_weak, bend_strong, twist, connection, anchor, notch_limit,
+  /// friction. In joules when the unit is known, else in the scaled model's units.
+  std::map<std::string, double> energies;
+  std::string energy_unit;   ///< "J" or "scaled"
+  int iterations = 0;        ///< Levenberg-Marquardt iterations in all
+  int outer_iterations = 0;  ///< frame updates / re-projections
+  int connection_moves = 0;  ///< times a sliding connection moved to a neighbouring edge
+  /// Sliding connection ends held at a rod vertex at the end (a kink minimum: the energy rises
+  /// to both sides along the member, checked by its one-sided derivatives).
+  int connections_at_vertices = 0;
+  bool converged = false;    ///< gradient below tolerance and no connection moved at the end
+  double gradient_norm = 0;  ///< final max-norm, relative to the reference force
+  double gradient_tolerance = 0;
+  std::string termination;  ///< why the solver stopped
+  double seconds = 0;
+};
+
+/// Simulates the deployed grid. `target` is the target patch (distances are measured to it and
+/// the rods start on its geodesics: each member's `surface` polyline, resampled); `grid` and
+/// `anchors` as designed; lamella width and thickness in mesh units. Throws InvalidInput for an
+/// inconsistent grid (empty members, crossings or anchors naming missing members, non-finite
+/// values), Cancelled when cancelled.
+DeploymentRun simulate_deployment(const Grid& grid, const std::vector<Anchor>& anchors,
+                                  const TriangleMesh& target, double lamella_width,
+                                  double lamella_thickness, const SimulationOptions& options = {},
+                                  const Progress& progress = {});
+
+}  // namespace gridshell
