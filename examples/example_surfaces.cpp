@@ -90,10 +90,7 @@ std::vector<Face> four_eight_faces(int nu, int nv) {
 }
 
 TriangleMesh grid_mesh(int nu, int nv, const Parametrization& surface) {
-  TriangleMesh mesh;
-  mesh.vertices = sample_grid(nu, nv, surface);
-  mesh.faces = four_eight_faces(nu, nv);
-  return mesh;
+  return TriangleMesh(sample_grid(nu, nv, surface), four_eight_faces(nu, nv));
 }
 
 std::array<int, 4> grid_corners(int nu, int nv) {
@@ -103,20 +100,24 @@ std::array<int, 4> grid_corners(int nu, int nv) {
 
 /// Translates the mesh so that its bounding box is centred on the z axis and starts at z = 0.
 void place_on_ground(TriangleMesh& mesh) {
-  Vec3 lo = mesh.vertices.front(), hi = lo;
-  for (const Vec3& p : mesh.vertices) {
+  Vec3 lo = mesh.vertices().front(), hi = lo;
+  for (const Vec3& p : mesh.vertices()) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
   const Vec3 shift(-(lo.x() + hi.x()) / 2, -(lo.y() + hi.y()) / 2, -lo.z());
-  for (Vec3& p : mesh.vertices) p += shift;
+  std::vector<Vec3> moved = mesh.vertices();
+  for (Vec3& p : moved) p += shift;
+  mesh.set_vertices(std::move(moved));
 }
 
 /// Scales each axis so that the bounding box is exactly `size`, then places it on the ground.
 void fit_bounding_box(TriangleMesh& mesh, const Vec3& size) {
   const Vec3 current = bounding_box_size(mesh);
   const Vec3 factor = size.cwiseQuotient(current);
-  for (Vec3& p : mesh.vertices) p = p.cwiseProduct(factor);
+  std::vector<Vec3> scaled = mesh.vertices();
+  for (Vec3& p : scaled) p = p.cwiseProduct(factor);
+  mesh.set_vertices(std::move(scaled));
   place_on_ground(mesh);
 }
 
@@ -326,8 +327,8 @@ ExampleSurface plane(double scale) {
   const auto uniform = [&random] {  // in [-1, 1), platform independent
     return 2.0 * (static_cast<double>(random()) / 4294967296.0) - 1.0;
   };
-  TriangleMesh mesh;
-  mesh.vertices.reserve(static_cast<std::size_t>(nu) * nv);
+  std::vector<Vec3> vertices;
+  vertices.reserve(static_cast<std::size_t>(nu) * nv);
   for (int j = 0; j < nv; ++j) {
     for (int i = 0; i < nu; ++i) {
       const double dx = jitter * hx * uniform(), dy = jitter * hy * uniform();
@@ -335,11 +336,11 @@ ExampleSurface plane(double scale) {
       double x = i * hx, y = j * hy;
       if (!side_x) x += dx;  // interior and bottom/top sides move in x
       if (!side_y) y += dy;  // interior and left/right sides move in y
-      mesh.vertices.emplace_back(x, y, 0.0);
+      vertices.emplace_back(x, y, 0.0);
     }
   }
-  const auto smallest_angle = [&mesh](int a, int b, int c) {
-    const Vec3 p[3] = {mesh.vertices[a], mesh.vertices[b], mesh.vertices[c]};
+  const auto smallest_angle = [&vertices](int a, int b, int c) {
+    const Vec3 p[3] = {vertices[a], vertices[b], vertices[c]};
     double smallest = kPi;
     for (int k = 0; k < 3; ++k) {
       const Vec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
@@ -347,16 +348,18 @@ ExampleSurface plane(double scale) {
     }
     return smallest;
   };
-  mesh.faces.reserve(2 * static_cast<std::size_t>(nu - 1) * (nv - 1));
+  std::vector<Face> faces;
+  faces.reserve(2 * static_cast<std::size_t>(nu - 1) * (nv - 1));
   for (int j = 0; j + 1 < nv; ++j) {
     for (int i = 0; i + 1 < nu; ++i) {
       const int a = grid_index(nu, i, j), b = grid_index(nu, i + 1, j);
       const int c = grid_index(nu, i + 1, j + 1), d = grid_index(nu, i, j + 1);
       const double main_quality = std::min(smallest_angle(a, b, c), smallest_angle(a, c, d));
       const double anti_quality = std::min(smallest_angle(a, b, d), smallest_angle(b, c, d));
-      add_cell(mesh.faces, nu, i, j, main_quality >= anti_quality);
+      add_cell(faces, nu, i, j, main_quality >= anti_quality);
     }
   }
+  TriangleMesh mesh(std::move(vertices), std::move(faces));
   ExampleSurface example{"plane",
                          "Plane: a flat 100 x 80 rectangle, jittered irregular triangulation",
                          std::move(mesh), grid_corners(nu, nv)};
@@ -403,13 +406,13 @@ ExampleSurface make_example(const std::string& name, double resolution_scale) {
       message << separator << generator.name;
       separator = ", ";
     }
-    throw InvalidInput(message.str());
+    throw InvalidInput("mesh", message.str());
   }
   if (!(resolution_scale > 0.0 && resolution_scale <= kMaxResolutionScale)) {
     std::ostringstream message;
     message << "example '" << name << "': resolution_scale must be in (0, " << kMaxResolutionScale
             << "], got " << resolution_scale;
-    throw InvalidInput(message.str());
+    throw InvalidInput("scale", message.str());
   }
   return found->build(resolution_scale);
 }

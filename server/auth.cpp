@@ -26,7 +26,7 @@ bool bearer_token_matches(std::string_view authorization, const std::string& tok
 
 std::string read_secret_file(const std::string& path, const char* option) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput(std::string(option) + ": cannot read " + path);
+  if (!in) throw InvalidInput(option, "cannot read " + path);
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
@@ -36,10 +36,10 @@ std::string read_token_file(const std::string& path) {
   std::string text = read_secret_file(path, "--token-file");
   const auto first = text.find_first_not_of(" \t\r\n");
   const auto last = text.find_last_not_of(" \t\r\n");
-  if (first == std::string::npos) throw InvalidInput("--token-file: " + path + " is empty");
+  if (first == std::string::npos) throw InvalidInput("--token-file", "" + path + " is empty");
   text = text.substr(first, last - first + 1);
   if (text.find_first_of(" \t\r\n") != std::string::npos)
-    throw InvalidInput("--token-file: " + path + ": the token must be one word");
+    throw InvalidInput("--token-file", "" + path + ": the token must be one word");
   return text;
 }
 

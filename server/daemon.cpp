@@ -70,11 +70,11 @@ std::string host_of(const std::string& address) {
 void check_address(const std::string& address, const char* option) {
   const auto colon = address.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == address.size())
-    throw InvalidInput(std::string(option) + ": expected HOST:PORT, got '" + address + "'");
+    throw InvalidInput(option, "expected HOST:PORT, got '" + address + "'");
   const std::string port = address.substr(colon + 1);
   if (port.find_first_not_of("0123456789") != std::string::npos || port.size() > 5 ||
       std::stoi(port) > 65535)
-    throw InvalidInput(std::string(option) + ": '" + port + "' is not a port number");
+    throw InvalidInput(option, "'" + port + "' is not a port number");
 }
 
 /// Checks that `cert_pem` holds a PEM certificate chain and `key_pem` the private key of its
@@ -94,17 +94,19 @@ std::unique_ptr<T, Free> read_pem(const std::string& text, Read read, Free free)
 void check_tls_pair(const std::string& cert_pem, const std::string& key_pem) {
   const auto cert = read_pem<X509>(cert_pem, PEM_read_bio_X509, X509_free);
   if (!cert)
-    throw InvalidInput(
-        "--tls-cert: no PEM certificate in the file (expected -----BEGIN CERTIFICATE-----)");
+    throw InvalidInput("--tls-cert",
+                       "no PEM certificate in the file (expected -----BEGIN CERTIFICATE-----)");
   const auto key = read_pem<EVP_PKEY>(key_pem, PEM_read_bio_PrivateKey, EVP_PKEY_free);
   if (!key)
     throw InvalidInput(
-        "--tls-key: no unencrypted PEM private key in the file (expected -----BEGIN ... PRIVATE "
+        "--tls-key",
+        "no unencrypted PEM private key in the file (expected -----BEGIN ... PRIVATE "
         "KEY-----)");
   const bool match = X509_check_private_key(cert.get(), key.get()) == 1;
   ERR_clear_error();
   if (!match)
-    throw InvalidInput("--tls-key: the key does not belong to the first certificate of --tls-cert");
+    throw InvalidInput("--tls-key",
+                       "the key does not belong to the first certificate of --tls-cert");
 }
 
 }  // namespace
@@ -153,27 +155,28 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
   check_address(o.listen, "--listen");
   if (!o.http.empty()) check_address(o.http, "--http");
   if (o.tls_cert.empty() != o.tls_key.empty())
-    throw InvalidInput("--tls-cert and --tls-key: give both (certificate chain and its key)");
+    throw InvalidInput("--tls-cert and --tls-key", "give both (certificate chain and its key)");
   const bool tls = !o.tls_cert.empty();
   for (const auto& [address, option] : {std::pair{o.listen, "--listen"}, {o.http, "--http"}}) {
     if (address.empty() || is_loopback_address(address) || o.insecure) continue;
     if (!tls || o.token_file.empty())
-      throw InvalidInput(std::string(option) + ": " + address +
-                         " is not a loopback address; serving it needs TLS and a token "
-                         "(--tls-cert, --tls-key, --token-file), or --insecure to serve it "
-                         "without them");
+      throw InvalidInput(option,
+                         "" + address +
+                             " is not a loopback address; serving it needs TLS and a token "
+                             "(--tls-cert, --tls-key, --token-file), or --insecure to serve it "
+                             "without them");
   }
-  if (o.workers < 0 || o.workers > 1024) throw InvalidInput("--workers: must be 0..1024");
-  if (o.queue < 0 || o.queue > 100000) throw InvalidInput("--queue: must be 0..100000");
+  if (o.workers < 0 || o.workers > 1024) throw InvalidInput("--workers", "must be 0..1024");
+  if (o.queue < 0 || o.queue > 100000) throw InvalidInput("--queue", "must be 0..100000");
   if (o.request_threads < 0 || o.request_threads > 1024)
-    throw InvalidInput("--request-threads: must be 0..1024");
+    throw InvalidInput("--request-threads", "must be 0..1024");
   if (o.progress_interval_ms < 0 || o.progress_interval_ms > 60000)
-    throw InvalidInput("--progress-interval-ms: must be 0..60000");
+    throw InvalidInput("--progress-interval-ms", "must be 0..60000");
   if (o.max_message_mib < 1 || o.max_message_mib > 2047)
-    throw InvalidInput("--max-message-mib: must be 1..2047");
+    throw InvalidInput("--max-message-mib", "must be 1..2047");
   if (o.http_body_limit_mib < 1 || o.http_body_limit_mib > 4096)
-    throw InvalidInput("--http-body-limit-mib: must be 1..4096");
-  if (!(o.shutdown_grace_seconds >= 0)) throw InvalidInput("--shutdown-grace: must be >= 0");
+    throw InvalidInput("--http-body-limit-mib", "must be 1..4096");
+  if (!(o.shutdown_grace_seconds >= 0)) throw InvalidInput("--shutdown-grace", "must be >= 0");
   if (tls) {
     d.cert_pem = read_secret_file(o.tls_cert, "--tls-cert");
     d.key_pem = read_secret_file(o.tls_key, "--tls-key");
@@ -190,7 +193,7 @@ void Daemon::start() {
   d.started = true;
   d.queue = std::make_unique<JobQueue>(
       JobQueue::Options{o.workers, o.queue, o.log, o.progress_interval_ms});
-  d.methods = make_methods({FieldNames::Request, o.request_threads});
+  d.methods = make_methods({o.request_threads});
   d.service = std::make_unique<GridshellService>(*d.queue, d.methods, d.token);
 
   static std::once_flag plugins;
@@ -232,8 +235,8 @@ void Daemon::start() {
   d.server = builder.BuildAndStart();
   if (!d.server || d.grpc_port == 0) {
     const std::string reason = os_error_in(last_grpc_error);
-    throw InvalidInput("--listen: cannot listen on " + o.listen + ": " +
-                       (reason.empty() ? "the address cannot be bound" : reason));
+    throw InvalidInput("--listen", "cannot listen on " + o.listen + ": " +
+                                       (reason.empty() ? "the address cannot be bound" : reason));
   }
 
   if (!o.http.empty()) {

@@ -8,9 +8,16 @@
 namespace gridshell::server {
 namespace {
 
+/// The status with the error as data in its details (v1::ErrorDetail), for clients that show
+/// the field in their own terms; the message carries "field: message" for everyone else.
 grpc::Status to_grpc(const Status& status) {
   if (status.ok()) return grpc::Status::OK;
-  return grpc::Status(static_cast<grpc::StatusCode>(status.code), status.message);
+  v1::ErrorDetail detail;
+  detail.set_code(error_code_name(status.code));
+  detail.set_field(status.field);
+  detail.set_message(status.message);
+  return grpc::Status(static_cast<grpc::StatusCode>(status.code), status.text(),
+                      detail.SerializeAsString());
 }
 
 /// One server-streaming call. The job (on a worker) reports through the Sink; the Sink turns

@@ -15,8 +15,8 @@
 #include <thread>
 
 #include "auth.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/files.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell::server {
 namespace {
@@ -56,6 +56,7 @@ std::string error_json(const Status& status) {
   nlohmann::json body;
   body["error"] = {{"code", static_cast<int>(status.code)},
                    {"status", code_name(status.code)},
+                   {"field", status.field},
                    {"message", status.message}};
   return body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
@@ -104,7 +105,7 @@ bool percent_decode(std::string_view in, std::string& out) {
 std::pair<std::string, std::string> split_host_port(const std::string& address) {
   const auto colon = address.rfind(':');
   if (colon == std::string::npos || colon + 1 == address.size())
-    throw InvalidInput("--http: expected HOST:PORT, got '" + address + "'");
+    throw InvalidInput("--http", "expected HOST:PORT, got '" + address + "'");
   std::string host = address.substr(0, colon);
   if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
     host = host.substr(1, host.size() - 2);
@@ -593,7 +594,7 @@ void HttpGateway::start() {
     std::error_code ec;
     g.static_root = fs::canonical(g.options.static_dir, ec);
     if (ec || !fs::is_directory(g.static_root))
-      throw InvalidInput("--static: " + g.options.static_dir + " is not a folder");
+      throw InvalidInput("--static", "" + g.options.static_dir + " is not a folder");
   }
   if (!g.options.tls_cert_pem.empty()) {
     g.tls.emplace(ssl::context::tls_server);
@@ -601,23 +602,24 @@ void HttpGateway::start() {
                        ssl::context::no_sslv3 | ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1);
     beast::error_code ec;
     g.tls->use_certificate_chain(net::buffer(g.options.tls_cert_pem), ec);
-    if (ec) throw InvalidInput("--tls-cert: not a PEM certificate chain: " + ec.message());
+    if (ec) throw InvalidInput("--tls-cert", "not a PEM certificate chain: " + ec.message());
     g.tls->use_private_key(net::buffer(g.options.tls_key_pem), ssl::context::pem, ec);
     if (ec)
-      throw InvalidInput("--tls-key: not a PEM private key for the certificate: " + ec.message());
+      throw InvalidInput("--tls-key", "not a PEM private key for the certificate: " + ec.message());
   }
   const auto [host, port] = split_host_port(g.options.address);
   beast::error_code ec;
   tcp::resolver resolver(g.io);
   const auto endpoints = resolver.resolve(host, port, tcp::resolver::passive, ec);
   if (ec || endpoints.empty())
-    throw InvalidInput("--http: cannot resolve " + g.options.address + ": " + ec.message());
+    throw InvalidInput("--http", "cannot resolve " + g.options.address + ": " + ec.message());
   const tcp::endpoint endpoint = *endpoints.begin();
   g.acceptor.open(endpoint.protocol(), ec);
   if (!ec) g.acceptor.set_option(net::socket_base::reuse_address(true), ec);
   if (!ec) g.acceptor.bind(endpoint, ec);
   if (!ec) g.acceptor.listen(net::socket_base::max_listen_connections, ec);
-  if (ec) throw InvalidInput("--http: cannot listen on " + g.options.address + ": " + ec.message());
+  if (ec)
+    throw InvalidInput("--http", "cannot listen on " + g.options.address + ": " + ec.message());
   g.port = g.acceptor.local_endpoint().port();
   g.accept();
   g.thread = std::thread([&g] {

@@ -233,12 +233,13 @@ void JobQueue::work() {
     try {
       result = job->request.run(progress, job->info);
       if (!result) status = {StatusCode::Internal, "internal error: no result"};
-    } catch (const InvalidInput& e) {
-      status = {StatusCode::InvalidArgument, e.what()};
-    } catch (const Infeasible& e) {
-      status = {StatusCode::FailedPrecondition, std::string("infeasible: ") + e.what()};
     } catch (const Cancelled&) {
       status = {StatusCode::Cancelled, "cancelled"};  // the reason is filled in below
+    } catch (const Error& e) {
+      const StatusCode code = e.code() == ErrorCode::InvalidInput ? StatusCode::InvalidArgument
+                              : e.code() == ErrorCode::Infeasible ? StatusCode::FailedPrecondition
+                                                                  : StatusCode::Internal;
+      status = {code, e.message(), e.field()};
     } catch (const std::bad_alloc&) {
       status = {StatusCode::ResourceExhausted, "out of memory"};
     } catch (const std::exception& e) {
@@ -276,7 +277,10 @@ void JobQueue::finish(const std::shared_ptr<Job>& job, Status status,
     line["vertices"] = job->info.vertices.load();
     line["faces"] = job->info.faces.load();
     line["status"] = code_name(status.code);
-    if (!status.ok()) line["message"] = status.message.substr(0, 500);
+    if (!status.ok()) {
+      line["message"] = status.message.substr(0, 500);
+      if (!status.field.empty()) line["field"] = status.field.substr(0, 200);
+    }
     line["queue_ms"] = ms_between(job->submitted, job->started);
     line["run_ms"] = ms_between(job->started, job->stopped);
     nlohmann::json stages = nlohmann::json::object();

@@ -72,8 +72,8 @@ auto job_function_from_json(const M& method, std::shared_ptr<const std::string> 
     options.ignore_unknown_fields = false;
     const auto status = google::protobuf::util::JsonStringToMessage(*body, &request, options);
     if (!status.ok())
-      throw InvalidInput("request body: not a " + request.GetTypeName() +
-                         " in JSON: " + std::string(status.message()));
+      throw InvalidInput("", "request body: not a " + request.GetTypeName() +
+                                 " in JSON: " + std::string(status.message()));
     progress.check();
     const auto [vertices, faces] = mesh_size(request);
     info.vertices = vertices;

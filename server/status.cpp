@@ -1,5 +1,7 @@
 #include "status.h"
 
+#include <cctype>
+
 namespace gridshell::server {
 
 const char* code_name(StatusCode code) {
@@ -40,6 +42,24 @@ const char* code_name(StatusCode code) {
       return "UNAUTHENTICATED";
   }
   return "UNKNOWN";
+}
+
+std::string error_code_name(StatusCode code) {
+  switch (code) {
+    case StatusCode::InvalidArgument:
+      return "invalid_input";
+    case StatusCode::FailedPrecondition:
+      return "infeasible";
+    case StatusCode::Cancelled:
+      return "cancelled";
+    case StatusCode::Internal:
+      return "internal";
+    default: {
+      std::string name = code_name(code);
+      for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return name;
+    }
+  }
 }
 
 int http_status(StatusCode code) {

@@ -28,12 +28,19 @@ enum class StatusCode {
 
 struct Status {
   StatusCode code = StatusCode::Ok;
-  std::string message;
+  std::string message;  ///< plain text, without the field
+  std::string field{};  ///< the request field it concerns (kernel errors), or ""
   bool ok() const { return code == StatusCode::Ok; }
+  /// "field: message", or the message alone: the gRPC status message and the log's.
+  std::string text() const { return field.empty() ? message : field + ": " + message; }
 };
 
 /// "INVALID_ARGUMENT", ...
 const char* code_name(StatusCode code);
+
+/// The kernel's name of the error class a status code stands for: "invalid_input",
+/// "infeasible", "cancelled", "internal" (v1::ErrorDetail.code), or the lower-case status name.
+std::string error_code_name(StatusCode code);
 
 /// The HTTP status the gateway answers for a code: 400 invalid argument, 422 failed precondition,
 /// 499 cancelled, 504 deadline exceeded, 429 resource exhausted, 401 unauthenticated, 501

@@ -62,22 +62,23 @@ std::string read_text(const std::string& path) {
 }
 
 TriangleMesh grid_mesh(int nu, int nv, const std::function<Vec3(double u, double v)>& map) {
-  TriangleMesh mesh;
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
   for (int j = 0; j <= nv; ++j)
-    for (int i = 0; i <= nu; ++i) mesh.vertices.push_back(map(double(i) / nu, double(j) / nv));
+    for (int i = 0; i <= nu; ++i) vertices.push_back(map(double(i) / nu, double(j) / nv));
   auto id = [nu](int i, int j) { return j * (nu + 1) + i; };
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {
       const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
       if ((i + j) % 2 == 0) {
-        mesh.faces.push_back({a, b, c});
-        mesh.faces.push_back({a, c, d});
+        faces.push_back({a, b, c});
+        faces.push_back({a, c, d});
       } else {
-        mesh.faces.push_back({a, b, d});
-        mesh.faces.push_back({b, c, d});
+        faces.push_back({a, b, d});
+        faces.push_back({b, c, d});
       }
     }
-  return mesh;
+  return TriangleMesh(std::move(vertices), std::move(faces));
 }
 
 TriangleMesh flat_square(int n) {

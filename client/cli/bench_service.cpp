@@ -27,8 +27,8 @@
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/requests.h"
 #include "remote.h"
 
@@ -71,8 +71,8 @@ class Daemon {
     const fs::path self = fs::read_symlink("/proc/self/exe", ec);
     const std::string binary = (self.parent_path() / "gridshelld").string();
     if (ec || !fs::exists(binary))
-      throw InvalidInput("bench service: gridshelld not found next to " + self.string() +
-                         " (build with GRIDSHELL_BUILD_SERVER=ON)");
+      throw InvalidInput("", "bench service: gridshelld not found next to " + self.string() +
+                                 " (build with GRIDSHELL_BUILD_SERVER=ON)");
     pid_ = fork();
     if (pid_ == 0) {
       const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -195,7 +195,7 @@ int bench_service(const std::string& out, bool no_write, int repeats) {
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; ++t)
       pool.emplace_back([&] {
-        for (int i = 0; i < per_thread; ++i) run_design(request, {}, {FieldNames::Request, 1});
+        for (int i = 0; i < per_thread; ++i) run_design(request, {}, {1});
       });
     for (auto& thread : pool) thread.join();
     return threads * per_thread / seconds_since(start);
@@ -231,7 +231,7 @@ int bench_service(const std::string& out, bool no_write, int repeats) {
   const int pairs = 9;
   for (int i = 0; i < pairs; ++i) {
     auto t0 = Clock::now();
-    run_design(request, {}, {FieldNames::Request, 1});
+    run_design(request, {}, {1});
     local_s.push_back(seconds_since(t0));
     t0 = Clock::now();
     const v1::DesignResult result = client.design(request);
@@ -357,9 +357,9 @@ int bench_service(const std::string& out, bool no_write, int repeats) {
 #else
 
 int bench_service(const std::string&, bool, int) {
-  throw InvalidInput(
-      "bench service: this gridshell was built without gRPC "
-      "(GRIDSHELL_BUILD_SERVER=OFF)");
+  throw InvalidInput("",
+                     "bench service: this gridshell was built without gRPC "
+                     "(GRIDSHELL_BUILD_SERVER=OFF)");
 }
 
 #endif

@@ -7,9 +7,10 @@
 #include <optional>
 #include <string>
 
+#include "gridshell/design/patch.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/mesh_io.h"
-#include "gridshell/design/patch.h"
 #include "gridshell/mesh/progress.h"
 #include "gridshell/v1/requests.pb.h"
 
@@ -34,8 +35,28 @@ int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& fiel
 /// description for the output files ("example", "auto" or the text given).
 CornerSpec resolve_corners(const InputMesh& input, const std::string& text, std::string* used);
 
-/// Set by SIGINT/SIGTERM (defined in main.cpp); every computation polls it through Progress.
+/// Parses --corners: "i,j,k,l" (vertex indices), "x,y,z;x,y,z;x,y,z;x,y,z" (points) or "auto".
+/// Throws InvalidInput (field "--corners").
+CornerSpec parse_corners(const std::string& text);
+
+/// What the CLI's error messages call the parts of a request (cli_errors.cpp).
+struct FieldContext {
+  std::string mesh;    ///< the MESH argument (a file or example:NAME), for "mesh.*" fields
+  std::string design;  ///< the DESIGN file of `gridshell simulate`, for "design.*" fields
+};
+/// The context of this run, filled in by the command.
+FieldContext& field_context();
+/// A request field ("options.lamella_width", "corners.vertices[2]") in the CLI's terms
+/// ("--lamella-width", "--corners (corner 3)"); flags and file names stay as they are.
+std::string cli_field(const std::string& field, const FieldContext& context);
+/// Prints the one "error:" line for `error` on stderr (ending the progress line first) and
+/// returns the exit code: 2 invalid input, 3 infeasible, 130 cancelled, 1 internal.
+int report_error(const Error& error);
+
+/// Set by SIGINT/SIGTERM (on_interrupt); every computation polls it through Progress.
 const std::atomic<bool>* cancel_flag();
+/// The signal handler main() installs: sets the cancellation flag (async-signal-safe).
+void on_interrupt(int signal);
 
 /// A progress line on stderr ("\r stage  42%") when stderr is a terminal, plain lines every
 /// few seconds otherwise; `quiet` silences it.

@@ -20,9 +20,9 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/design/design.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {
@@ -301,15 +301,15 @@ Command add_bench_command(CLI::App& app) {
                   "runs per example (design, simulate); rounds of all client levels (service)")
       ->capture_default_str();
   return [args] {
-    if (args->sources < 1) throw InvalidInput("--sources: must be at least 1");
+    if (args->sources < 1) throw InvalidInput("--sources", "must be at least 1");
     for (int s : args->sizes)
-      if (s < 100 || s > 2000000) throw InvalidInput("--sizes: each size must be 100..2000000");
-    if (args->repeats < 1) throw InvalidInput("--repeats: must be at least 1");
+      if (s < 100 || s > 2000000) throw InvalidInput("--sizes", "each size must be 100..2000000");
+    if (args->repeats < 1) throw InvalidInput("--repeats", "must be at least 1");
     if (args->what == "simulate") return bench_simulate(args->repeats, args->out, args->no_write);
     if (args->what == "resolution") {
-      if (args->edges.empty()) throw InvalidInput("--edges: give at least one resolution");
+      if (args->edges.empty()) throw InvalidInput("--edges", "give at least one resolution");
       for (double e : args->edges)
-        if (!(e >= 1 && e <= 64)) throw InvalidInput("--edges: each must be between 1 and 64");
+        if (!(e >= 1 && e <= 64)) throw InvalidInput("--edges", "each must be between 1 and 64");
       return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
     }
     if (args->what == "service") return bench_service(args->out, args->no_write, args->repeats);

@@ -109,11 +109,10 @@ int run_design(const DesignArguments& args) {
   const Progress progress = make_progress(args.output.quiet);
   v1::DesignResult result;
   if (args.output.remote.remote()) {
-    prepare_design(request, FieldNames::CommandLine);  // the CLI's own messages for bad options
+    prepare_design(request);  // bad options fail here, before a remote call
     result = RemoteClient(args.output.remote).design(request, progress);
   } else {
-    result =
-        gridshell::run_design(request, progress, {FieldNames::CommandLine, args.output.threads});
+    result = gridshell::run_design(request, progress, {args.output.threads});
   }
   finish_progress();
   write_files(design_files(result), args.output.out);

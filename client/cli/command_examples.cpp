@@ -3,8 +3,8 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {
@@ -41,10 +41,10 @@ Command add_examples_command(CLI::App& app) {
     }
     if (write->parsed()) {
       if (!(args->scale >= 0.05 && args->scale <= 20))
-        throw InvalidInput("--scale: must be between 0.05 and 20");
+        throw InvalidInput("--scale", "must be between 0.05 and 20");
       const std::string& f = args->file;
       if (f.size() < 4 || f.substr(f.size() - 4) != ".obj")
-        throw InvalidInput("FILE: only .obj output is supported, got '" + f + "'");
+        throw InvalidInput("FILE", "only .obj output is supported, got '" + f + "'");
       const ExampleSurface example = make_example(args->name, args->scale);
       save_obj(example.mesh, f);
       std::printf("wrote %s: %d vertices, %d faces; corners %d,%d,%d,%d\n", f.c_str(),

@@ -34,16 +34,16 @@ int run_geodesic(const GeodesicArguments& args) {
   request.set_source(mesh_vertex(input, args.source, "--source"));
   request.set_method(args.method);
   request.set_compare(args.compare);
-  if (args.repeat < 1) throw InvalidInput("--repeat: must be at least 1");
+  if (args.repeat < 1) throw InvalidInput("--repeat", "must be at least 1");
   request.set_repeat(args.repeat);
   request.set_distances(!args.distances_out.empty());
   const Progress progress = make_progress(true);
   v1::GeodesicResult result;
   if (args.remote.remote()) {
-    prepare_geodesic(request, FieldNames::CommandLine);  // bad flags get the CLI's own messages
+    prepare_geodesic(request);  // bad flags fail here, before a remote call
     result = RemoteClient(args.remote).geodesic(request, progress);
   } else {
-    result = gridshell::run_geodesic(request, progress, {FieldNames::CommandLine});
+    result = gridshell::run_geodesic(request, progress, {});
   }
   v1::GeodesicReport report = result.report();
   report.set_input(std::filesystem::path(args.mesh).filename().string());

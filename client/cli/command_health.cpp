@@ -16,7 +16,8 @@ Command add_health_command(CLI::App& app) {
       "health", "Ask gridshelld whether it is serving (exit 0 if it is, 1 otherwise)");
   add_remote_options(sub, args->remote);
   return [args] {
-    if (!args->remote.remote()) throw InvalidInput("--server: required (HOST:PORT of gridshelld)");
+    if (!args->remote.remote())
+      throw InvalidInput("--server", "required (HOST:PORT of gridshelld)");
     RemoteClient client(args->remote);
     const std::string overall = client.health();
     const std::string service = client.health("gridshell.v1.Gridshell");

@@ -40,10 +40,10 @@ int run_patch(const PatchArguments& args) {
   const Progress progress = make_progress(args.output.quiet);
   v1::PatchResult result;
   if (args.output.remote.remote()) {
-    prepare_patch(request, FieldNames::CommandLine);  // the CLI's own messages for bad options
+    prepare_patch(request);  // bad options fail here, before a remote call
     result = RemoteClient(args.output.remote).patch(request, progress);
   } else {
-    result = gridshell::run_patch(request, progress, {FieldNames::CommandLine});
+    result = gridshell::run_patch(request, progress, {});
   }
   finish_progress();
   // Corner indices in file order, so the user can pass them back to --corners.

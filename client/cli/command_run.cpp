@@ -87,25 +87,25 @@ int run_run(const RunArguments& args) {
   simulate_request.set_design_name("design.json");
   prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
-  prepare_simulation_options(simulate_request.options(), FieldNames::CommandLine);
+  prepare_simulation_options(simulate_request.options());
   const bool remote = args.output.remote.remote();
   std::optional<RemoteClient> client;
   v1::RunResult result;
   if (remote) {
-    prepare_design(design_request_message, FieldNames::CommandLine);  // the CLI's own messages
+    prepare_design(design_request_message);  // bad options fail before any work
     client.emplace(args.output.remote);
     *result.mutable_design() = client->design(design_request_message, progress);
   } else {
-    *result.mutable_design() = gridshell::run_design(
-        design_request_message, progress, {FieldNames::CommandLine, args.output.threads});
+    *result.mutable_design() =
+        gridshell::run_design(design_request_message, progress, {args.output.threads});
   }
   write_files(design_files(result.design()), args.output.out);
   *simulate_request.mutable_design() = result.design().design();
   if (remote)
     *result.mutable_simulation() = client->simulate(simulate_request, progress);
   else
-    *result.mutable_simulation() = gridshell::run_simulate(
-        simulate_request, progress, {FieldNames::CommandLine, args.output.threads});
+    *result.mutable_simulation() =
+        gridshell::run_simulate(simulate_request, progress, {args.output.threads});
   finish_progress();
   write_files(simulate_files(result.simulation()), args.output.out);
   print_heading("run", args.design.mesh, args.output);

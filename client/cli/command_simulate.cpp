@@ -10,8 +10,8 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/deployment_job.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/files.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/requests.h"
 #include "remote.h"
 
@@ -47,23 +47,23 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
   o.set_solver(flags.solver);
   if (!flags.material.empty()) o.set_material(flags.material);
   if (flags.young) {
-    if (!(*flags.young > 0)) throw InvalidInput("--young: must be a positive number of pascal");
+    if (!(*flags.young > 0)) throw InvalidInput("--young", "must be a positive number of pascal");
     o.set_young_modulus(*flags.young);
   }
   if (flags.shear) {
-    if (!(*flags.shear > 0)) throw InvalidInput("--shear: must be a positive number of pascal");
+    if (!(*flags.shear > 0)) throw InvalidInput("--shear", "must be a positive number of pascal");
     o.set_shear_modulus(*flags.shear);
   }
   // Without --material the moduli override the default material's (resolve_simulation_options
   // then calls it "custom").
   o.set_unit(flags.unit);
   o.set_unit_in_meters(parse_length_unit(flags.unit, "--unit"));
-  if (!(flags.mu > 0)) throw InvalidInput("--mu: must be a positive number");
+  if (!(flags.mu > 0)) throw InvalidInput("--mu", "must be a positive number");
   o.set_friction_mu(flags.mu);
   if (!(flags.edges_per_interval >= 1 && flags.edges_per_interval <= 64))
-    throw InvalidInput("--edges-per-interval: must be between 1 and 64");
+    throw InvalidInput("--edges-per-interval", "must be between 1 and 64");
   o.set_edges_per_interval(flags.edges_per_interval);
-  if (flags.max_iterations < 1) throw InvalidInput("--max-iterations: must be at least 1");
+  if (flags.max_iterations < 1) throw InvalidInput("--max-iterations", "must be at least 1");
   o.set_max_iterations(flags.max_iterations);
   return o;
 }
@@ -102,7 +102,7 @@ struct SimulateArguments {
 
 v1::Design read_design(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput(path + ": cannot open the design file");
+  if (!in) throw InvalidInput(path, "cannot open the design file");
   std::stringstream text;
   text << in.rdbuf();
   v1::Design design;
@@ -112,7 +112,7 @@ v1::Design read_design(const std::string& path) {
   if (json.rfind("\xEF\xBB\xBF", 0) == 0) json.erase(0, 3);  // a UTF-8 byte order mark
   const auto status = google::protobuf::util::JsonStringToMessage(json, &design, options);
   if (!status.ok())
-    throw InvalidInput(path + ": not a gridshell design file: " + std::string(status.message()));
+    throw InvalidInput(path, "not a gridshell design file: " + std::string(status.message()));
   return design;
 }
 
@@ -124,19 +124,12 @@ int run_simulate(const SimulateArguments& args) {
   prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
   v1::SimulateResult result;
-  try {
-    if (args.output.remote.remote()) {
-      resolve_simulation_options(request.options());  // the CLI's own messages, before sending
-      result = RemoteClient(args.output.remote).simulate(request, progress);
-    } else {
-      result = gridshell::run_simulate(request, progress,
-                                       {FieldNames::CommandLine, args.output.threads});
-    }
-  } catch (const InvalidInput& e) {
-    const std::string message = e.what();
-    // Problems inside the design file name the file first.
-    if (message.rfind("design.", 0) == 0) throw InvalidInput(args.design + ": " + message);
-    throw;
+  field_context().design = args.design;  // problems inside the design file name the file
+  if (args.output.remote.remote()) {
+    prepare_simulation_options(request.options());  // checked here, before sending
+    result = RemoteClient(args.output.remote).simulate(request, progress);
+  } else {
+    result = gridshell::run_simulate(request, progress, {args.output.threads});
   }
   finish_progress();
   write_files(simulate_files(result), args.output.out);

@@ -11,15 +11,6 @@
 #include "gridshell/mesh/errors.h"
 #include "remote.h"
 
-namespace {
-std::atomic<bool> interrupted{false};
-void on_interrupt(int) { interrupted = true; }
-}  // namespace
-
-namespace gridshell::cli {
-const std::atomic<bool>* cancel_flag() { return &interrupted; }
-}  // namespace gridshell::cli
-
 int main(int argc, char** argv) {
   using namespace gridshell;
   CLI::App app{"gridshell: design and simulate elastic geodesic gridshells"};
@@ -52,25 +43,19 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n(run 'gridshell --help' for usage)\n";
     return 2;
   }
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  std::signal(SIGINT, cli::on_interrupt);
+  std::signal(SIGTERM, cli::on_interrupt);
   try {
     for (CLI::App* sub : app.get_subcommands())
       if (commands.count(sub)) return commands[sub]();
     std::cerr << "error: no command given\n";
     return 2;
-  } catch (const InvalidInput& e) {
-    cli::finish_progress();
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
-  } catch (const Infeasible& e) {
-    cli::finish_progress();
-    std::cerr << "error: infeasible: " << e.what() << "\n";
-    return 3;
   } catch (const Cancelled&) {
     cli::finish_progress();
     std::cerr << "error: cancelled\n";
     return 130;
+  } catch (const Error& e) {
+    return cli::report_error(e);  // the field in the CLI's terms (cli_errors.cpp)
   } catch (const cli::RemoteError& e) {
     cli::finish_progress();
     std::cerr << "error: " << e.what() << "\n";

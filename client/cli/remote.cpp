@@ -40,7 +40,7 @@ namespace {
 
 std::string read_whole_file(const std::string& path, const char* option) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput(std::string(option) + ": cannot read " + path);
+  if (!in) throw InvalidInput(option, "cannot read " + path);
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
@@ -71,11 +71,18 @@ struct RemoteClient::Impl {
   [[noreturn]] void fail(const grpc::Status& status) const {
     const std::string& message = status.error_message();
     const std::string where = "gridshelld at " + options.server + ": ";
+    // The error as data (field and plain message) when the daemon sent it, so that the field
+    // is shown in the CLI's terms as for a local run.
+    v1::ErrorDetail detail;
+    const bool structured =
+        !status.error_details().empty() && detail.ParseFromString(status.error_details());
+    const std::string field = structured ? detail.field() : "";
+    const std::string text = structured ? detail.message() : message;
     switch (status.error_code()) {
       case grpc::StatusCode::INVALID_ARGUMENT:
-        throw InvalidInput(message);
+        throw InvalidInput(field, text);
       case grpc::StatusCode::FAILED_PRECONDITION:
-        throw Infeasible(message);
+        throw Infeasible(field, text);
       case grpc::StatusCode::CANCELLED:
         throw Cancelled();
       case grpc::StatusCode::DEADLINE_EXCEEDED:
@@ -159,19 +166,19 @@ RemoteClient::RemoteClient(const RemoteOptions& options) : impl_(std::make_uniqu
   impl_->options = options;
   const auto colon = options.server.rfind(':');
   if (colon == std::string::npos || colon == 0)
-    throw InvalidInput("--server: expected HOST:PORT, got '" + options.server + "'");
+    throw InvalidInput("--server", "expected HOST:PORT, got '" + options.server + "'");
   const std::string port = options.server.substr(colon + 1);
   const bool digits = !port.empty() && port.size() <= 5 &&
                       port.find_first_not_of("0123456789") == std::string::npos;
   if (!digits || std::stoi(port) < 1 || std::stoi(port) > 65535)
-    throw InvalidInput("--server: '" + port + "' is not a port number (1-65535)");
+    throw InvalidInput("--server", "'" + port + "' is not a port number (1-65535)");
   // Up to a year: a deadline that gRPC's clock arithmetic does not overflow (NaN fails too).
   if (!(options.timeout >= 0 && options.timeout <= 3.2e7))
-    throw InvalidInput("--timeout: must be between 0 (none) and 3.2e7 seconds");
+    throw InvalidInput("--timeout", "must be between 0 (none) and 3.2e7 seconds");
   if (!options.token_file.empty()) {
     impl_->token = trimmed(read_whole_file(options.token_file, "--token-file"));
     if (impl_->token.empty())
-      throw InvalidInput("--token-file: " + options.token_file + " is empty");
+      throw InvalidInput("--token-file", "" + options.token_file + " is empty");
   }
   std::shared_ptr<grpc::ChannelCredentials> credentials;
   if (options.tls || !options.tls_ca.empty()) {
@@ -226,8 +233,8 @@ std::string RemoteClient::health(const std::string& service) {
 struct RemoteClient::Impl {};
 
 RemoteClient::RemoteClient(const RemoteOptions&) {
-  throw InvalidInput(
-      "--server: this gridshell was built without gRPC (GRIDSHELL_BUILD_SERVER=OFF)");
+  throw InvalidInput("--server",
+                     "this gridshell was built without gRPC (GRIDSHELL_BUILD_SERVER=OFF)");
 }
 RemoteClient::~RemoteClient() = default;
 v1::PatchResult RemoteClient::patch(const v1::PatchRequest&, const Progress&) { return {}; }

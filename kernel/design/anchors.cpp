@@ -1,7 +1,5 @@
 #include "gridshell/design/anchors.h"
 
-#include "gridshell/mesh/normals.h"
-
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -9,6 +7,8 @@
 #include <limits>
 #include <ranges>
 #include <tuple>
+
+#include "gridshell/mesh/normals.h"
 
 namespace gridshell {
 namespace {
@@ -75,7 +75,8 @@ template <class Range>
 int nearest_vertex(const TriangleMesh& mesh, const Range& candidates, const Vec3& p) {
   int best = *std::begin(candidates);
   for (int v : candidates)
-    if ((mesh.vertices[v] - p).squaredNorm() < (mesh.vertices[best] - p).squaredNorm()) best = v;
+    if ((mesh.vertices()[v] - p).squaredNorm() < (mesh.vertices()[best] - p).squaredNorm())
+      best = v;
   return best;
 }
 
@@ -91,11 +92,11 @@ void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vec
   std::vector<int> boundary;
   for (const auto& side : patch.sides) boundary.insert(boundary.end(), side.begin(), side.end());
   Vec3 centroid = Vec3::Zero();
-  for (int v : boundary) centroid += mesh.vertices[v];
+  for (int v : boundary) centroid += mesh.vertices()[v];
   centroid /= static_cast<double>(boundary.size());
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   for (int v : boundary) {
-    const Vec3 d = mesh.vertices[v] - centroid;
+    const Vec3 d = mesh.vertices()[v] - centroid;
     covariance += d * d.transpose();
   }
   Vec3 up = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvectors().col(0);
@@ -163,7 +164,7 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
     a.g = corner_crossings[i][0], a.h = corner_crossings[i][1];
     a.corner = true;
     a.side = i;
-    a.position = mesh.vertices[patch.corners[i]];
+    a.position = mesh.vertices()[patch.corners[i]];
     a.normal = normals[patch.corners[i]];
     anchors.push_back(a);
   }
@@ -175,7 +176,7 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
   double kmax = 0;
   for (int side = 0; side < 4; ++side) {
     std::vector<Vec3> polyline;
-    for (int v : patch.sides[side]) polyline.push_back(mesh.vertices[v]);
+    for (int v : patch.sides[side]) polyline.push_back(mesh.vertices()[v]);
     curvatures[side] = boundary_curvature(polyline, samples, options.curvature_window);
     lengths[side] = cumulative_lengths(polyline).back();
     kmax = std::max(kmax, *std::max_element(curvatures[side].begin(), curvatures[side].end()));

@@ -121,27 +121,27 @@ std::string degrees(double radians) { return number(radians * 180.0 / kPi, 4) + 
 
 void check_options(const CladdingOptions& o) {
   if (!(o.k_min > 0) || !(o.k_max > o.k_min) || !std::isfinite(o.k_max)) {
-    throw InvalidInput("cladding: slope bounds must satisfy 0 < k_min < k_max < inf, got k_min " +
-                       number(o.k_min) + ", k_max " + number(o.k_max));
+    throw InvalidInput("options.k_min",
+                       "slope bounds must satisfy 0 < k_min < k_max < inf, got k_min " +
+                           number(o.k_min) + ", k_max " + number(o.k_max));
   }
   if (!(o.vertical_c > 0) || !std::isfinite(o.vertical_c)) {
-    throw InvalidInput("cladding: vertical_c must be positive and finite, got " +
-                       number(o.vertical_c));
+    throw InvalidInput("options.vertical_c",
+                       "must be positive and finite, got " + number(o.vertical_c));
   }
   if (!(o.min_planar_angle >= 0 && o.min_planar_angle < kPi / 2)) {
-    throw InvalidInput("cladding: min_planar_angle must be in [0, pi/2) radians, got " +
-                       number(o.min_planar_angle));
+    throw InvalidInput("options.min_planar_angle",
+                       "must be in [0, pi/2) radians, got " + number(o.min_planar_angle));
   }
 }
 
-void check_map(const Eigen::MatrixXd& map, const char* what) {
+void check_map(const Eigen::MatrixXd& map, const char* what) {  // `what`: the field
   if (map.rows() < 2 || map.rows() != map.cols()) {
-    throw InvalidInput(std::string("cladding: ") + what +
-                       " must be an R x R matrix with R >= 2, got " + std::to_string(map.rows()) +
-                       " x " + std::to_string(map.cols()));
+    throw InvalidInput(what, "must be an R x R matrix with R >= 2, got " +
+                                 std::to_string(map.rows()) + " x " + std::to_string(map.cols()));
   }
   if (!map.allFinite()) {
-    throw InvalidInput(std::string("cladding: ") + what + " has non-finite entries");
+    throw InvalidInput(what, "has non-finite entries");
   }
 }
 
@@ -463,10 +463,10 @@ double bisect(const Predicate& ok, double inside, double outside, double toleran
 }
 
 void check_maps(const DistanceMaps& maps) {
-  check_map(maps.g.distances, "surface distance map D_u");
-  check_map(maps.h.distances, "surface distance map D_v");
+  check_map(maps.g.distances, "maps.g");
+  check_map(maps.h.distances, "maps.h");
   if (maps.g.family != Family::G || maps.h.family != Family::H) {
-    throw InvalidInput("cladding: DistanceMaps.g / .h must hold families G / H");
+    throw InvalidInput("maps", "maps.g / maps.h must hold families G / H");
   }
 }
 
@@ -495,7 +495,7 @@ std::string interval_text(double lo, double hi) {
   }
   if (!best) {
     message << "no sampled angle gives a convex planar patch";
-    throw Infeasible(message.str());
+    throw Infeasible("corners", message.str());
   }
   if (!any_diagonal) {
     message << "the diagonal condition (e - ē)(f - f̄) < 0 (paper eq. 2) fails for every ᾱ: "
@@ -503,7 +503,7 @@ std::string interval_text(double lo, double hi) {
             << ", f = d(c1,c3) = " << number(f, 5) << "; planar ē = |c0c2| ranges over ["
             << number(e_lo, 5) << ", " << number(e_hi, 5) << "], f̄ = |c1c3| over ["
             << number(f_lo, 5) << ", " << number(f_hi, 5) << "]";
-    throw Infeasible(message.str());
+    throw Infeasible("corners", message.str());
   }
   message << "closest at ᾱ = " << degrees(best->alpha) << " (" << number(best->alpha, 6)
           << " rad): ";
@@ -517,7 +517,7 @@ std::string interval_text(double lo, double hi) {
     if (!(*a)->function.valid) problems.push_back((*a)->function.problem);
   }
   for (size_t k = 0; k < problems.size(); ++k) message << (k ? "; " : "") << problems[k];
-  throw Infeasible(message.str());
+  throw Infeasible("corners", message.str());
 }
 
 }  // namespace
@@ -526,13 +526,13 @@ CladdingFunction cladding_function(const Eigen::MatrixXd& surface_map,
                                    const Eigen::MatrixXd& planar_map, Family family,
                                    double alpha_bar, const CladdingOptions& options) {
   check_options(options);
-  check_map(surface_map, "surface distance map");
-  check_map(planar_map, "planar distance map");
+  check_map(surface_map, "surface_map");
+  check_map(planar_map, "planar_map");
   if (planar_map.rows() != surface_map.rows()) {
-    throw InvalidInput("cladding: surface map is " + std::to_string(surface_map.rows()) + " x " +
-                       std::to_string(surface_map.rows()) + " but planar map is " +
-                       std::to_string(planar_map.rows()) + " x " +
-                       std::to_string(planar_map.rows()));
+    throw InvalidInput("planar_map", "surface map is " + std::to_string(surface_map.rows()) +
+                                         " x " + std::to_string(surface_map.rows()) +
+                                         " but planar map is " + std::to_string(planar_map.rows()) +
+                                         " x " + std::to_string(planar_map.rows()));
   }
   const auto delta = [&](int i, int j) { return surface_map(i, j) - planar_map(i, j); };
   return assess(static_cast<int>(surface_map.rows()), delta, map_scale(surface_map), family,
@@ -541,7 +541,7 @@ CladdingFunction cladding_function(const Eigen::MatrixXd& surface_map,
 }
 
 bool diagonal_condition(const DistanceMaps& maps, const PlanarPatch& planar) {
-  check_map(maps.g.distances, "surface distance map D_u");
+  check_map(maps.g.distances, "maps.g");
   return diagonals_cross(maps.g.distances, planar);
 }
 
@@ -554,7 +554,7 @@ AlphaRange feasible_alpha_range(const DistanceMaps& maps, const std::array<doubl
     std::ostringstream message;
     message << "no convex planar quadrilateral has the side lengths " << side_lengths[0] << ", "
             << side_lengths[1] << ", " << side_lengths[2] << ", " << side_lengths[3];
-    throw Infeasible(message.str());
+    throw Infeasible("corners", message.str());
   }
   progress.report(kStage, 0.0);
 
@@ -574,9 +574,10 @@ AlphaRange feasible_alpha_range(const DistanceMaps& maps, const std::array<doubl
     shape_ok[k] = admissible(lo + (hi - lo) * k / kShapeSamples);
   const auto [shape_first, shape_last] = chosen_run(shape_ok, 1.0);  // one run (monotone)
   if (shape_first < 0) {
-    throw Infeasible("no planar patch with these side lengths has every inner angle in [" +
-                     degrees(m) + ", " + degrees(kPi - m) + "] (convex range " +
-                     interval_text(lo, hi) + ", CladdingOptions::min_planar_angle)");
+    throw Infeasible("options.min_planar_angle",
+                     "no planar patch with these side lengths has every inner angle in [" +
+                         degrees(m) + ", " + degrees(kPi - m) + "] (convex range " +
+                         interval_text(lo, hi) + ", CladdingOptions::min_planar_angle)");
   }
   const auto shape_alpha = [&](int k) { return lo + (hi - lo) * k / kShapeSamples; };
   const double a = bisect(admissible, shape_alpha(shape_first), shape_alpha(shape_first - 1),

@@ -71,7 +71,8 @@ GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver, const std
   return gap;
 }
 
-CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOptions& options,
+CoverabilityReport analyze_coverability(const Patch& patch, const GeodesicOptions& geodesic,
+                                        const CoverabilityOptions& options,
                                         const Progress& progress) {
   CoverabilityReport report;
   progress.report("coverability", 0.0);
@@ -82,7 +83,7 @@ CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOp
   report.injectivity_bound = report.gaussian_curvature_max > 0
                                  ? std::numbers::pi / std::sqrt(report.gaussian_curvature_max)
                                  : std::numeric_limits<double>::infinity();
-  GeodesicSolver solver(patch.mesh, GeodesicOptions{options.method});
+  GeodesicSolver solver(patch.mesh, geodesic);
   // Longest member: members join opposite sides (0-2 and 1-3); sample sources on one side.
   const int samples = std::max(2, options.member_distance_samples);
   std::vector<std::pair<int, int>> jobs;  // (source vertex, side it starts on)
@@ -123,20 +124,21 @@ double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fix
   std::vector<Eigen::Triplet<double>> triplets;
   std::vector<double> mass(n, 0.0);
   std::vector<Eigen::Triplet<double>> stiffness;  // L over all vertices
-  for (const Face& f : mesh.faces) {
-    const Vec3& a = mesh.vertices[f[0]];
-    const double area = 0.5 * (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm();
+  for (const Face& f : mesh.faces()) {
+    const Vec3& a = mesh.vertices()[f[0]];
+    const double area = 0.5 * (mesh.vertices()[f[1]] - a).cross(mesh.vertices()[f[2]] - a).norm();
     for (int i = 0; i < 3; ++i) {
       mass[f[i]] += area / 3;
       const int o = f[i], p = f[(i + 1) % 3], q = f[(i + 2) % 3];
-      const Vec3 u = mesh.vertices[p] - mesh.vertices[o], v = mesh.vertices[q] - mesh.vertices[o];
+      const Vec3 u = mesh.vertices()[p] - mesh.vertices()[o],
+                 v = mesh.vertices()[q] - mesh.vertices()[o];
       const double cot = u.dot(v) / std::max(u.cross(v).norm(), 1e-300);
       const double w = 0.5 * cot;  // weight of edge (p,q), opposite vertex o
       stiffness.push_back({p, q, -w});
       stiffness.push_back({q, p, -w});
       stiffness.push_back({p, p, w});
       stiffness.push_back({q, q, w});
-      edge_sum += (mesh.vertices[p] - mesh.vertices[q]).norm();
+      edge_sum += (mesh.vertices()[p] - mesh.vertices()[q]).norm();
       ++edge_count;
     }
   }
@@ -149,7 +151,7 @@ double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fix
   for (int v = 0; v < n; ++v)
     if (free_index[v] >= 0) {
       triplets.push_back({free_index[v], free_index[v], mass[v]});
-      rhs.row(free_index[v]) = mass[v] * mesh.vertices[v].transpose();
+      rhs.row(free_index[v]) = mass[v] * mesh.vertices()[v].transpose();
     }
   for (int col = 0; col < L.outerSize(); ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(L, col); it; ++it) {
@@ -158,7 +160,7 @@ double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fix
       if (free_index[c] >= 0)
         triplets.push_back({free_index[r], free_index[c], h * it.value()});
       else
-        rhs.row(free_index[r]) -= h * it.value() * mesh.vertices[c].transpose();
+        rhs.row(free_index[r]) -= h * it.value() * mesh.vertices()[c].transpose();
     }
   Eigen::SparseMatrix<double> A(free_count, free_count);
   A.setFromTriplets(triplets.begin(), triplets.end());
@@ -168,29 +170,31 @@ double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fix
     x = ldlt.solve(rhs);
   } else {  // obtuse triangles can make the cotangent matrix indefinite; LU still solves it
     Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(A);
-    if (lu.info() != Eigen::Success) throw Infeasible("smoothing: the fairing system is singular");
+    if (lu.info() != Eigen::Success)
+      throw Infeasible("corners", "smoothing: the fairing system is singular");
     x = lu.solve(rhs);
   }
   double moved = 0;
   for (int v = 0; v < n; ++v)
     if (free_index[v] >= 0) {
       const Vec3 p = x.row(free_index[v]).transpose();
-      if (!p.allFinite()) throw Infeasible("smoothing produced non-finite positions");
-      moved = std::max(moved, (p - mesh.vertices[v]).norm());
-      mesh.vertices[v] = p;
+      if (!p.allFinite()) throw Infeasible("corners", "smoothing produced non-finite positions");
+      moved = std::max(moved, (p - mesh.vertices()[v]).norm());
+      mesh.set_vertex(v, p);
     }
   return moved;
 }
 
-SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& options,
+SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic,
+                                       const CoverabilityOptions& options,
                                        const Progress& progress) {
   SmoothingResult result;
   const TriangleMesh original = patch.mesh;
-  const MeshTopology topology = build_topology(patch.mesh);
+  const MeshTopology& topology = patch.mesh.topology();
   std::vector<char> fixed(patch.mesh.vertex_count(), 0);
   for (int v = 0; v < patch.mesh.vertex_count(); ++v) fixed[v] = topology.is_boundary_vertex[v];
   auto eta_of = [&]() {
-    GeodesicSolver solver(patch.mesh, GeodesicOptions{options.method});
+    GeodesicSolver solver(patch.mesh, geodesic);
     return gap_factor(patch, solver, gaussian_curvature(patch.mesh), progress).eta;
   };
   result.eta_before = result.eta_after = eta_of();
@@ -201,7 +205,7 @@ SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& 
           << options.eta_max << " after " << result.iterations
           << " iterations: the patch cannot be covered by shortest geodesics (paper 3.3); "
              "choose corners closer together or a smoother surface";
-      throw Infeasible(msg.str());
+      throw Infeasible("corners", msg.str());
     }
     progress.report("smoothing", std::min(1.0, static_cast<double>(result.iterations) /
                                                    options.max_smoothing_iterations));
@@ -210,8 +214,8 @@ SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& 
     result.eta_after = eta_of();
   }
   for (int v = 0; v < patch.mesh.vertex_count(); ++v)
-    result.max_displacement =
-        std::max(result.max_displacement, (patch.mesh.vertices[v] - original.vertices[v]).norm());
+    result.max_displacement = std::max(result.max_displacement,
+                                       (patch.mesh.vertices()[v] - original.vertices()[v]).norm());
   return result;
 }
 

@@ -15,38 +15,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 }  // namespace
 
-void parse_alpha(const std::string& text, DesignOptions& options) {
-  if (text == "min") {
-    options.alpha = DesignOptions::Alpha::Min;
-    return;
-  }
-  if (text == "max") {
-    options.alpha = DesignOptions::Alpha::Max;
-    return;
-  }
-  std::string number = text;
-  double factor = 1.0;
-  if (number.size() > 3 && number.substr(number.size() - 3) == "deg") {
-    number = number.substr(0, number.size() - 3);
-    factor = std::numbers::pi / 180;
-  }
-  size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(number, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != number.size() || !std::isfinite(value))
-    throw InvalidInput("--alpha: expected min, max, an angle in radians or NNdeg, got '" + text +
-                       "'");
-  value *= factor;
-  if (!(value > 0 && value < std::numbers::pi))
-    throw InvalidInput("--alpha: the planar corner angle must be between 0 and pi radians");
-  options.alpha = DesignOptions::Alpha::Value;
-  options.alpha_value = value;
-}
-
 Design design_grid(TargetPatch target, const DesignOptions& options, const Progress& progress) {
   Design design;
   design.target = std::move(target);
@@ -56,18 +24,17 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
     // half the patch, or a millionth of it, is no gridshell (and its simulation has no meaning).
     const std::array<double, 4> sides = side_lengths(patch);
     const double longest = *std::max_element(sides.begin(), sides.end());
-    for (const auto& [value, flag] :
-         {std::pair{options.members.lamella_width, "--lamella-width"},
-          std::pair{options.members.lamella_thickness, "--lamella-thickness"}})
+    for (const auto& [value, field] :
+         {std::pair{options.members.lamella_width, "options.lamella_width"},
+          std::pair{options.members.lamella_thickness, "options.lamella_thickness"}})
       if (value != 0 && !(value >= 1e-6 * longest && value <= 0.5 * longest)) {
         std::ostringstream msg;
-        msg << flag << ": " << value << " is outside [1e-6, 0.5] x the longest patch side ("
-            << longest << ")";
-        throw InvalidInput(msg.str());
+        msg << value << " is outside [1e-6, 0.5] x the longest patch side (" << longest << ")";
+        throw InvalidInput(field, msg.str());
       }
   }
   auto start = std::chrono::steady_clock::now();
-  const GeodesicSolver solver(patch.mesh, GeodesicOptions{options.patch.cut.method});
+  const GeodesicSolver solver(patch.mesh, options.patch.geodesic);
   design.maps = compute_distance_maps(patch, solver, options.maps, progress);
   design.stage_seconds["distance_maps"] = seconds_since(start);
 
@@ -85,15 +52,15 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
       if (options.alpha_value < design.alpha_range.min ||
           options.alpha_value > design.alpha_range.max) {
         std::ostringstream msg;
-        msg << "--alpha " << options.alpha_value << " rad is outside the feasible range ["
+        msg << options.alpha_value << " rad is outside the feasible range ["
             << design.alpha_range.min << ", " << design.alpha_range.max << "] rad";
-        throw Infeasible(msg.str());
+        throw Infeasible("options.alpha", msg.str());
       }
       design.alpha_bar = options.alpha_value;
       break;
   }
   const auto planar = make_planar_patch(lengths, design.alpha_bar);
-  if (!planar) throw Infeasible("no convex planar patch at the chosen planar angle");
+  if (!planar) throw Infeasible("options.alpha", "no convex planar patch at this planar angle");
   design.planar = *planar;
   design.alpha = corner_angles(patch)[0];
   const int R = design.maps.g.resolution();
@@ -104,17 +71,15 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
       cladding_function(design.maps.h.distances, planar_distance_map(design.planar, Family::H, R),
                         Family::H, design.alpha_bar, options.cladding);
   for (const CladdingFunction* f : {&design.cladding_g, &design.cladding_h})
-    if (!f->valid) throw Infeasible("cladding function invalid at the chosen angle: " + f->problem);
+    if (!f->valid)
+      throw Infeasible("options.alpha", "cladding function invalid at this angle: " + f->problem);
   design.stage_seconds["cladding"] = seconds_since(start);
 
   start = std::chrono::steady_clock::now();
   MemberPlacementOptions g_options = options.members, h_options = options.members;
-  const double longest_side = *std::max_element(lengths.begin(), lengths.end());
-  design.lamella_width =
-      options.members.lamella_width > 0 ? options.members.lamella_width : 0.01 * longest_side;
-  design.lamella_thickness = options.members.lamella_thickness > 0
-                                 ? options.members.lamella_thickness
-                                 : design.lamella_width / 10;
+  const LamellaSize size = lamella_size(patch, options.members);
+  design.lamella_width = size.width;
+  design.lamella_thickness = size.thickness;
   g_options.lamella_width = h_options.lamella_width = design.lamella_width;
   g_options.lamella_thickness = h_options.lamella_thickness = design.lamella_thickness;
   if (options.members_g > 0) g_options.count = options.members_g;

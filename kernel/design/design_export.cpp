@@ -91,8 +91,9 @@ std::string spatial_obj(const Design& design) {
   obj.precision(17);
   const TriangleMesh& mesh = design.target.patch.mesh;
   obj << "# gridshell spatial grid: target patch and geodesic members\no patch\n";
-  for (const Vec3& v : mesh.vertices) obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
-  for (const Face& f : mesh.faces)
+  for (const Vec3& v : mesh.vertices())
+    obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
+  for (const Face& f : mesh.faces())
     obj << "f " << f[0] + 1 << " " << f[1] + 1 << " " << f[2] + 1 << "\n";
   int next = mesh.vertex_count() + 1;
   for (const auto* family : {&design.grid.g, &design.grid.h})

@@ -40,7 +40,7 @@ constexpr const char* kStage = "distance maps";
 void check_patch(const Patch& patch) {
   for (int s = 0; s < 4; ++s) {
     if (patch.sides[s].size() < 2) {
-      throw InvalidInput("patch side " + std::to_string(s) + " has fewer than two vertices");
+      throw InvalidInput("patch.sides[" + std::to_string(s) + "]", "fewer than two vertices");
     }
   }
 }
@@ -52,7 +52,7 @@ struct Abandoned {};
 
 std::vector<int> family_boundary(const Patch& patch, Family family, int end) {
   if (end != 0 && end != 1) {
-    throw InvalidInput("family_boundary: end must be 0 or 1, got " + std::to_string(end));
+    throw InvalidInput("end", "must be 0 or 1, got " + std::to_string(end));
   }
   // G: side 0 (c0 -> c1) and side 2 reversed (c3 -> c2); H: side 1 (c1 -> c2) and side 3
   // reversed (c0 -> c3).
@@ -65,7 +65,7 @@ std::vector<int> family_boundary(const Patch& patch, Family family, int end) {
 double chain_length(const TriangleMesh& mesh, const std::vector<int>& chain) {
   double length = 0;
   for (size_t k = 0; k + 1 < chain.size(); ++k) {
-    length += (mesh.vertices.at(chain[k + 1]) - mesh.vertices.at(chain[k])).norm();
+    length += (mesh.vertices().at(chain[k + 1]) - mesh.vertices().at(chain[k])).norm();
   }
   return length;
 }
@@ -73,13 +73,13 @@ double chain_length(const TriangleMesh& mesh, const std::vector<int>& chain) {
 SurfacePoint point_on_chain(const TriangleMesh& mesh, const std::vector<int>& chain, double t) {
   if (!(t >= 0.0 && t <= 1.0)) {
     std::ostringstream message;
-    message << "point_on_chain: t = " << t << " is outside [0, 1]";
-    throw InvalidInput(message.str());
+    message << t << " is outside [0, 1]";
+    throw InvalidInput("t", message.str());
   }
-  if (chain.empty()) throw InvalidInput("point_on_chain: empty vertex chain");
+  if (chain.empty()) throw InvalidInput("chain", "empty vertex chain");
   for (int v : chain) {
     if (v < 0 || v >= mesh.vertex_count()) {
-      throw InvalidInput("point_on_chain: vertex " + std::to_string(v) + " is out of range");
+      throw InvalidInput("chain", "vertex " + std::to_string(v) + " is out of range");
     }
   }
   if (t == 0.0 || chain.size() == 1) return SurfacePoint::at_vertex(mesh, chain.front());
@@ -89,7 +89,7 @@ SurfacePoint point_on_chain(const TriangleMesh& mesh, const std::vector<int>& ch
   std::vector<double> cumulative(chain.size(), 0.0);
   for (size_t k = 0; k + 1 < chain.size(); ++k) {
     cumulative[k + 1] =
-        cumulative[k] + (mesh.vertices[chain[k + 1]] - mesh.vertices[chain[k]]).norm();
+        cumulative[k] + (mesh.vertices()[chain[k + 1]] - mesh.vertices()[chain[k]]).norm();
   }
   const double total = cumulative.back();
   if (!(total > 0)) return SurfacePoint::at_vertex(mesh, chain.front());
@@ -108,8 +108,8 @@ SurfacePoint point_on_chain(const TriangleMesh& mesh, const std::vector<int>& ch
 
 int distance_map_resolution(const Patch& patch, const DistanceMapOptions& options) {
   if (options.resolution == 1 || options.resolution < 0) {
-    throw InvalidInput("distance map resolution must be 0 (adaptive) or at least 2, got " +
-                       std::to_string(options.resolution));
+    throw InvalidInput("options.resolution", "must be 0 (adaptive) or at least 2, got " +
+                                                 std::to_string(options.resolution));
   }
   if (options.resolution > 0) return options.resolution;
   size_t edges = 0;
@@ -120,8 +120,8 @@ int distance_map_resolution(const Patch& patch, const DistanceMapOptions& option
 DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& solver,
                                    const DistanceMapOptions& options, const Progress& progress) {
   if (options.threads < 0) {
-    throw InvalidInput("distance maps: threads must be >= 0 (0 = hardware concurrency), got " +
-                       std::to_string(options.threads));
+    throw InvalidInput("options.threads", "must be >= 0 (0 = hardware concurrency), got " +
+                                              std::to_string(options.threads));
   }
   check_patch(patch);
   const int R = distance_map_resolution(patch, options);

@@ -40,7 +40,7 @@ std::vector<int> faces_containing(const TriangleMesh& mesh, const MeshTopology& 
   const int zeros = zero_count(p);
   if (zeros >= 2) {
     for (int i = 0; i < 3; ++i)
-      if (p.barycentric[i] != 0.0) return topology.vertex_faces[mesh.faces[p.face][i]];
+      if (p.barycentric[i] != 0.0) return topology.vertex_faces[mesh.faces()[p.face][i]];
   }
   std::vector<int> faces{p.face};
   if (zeros == 1) {
@@ -68,11 +68,11 @@ struct FaceFrame {
 };
 
 FaceFrame frame_of(const TriangleMesh& mesh, int f) {
-  const Face& t = mesh.faces[f];
+  const Face& t = mesh.faces()[f];
   FaceFrame frame;
-  frame.origin = mesh.vertices[t[0]];
-  frame.e1 = (mesh.vertices[t[1]] - frame.origin).normalized();
-  const Vec3 n = frame.e1.cross(mesh.vertices[t[2]] - frame.origin).normalized();
+  frame.origin = mesh.vertices()[t[0]];
+  frame.e1 = (mesh.vertices()[t[1]] - frame.origin).normalized();
+  const Vec3 n = frame.e1.cross(mesh.vertices()[t[2]] - frame.origin).normalized();
   frame.e2 = n.cross(frame.e1);
   return frame;
 }
@@ -136,7 +136,7 @@ double refine_end(const DistanceField& field, const TriangleMesh& mesh,
     msg << "member " << member_name(family, index) << " (u1 = " << u1
         << "): no end point on the opposite boundary has equal surface and planar length "
            "(criterion i)";
-    throw Infeasible(msg.str());
+    throw Infeasible(family == Family::G ? "options.members_u" : "options.members_v", msg.str());
   }
   // Illinois-modified regula falsi with bisection fallback: superlinear and always bracketed.
   int side = 0;
@@ -165,7 +165,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
                 const std::vector<MemberPosition>& h_members, const GridOptions& options,
                 const Progress& progress) {
   const TriangleMesh& mesh = patch.mesh;
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   Grid grid;
   const std::array<const std::vector<MemberPosition>*, 2> positions{&g_members, &h_members};
   const std::array<std::vector<Member>*, 2> families{&grid.g, &grid.h};
@@ -192,8 +192,8 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
     for (size_t k = 0; k < list.size(); ++k)
       if (!(list[k].u1 > 0 && list[k].u1 < 1 && list[k].u2 > 0 && list[k].u2 < 1) ||
           (k > 0 && !(list[k].u1 > list[k - 1].u1 && list[k].u2 > list[k - 1].u2)))
-        throw InvalidInput("member positions of family " + std::string(f ? "h" : "g") +
-                           " must be inside (0,1) and strictly increasing");
+        throw InvalidInput(f ? "h_members" : "g_members",
+                           "positions must be inside (0,1) and strictly increasing");
     families[f]->resize(list.size() + 2);
   }
   // g0: c0 -> c3 (side 3 reversed), g_last: c1 -> c2 (side 1); h0: c1 -> c0 (side 0 reversed),
@@ -304,7 +304,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
       if (p.barycentric[i] < 1e-10) p.barycentric[i] = 0.0;
     if (zero_count(p) < 2) return -1;
     for (int i = 0; i < 3; ++i)
-      if (p.barycentric[i] != 0.0) return mesh.faces[p.face][i];
+      if (p.barycentric[i] != 0.0) return mesh.faces()[p.face][i];
     return -1;
   };
   std::unordered_map<int, std::vector<std::pair<int, double>>> h_vertices;  // vertex -> (h, s_h)
@@ -373,14 +373,14 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         std::ostringstream msg;
         msg << "members g" << i << " and h" << j << " cross " << distinct.size()
             << " times on the surface instead of once (criterion iii)";
-        throw Infeasible(msg.str());
+        throw Infeasible("options.members_u", msg.str());
       }
       double t = 0, u = 0;
       if (!intersect(g.planar[0], g.planar[1], h.planar[0], h.planar[1], 1e-12, t, u)) {
         std::ostringstream msg;
         msg << "members g" << i << " and h" << j
             << " do not cross in the planar grid (criterion iii)";
-        throw Infeasible(msg.str());
+        throw Infeasible("options.members_u", msg.str());
       }
       Crossing x;
       x.g = i, x.h = j;
@@ -413,7 +413,8 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
           msg << "members " << member_name(m.family, m.index) << " and "
               << member_name(n.family, n.index)
               << " of the same family cross in the planar grid (criterion iii)";
-          throw Infeasible(msg.str());
+          throw Infeasible(m.family == Family::G ? "options.members_u" : "options.members_v",
+                           msg.str());
         }
       }
   for (auto& [key, x] : crossings) grid.crossings.push_back(x);

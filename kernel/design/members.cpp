@@ -314,60 +314,78 @@ FillResult fill(const Placer& placer, const std::vector<Placement>& fixed, int t
 
 void validate(const CladdingFunction& cladding, const DistanceMap& surface_map,
               const MemberPlacementOptions& o) {
-  const std::string count_flag = cladding.family == Family::G ? "--members-u" : "--members-v";
-  if (!(o.lamella_width > 0) || !std::isfinite(o.lamella_width))
-    throw InvalidInput("--lamella-width: must be positive");
-  if (!(o.lamella_thickness > 0) || !std::isfinite(o.lamella_thickness))
-    throw InvalidInput("--lamella-thickness: must be positive");
+  const std::string count_field =
+      cladding.family == Family::G ? "options.members_u" : "options.members_v";
+  if (!(o.lamella_width >= 0) || !std::isfinite(o.lamella_width))
+    throw InvalidInput("options.lamella_width", "must be positive (or 0 for automatic)");
+  if (!(o.lamella_thickness >= 0) || !std::isfinite(o.lamella_thickness))
+    throw InvalidInput("options.lamella_thickness", "must be positive (or 0 for automatic)");
   if (!(o.clearance >= 0) || !std::isfinite(o.clearance))
-    throw InvalidInput("member clearance: must be >= 0");
+    throw InvalidInput("options.clearance", "must be >= 0");
   if (!(o.max_spacing > 0 && o.max_spacing <= 1))
-    throw InvalidInput("member max_spacing: must be in (0, 1]");
-  if (o.min_members < 0) throw InvalidInput("min_members: must be >= 0");
+    throw InvalidInput("options.max_spacing", "must be in (0, 1]");
+  if (o.min_members < 0) throw InvalidInput("options.min_members", "must be >= 0");
   if (o.max_members < o.min_members) {
     std::ostringstream msg;
-    msg << "max_members (" << o.max_members << ") must be >= min_members (" << o.min_members << ")";
-    throw InvalidInput(msg.str());
+    msg << "must be >= min_members (" << o.min_members << "), got " << o.max_members;
+    throw InvalidInput("options.max_members", msg.str());
   }
-  if (o.count < 0) throw InvalidInput(count_flag + ": must be >= 0 (0 = automatic)");
+  if (o.count < 0) throw InvalidInput(count_field, "must be >= 0 (0 = automatic)");
   if (!(o.feature_threshold >= 0) || !std::isfinite(o.feature_threshold))
-    throw InvalidInput("member feature_threshold: must be >= 0");
+    throw InvalidInput("options.feature_threshold", "must be >= 0");
 
   const std::string f = family_letter(cladding.family);
   if (surface_map.family != cladding.family)
-    throw InvalidInput("place_members: distance map and cladding function of different families");
+    throw InvalidInput("surface_map", "distance map and cladding function of different families");
   const auto& d = surface_map.distances;
   if (d.rows() < 2 || d.rows() != d.cols() || !d.allFinite())
-    throw InvalidInput("distance map of family " + f + " must be a finite R x R matrix, R >= 2");
+    throw InvalidInput("surface_map",
+                       "distance map of family " + f + " must be a finite R x R matrix, R >= 2");
   const auto& pts = cladding.points;
   const auto near = [](const Vec2& p, double x) {
     return std::abs(p.x() - x) < 1e-6 && std::abs(p.y() - x) < 1e-6;
   };
   if (pts.size() < 2 || !near(pts.front(), 0) || !near(pts.back(), 1))
-    throw InvalidInput("cladding function of family " + f + " does not connect (0,0) to (1,1)");
+    throw InvalidInput("cladding",
+                       "cladding function of family " + f + " does not connect (0,0) to (1,1)");
   for (const Vec2& p : pts)
     if (!p.allFinite() || p.minCoeff() < -1e-6 || p.maxCoeff() > 1 + 1e-6)
-      throw InvalidInput("cladding function of family " + f + " leaves the unit square");
+      throw InvalidInput("cladding",
+                         "cladding function of family " + f + " leaves the unit square");
   if (!cladding.valid)
-    throw Infeasible("cladding function of family " + f + " is not valid" +
-                     (cladding.problem.empty() ? std::string() : ": " + cladding.problem));
+    throw Infeasible("options.alpha",
+                     "cladding function of family " + f + " is not valid" +
+                         (cladding.problem.empty() ? std::string() : ": " + cladding.problem));
 }
 
 }  // namespace
 
+LamellaSize lamella_size(const Patch& patch, const MemberPlacementOptions& options) {
+  const std::array<double, 4> sides = side_lengths(patch);
+  const double longest = *std::max_element(sides.begin(), sides.end());
+  LamellaSize size;
+  size.width = options.lamella_width > 0 ? options.lamella_width : 0.01 * longest;
+  size.thickness = options.lamella_thickness > 0 ? options.lamella_thickness : size.width / 10;
+  return size;
+}
+
 std::vector<MemberPosition> place_members(const CladdingFunction& cladding,
                                           const DistanceMap& surface_map, const Patch& patch,
                                           const PlanarPatch& planar,
-                                          const MemberPlacementOptions& options) {
-  validate(cladding, surface_map, options);
+                                          const MemberPlacementOptions& raw_options) {
+  validate(cladding, surface_map, raw_options);
+  MemberPlacementOptions options = raw_options;
+  const LamellaSize size = lamella_size(patch, raw_options);
+  options.lamella_width = size.width;
+  options.lamella_thickness = size.thickness;
   const Family family = cladding.family;
   const std::array<double, 4> sides = side_lengths(patch);
   const std::array<double, 2> lengths = family == Family::G
                                             ? std::array<double, 2>{sides[0], sides[2]}
                                             : std::array<double, 2>{sides[1], sides[3]};
   if (!(lengths[0] > 0 && lengths[1] > 0))
-    throw InvalidInput("place_members: the patch boundaries of family " +
-                       std::string(family_letter(family)) + " have zero length");
+    throw InvalidInput("patch", "the patch boundaries of family " +
+                                    std::string(family_letter(family)) + " have zero length");
   const Placer placer(cladding, planar, lengths, options.lamella_width * (1 + options.clearance));
 
   // C(s) on a uniform grid of s, smoothed, with derivatives and curvature.
@@ -468,7 +486,10 @@ std::vector<MemberPosition> place_members(const CladdingFunction& cladding,
       }
       msg << "; members meet the boundaries at angles down to " << std::fixed
           << std::setprecision(1) << std::asin(sine) * 180 / std::numbers::pi << " deg";
-      throw Infeasible(msg.str());
+      throw Infeasible(automatic             ? "options.lamella_width"
+                       : family == Family::G ? "options.members_u"
+                                             : "options.members_v",
+                       msg.str());
     }
     features.pop_back();  // lowest priority
   }

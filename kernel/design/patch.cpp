@@ -19,79 +19,92 @@
 #include "gridshell/mesh/curvature.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
+#include "gridshell/mesh/surface_distance.h"
 
 namespace gridshell {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-std::vector<std::string> split(const std::string& text, char separator) {
-  std::vector<std::string> parts;
-  std::string current;
-  for (char c : text) {
-    if (c == separator) {
-      parts.push_back(current);
-      current.clear();
-    } else {
-      current += c;
-    }
-  }
-  parts.push_back(current);
-  return parts;
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
-}
-
-double parse_number(const std::string& text, const std::string& what) {
-  const std::string t = trim(text);
-  try {
-    size_t used = 0;
-    const double value = std::stod(t, &used);
-    if (used != t.size() || !std::isfinite(value)) throw std::invalid_argument(t);
-    return value;
-  } catch (const std::exception&) {
-    throw InvalidInput("--corners: " + what + " '" + t + "' is not a finite number");
-  }
-}
-
 // ---- Mesh surgery used to make corners vertices ------------------------------------------
 
-// Inserts the point given by `point` (already classified as interior to a face or on an edge)
-// and returns the new vertex index.
-int insert_point(TriangleMesh& mesh, const SurfacePoint& point) {
+// A mesh being edited as plain arrays. Input faces keep their index; a split input face's pieces
+// are listed in `pieces` (the face itself first).
+struct EditedMesh {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  std::map<int, std::vector<int>> pieces;  // input face -> its pieces, for split faces only
+  std::vector<int> origin;                 // face -> input face it is a piece of
+
+  void add_piece(int of_face, Face face) {
+    const int input_face = origin[of_face];
+    auto [it, inserted] = pieces.try_emplace(input_face, std::vector<int>{input_face});
+    it->second.push_back(static_cast<int>(faces.size()));
+    faces.push_back(face);
+    origin.push_back(input_face);
+  }
+  std::vector<int> pieces_of(int input_face) const {
+    const auto it = pieces.find(input_face);
+    return it == pieces.end() ? std::vector<int>{input_face} : it->second;
+  }
+};
+
+// Inserts the point given by its face and barycentric weights (already snapped: interior to
+// the face, or on an edge with the opposite weight exactly 0) and returns the new vertex index.
+int insert_point(EditedMesh& mesh, const SurfacePoint& point) {
   const Face f = mesh.faces[point.face];
-  const Vec3 position = point.position(mesh);
-  const int v = mesh.vertex_count();
+  const Vec3 position = point.barycentric[0] * mesh.vertices[f[0]] +
+                        point.barycentric[1] * mesh.vertices[f[1]] +
+                        point.barycentric[2] * mesh.vertices[f[2]];
+  const int v = static_cast<int>(mesh.vertices.size());
   mesh.vertices.push_back(position);
   int zero = -1;
   for (int i = 0; i < 3; ++i)
     if (point.barycentric[i] == 0.0) zero = i;
   if (zero < 0) {  // inside the face: split into three
     mesh.faces[point.face] = {f[0], f[1], v};
-    mesh.faces.push_back({f[1], f[2], v});
-    mesh.faces.push_back({f[2], f[0], v});
+    mesh.add_piece(point.face, {f[1], f[2], v});
+    mesh.add_piece(point.face, {f[2], f[0], v});
     return v;
   }
   // On the edge opposite vertex `zero`: split this face and its neighbour across that edge.
   const int a = f[(zero + 1) % 3], b = f[(zero + 2) % 3];
-  const int nf = mesh.face_count();
+  const int nf = static_cast<int>(mesh.faces.size());
   for (int g = 0; g < nf; ++g) {
     const Face t = mesh.faces[g];
     for (int i = 0; i < 3; ++i) {
       const int x = t[i], y = t[(i + 1) % 3], z = t[(i + 2) % 3];
       if ((x == a && y == b) || (x == b && y == a)) {
         mesh.faces[g] = {x, v, z};
-        mesh.faces.push_back({v, y, z});
+        mesh.add_piece(g, {v, y, z});
         break;
       }
     }
   }
   return v;
+}
+
+// The point `point` of the input mesh located on the edited mesh: among the pieces of its input
+// face, the one closest to it (the point lies on it, up to rounding), with its weights there.
+SurfacePoint locate_on_pieces(const TriangleMesh& input, const EditedMesh& mesh,
+                              const SurfacePoint& point) {
+  const Vec3 position = point.position(input);
+  SurfacePoint best;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (int f : mesh.pieces_of(point.face)) {
+    const Face& t = mesh.faces[f];
+    const Vec3 w = closest_point_on_triangle(position, mesh.vertices[t[0]], mesh.vertices[t[1]],
+                                             mesh.vertices[t[2]]);
+    const Vec3 q =
+        w[0] * mesh.vertices[t[0]] + w[1] * mesh.vertices[t[1]] + w[2] * mesh.vertices[t[2]];
+    const double d = (q - position).squaredNorm();
+    if (d < best_distance) {
+      best_distance = d;
+      best.face = f;
+      best.barycentric = w;
+    }
+  }
+  return best;
 }
 
 // Snaps barycentric weights within `snap` of 0 to exactly 0 (renormalizing).
@@ -118,7 +131,7 @@ struct Location {
 };
 
 Location classify(const TriangleMesh& mesh, const SurfacePoint& point, double snap) {
-  const Face& f = mesh.faces[point.face];
+  const Face& f = mesh.faces()[point.face];
   Vec3 w = point.barycentric.cwiseMax(0.0);
   w /= w.sum();
   // Order coordinates: the smallest is treated as zero (geodesic interior points lie on edges).
@@ -156,7 +169,7 @@ std::vector<int> faces_of(const TriangleMesh& mesh, const MeshTopology& topology
   if (loc.is_vertex()) return topology.vertex_faces[loc.a];
   std::vector<int> faces;
   for (int f : topology.vertex_faces[loc.a]) {
-    const Face& t = mesh.faces[f];
+    const Face& t = mesh.faces()[f];
     if (t[0] == loc.b || t[1] == loc.b || t[2] == loc.b) faces.push_back(f);
   }
   return faces;
@@ -220,65 +233,15 @@ std::string side_name(int i) {
 
 // ---------------------------------------------------------------------------------------------
 
-CornerSpec parse_corners(const std::string& text) {
-  CornerSpec spec;
-  const std::string t = trim(text);
-  if (t == "auto") {
-    spec.kind = CornerSpec::Kind::Auto;
-    return spec;
-  }
-  if (t.find(';') != std::string::npos) {
-    const auto points = split(t, ';');
-    if (points.size() != 4)
-      throw InvalidInput("--corners: expected 4 points 'x,y,z;x,y,z;x,y,z;x,y,z', got " +
-                         std::to_string(points.size()));
-    spec.kind = CornerSpec::Kind::Points;
-    for (int i = 0; i < 4; ++i) {
-      const auto xyz = split(points[i], ',');
-      if (xyz.size() != 3)
-        throw InvalidInput("--corners: point " + std::to_string(i + 1) +
-                           " must have 3 coordinates x,y,z, got '" + trim(points[i]) + "'");
-      for (int k = 0; k < 3; ++k)
-        spec.points[i][k] = parse_number(xyz[k], "coordinate of point " + std::to_string(i + 1));
-    }
-    return spec;
-  }
-  const auto parts = split(t, ',');
-  if (parts.size() != 4)
-    throw InvalidInput(
-        "--corners: expected 4 vertex indices 'i,j,k,l', 4 points "
-        "'x,y,z;x,y,z;x,y,z;x,y,z' or 'auto', got '" +
-        text + "'");
-  spec.kind = CornerSpec::Kind::Vertices;
-  for (int i = 0; i < 4; ++i) {
-    const std::string p = trim(parts[i]);
-    size_t used = 0;
-    long value = -1;
-    try {
-      value = std::stol(p, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != p.size() || p.empty() || value < 0 || value > std::numeric_limits<int>::max())
-      throw InvalidInput("--corners: vertex index '" + p + "' is not a non-negative integer");
-    spec.vertices[i] = static_cast<int>(value);
-  }
-  for (int i = 0; i < 4; ++i)
-    for (int j = i + 1; j < 4; ++j)
-      if (spec.vertices[i] == spec.vertices[j])
-        throw InvalidInput("--corners: vertex " + std::to_string(spec.vertices[i]) +
-                           " is given twice");
-  return spec;
-}
-
 std::array<int, 4> auto_corners(const TriangleMesh& mesh) {
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   if (topology.boundary_loops.empty())
-    throw InvalidInput("--corners auto: the mesh has no boundary");
+    throw InvalidInput("corners", "auto: the mesh has no boundary");
   const std::vector<int>& loop =
       *std::max_element(topology.boundary_loops.begin(), topology.boundary_loops.end(),
                         [](const auto& a, const auto& b) { return a.size() < b.size(); });
-  if (loop.size() < 4) throw InvalidInput("--corners auto: the boundary has fewer than 4 vertices");
+  if (loop.size() < 4)
+    throw InvalidInput("corners", "auto: the boundary has fewer than 4 vertices");
   const std::vector<double> sums = vertex_angle_sums(mesh);
   std::vector<int> order(loop.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
@@ -290,56 +253,63 @@ std::array<int, 4> auto_corners(const TriangleMesh& mesh) {
   return {loop[picked[0]], loop[picked[1]], loop[picked[2]], loop[picked[3]]};
 }
 
-SurfacePoint closest_surface_point(const TriangleMesh& mesh, const Vec3& point) {
-  SurfacePoint best;
-  double best_distance = std::numeric_limits<double>::infinity();
-  for (int f = 0; f < mesh.face_count(); ++f) {
-    const Face& t = mesh.faces[f];
-    const Vec3 w =
-        closest_point_on_triangle(point, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
-    const Vec3 q =
-        w[0] * mesh.vertices[t[0]] + w[1] * mesh.vertices[t[1]] + w[2] * mesh.vertices[t[2]];
-    const double d = (q - point).squaredNorm();
-    if (d < best_distance) {
-      best_distance = d;
-      best.face = f;
-      best.barycentric = w;
-    }
-  }
-  if (best.face < 0) throw InvalidInput("--corners: the mesh has no faces");
-  return best;
-}
+namespace {
 
-Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& corner_points,
-                const PatchCutOptions& options, const Progress& progress) {
-  progress.report("patch: corners", 0.0);
-  const double snap = options.snap_fraction;
+// ---- The steps of cut_patch ------------------------------------------------------------------
 
-  // 1. Make every corner a vertex of a working copy of the mesh.
-  TriangleMesh mesh = input;
+// Step 1: the mesh with every corner a vertex (faces or edges split where a corner lies inside)
+// and the corner vertices. The input mesh itself when every corner is a vertex already.
+struct CornerMesh {
+  TriangleMesh mesh;
   std::array<int, 4> corners{};
-  std::array<Vec3, 4> corner_positions;
-  for (int i = 0; i < 4; ++i) {
+};
+CornerMesh make_corners_vertices(const TriangleMesh& input,
+                                 const std::array<SurfacePoint, 4>& corner_points, double snap) {
+  for (int i = 0; i < 4; ++i)
     if (corner_points[i].face < 0 || corner_points[i].face >= input.face_count())
-      throw InvalidInput("corner " + std::to_string(i) + ": face index out of range");
-    corner_positions[i] = corner_points[i].position(input);
-  }
+      throw InvalidInput("corners[" + std::to_string(i) + "]",
+                         "face index " + std::to_string(corner_points[i].face) +
+                             " is out of range (the mesh has " +
+                             std::to_string(input.face_count()) + " faces)");
+  CornerMesh out;
+  EditedMesh edited;
+  bool edited_any = false;
   for (int i = 0; i < 4; ++i) {
-    SurfacePoint p = i == 0 ? corner_points[0] : closest_surface_point(mesh, corner_positions[i]);
-    p = snapped(p, snap);
-    const int v = p.vertex(mesh);
-    corners[i] = v >= 0 ? v : insert_point(mesh, p);
+    if (!edited_any) {
+      const int v = snapped(corner_points[i], snap).vertex(input);
+      if (v >= 0) {
+        out.corners[i] = v;
+        continue;
+      }
+      edited.vertices = input.vertices();
+      edited.faces = input.faces();
+      edited.origin.resize(edited.faces.size());
+      for (size_t f = 0; f < edited.origin.size(); ++f) edited.origin[f] = static_cast<int>(f);
+      edited_any = true;
+    }
+    // Earlier insertions may have split the corner's face: find it among the pieces.
+    const SurfacePoint q = snapped(locate_on_pieces(input, edited, corner_points[i]), snap);
+    const Face& face = edited.faces[q.face];
+    int vertex = -1;
+    for (int k = 0; k < 3; ++k)
+      if (q.barycentric[k] == 1.0) vertex = face[k];
+    out.corners[i] = vertex >= 0 ? vertex : insert_point(edited, q);
   }
+  out.mesh = edited_any ? TriangleMesh(std::move(edited.vertices), std::move(edited.faces)) : input;
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j)
-      if (corners[i] == corners[j])
-        throw InvalidInput("corners " + std::to_string(i) + " and " + std::to_string(j) +
-                           " are the same surface point");
-  const int input_vertex_count = input.vertex_count();
+      if (out.corners[i] == out.corners[j])
+        throw InvalidInput("corners[" + std::to_string(j) + "]",
+                           "the same surface point as corners[" + std::to_string(i) + "]");
+  return out;
+}
 
-  // 2. The four boundary geodesics, exact shortest paths between consecutive corners.
-  const MeshTopology topology = build_topology(mesh);
-  GeodesicSolver solver(mesh, GeodesicOptions{options.method});
+// Step 2: the four boundary geodesics c_i -> c_{i+1}, exact shortest paths, as locations.
+std::array<std::vector<Location>, 4> boundary_geodesics(const TriangleMesh& mesh,
+                                                        const std::array<int, 4>& corners,
+                                                        const GeodesicOptions& geodesic,
+                                                        double snap, const Progress& progress) {
+  GeodesicSolver solver(mesh, geodesic);
   std::array<std::vector<Location>, 4> paths;
   for (int i = 0; i < 4; ++i) {
     progress.report("patch: boundary geodesics", 0.1 + 0.2 * i);
@@ -360,44 +330,63 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
       throw std::logic_error("patch cut: geodesic " + side_name(i) + " does not join its corners");
     paths[i] = std::move(locations);
   }
-  progress.report("patch: cutting", 0.9);
+  return paths;
+}
 
-  // 3. New vertices for the points on edges; merge points of different paths at one spot.
-  std::map<std::uint64_t, std::vector<std::pair<double, int>>> edge_points;  // key -> (t, vertex)
+// Step 3: a vertex for every path point on an edge (points of different paths at one spot are
+// merged); `nodes[i]` are the vertices along path i.
+struct PathNodes {
+  std::vector<Vec3> vertices;  ///< the mesh's vertices and then the new ones
+  std::map<std::uint64_t, std::vector<std::pair<double, int>>> edge_points;  // edge -> (t, v)
+  std::array<std::vector<int>, 4> nodes;
+};
+PathNodes insert_path_points(const TriangleMesh& mesh,
+                             const std::array<std::vector<Location>, 4>& paths, double snap) {
+  PathNodes out;
+  out.vertices = mesh.vertices();
   auto node_of = [&](const Location& loc) -> int {
     if (loc.is_vertex()) return loc.a;
-    auto& list = edge_points[edge_key(loc.a, loc.b)];
+    auto& list = out.edge_points[edge_key(loc.a, loc.b)];
     for (const auto& [t, v] : list)
       if (std::abs(t - loc.t) < snap) return v;
-    const int v = mesh.vertex_count();
-    mesh.vertices.push_back((1 - loc.t) * mesh.vertices[loc.a] + loc.t * mesh.vertices[loc.b]);
+    const int v = static_cast<int>(out.vertices.size());
+    out.vertices.push_back((1 - loc.t) * out.vertices[loc.a] + loc.t * out.vertices[loc.b]);
     list.push_back({loc.t, v});
     return v;
   };
-  std::array<std::vector<int>, 4> nodes;
   for (int i = 0; i < 4; ++i)
-    for (const Location& loc : paths[i]) nodes[i].push_back(node_of(loc));
+    for (const Location& loc : paths[i]) out.nodes[i].push_back(node_of(loc));
+  return out;
+}
 
-  // Criterion (iv): the closed loop c0->c1->c2->c3->c0 must be simple.
-  {
-    std::map<int, int> owner;  // node -> side that visits it
-    for (int i = 0; i < 4; ++i)
-      for (size_t k = 0; k + 1 < nodes[i].size(); ++k) {  // the last node is the next side's first
-        const auto [it, inserted] = owner.emplace(nodes[i][k], i);
-        if (!inserted) {
-          std::ostringstream msg;
-          const Vec3& p = mesh.vertices[nodes[i][k]];
-          msg << "boundary geodesics " << side_name(it->second) << " and " << side_name(i)
-              << " touch or cross at (" << p.x() << ", " << p.y() << ", " << p.z()
-              << "): the patch is not a simple quadrilateral (grid criterion iv)";
-          throw Infeasible(msg.str());
-        }
+// Step 4, criterion (iv): the closed loop c0->c1->c2->c3->c0 must be simple.
+void check_simple_loop(const PathNodes& path) {
+  std::map<int, int> owner;  // node -> side that visits it
+  for (int i = 0; i < 4; ++i)
+    for (size_t k = 0; k + 1 < path.nodes[i].size(); ++k) {  // the last is the next side's first
+      const auto [it, inserted] = owner.emplace(path.nodes[i][k], i);
+      if (!inserted) {
+        std::ostringstream msg;
+        const Vec3& p = path.vertices[path.nodes[i][k]];
+        msg << "boundary geodesics " << side_name(it->second) << " and " << side_name(i)
+            << " touch or cross at (" << p.x() << ", " << p.y() << ", " << p.z()
+            << "): the patch is not a simple quadrilateral (grid criterion iv)";
+        throw Infeasible("corners", msg.str());
       }
-  }
+    }
+}
 
-  // 4. Chords: path segments that cross a face's interior.
-  std::map<int, std::vector<std::pair<int, int>>> chords;  // face -> (node, node)
-  std::vector<char> face_touched(mesh.face_count(), 0);
+// Step 5: the path segments that cross a face's interior (chords), by face, and the faces a
+// path touches (crossed, or with a new vertex on an edge).
+struct Chords {
+  std::map<int, std::vector<std::pair<int, int>>> by_face;  // face -> (node, node)
+  std::vector<char> touched;                                // per face
+};
+Chords find_chords(const TriangleMesh& mesh, const std::array<std::vector<Location>, 4>& paths,
+                   const PathNodes& path) {
+  const MeshTopology& topology = mesh.topology();
+  Chords out;
+  out.touched.assign(mesh.face_count(), 0);
   for (int i = 0; i < 4; ++i)
     for (size_t k = 0; k + 1 < paths[i].size(); ++k) {
       const Location& p = paths[i][k];
@@ -420,23 +409,29 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
       if (common.size() != 1)
         throw std::logic_error("patch cut: a segment of geodesic " + side_name(i) +
                                " lies in more than one face");
-      chords[common[0]].push_back({nodes[i][k], nodes[i][k + 1]});
-      face_touched[common[0]] = 1;
+      out.by_face[common[0]].push_back({path.nodes[i][k], path.nodes[i][k + 1]});
+      out.touched[common[0]] = 1;
     }
-  for (const auto& [key, list] : edge_points) {
+  for (const auto& [key, list] : path.edge_points) {
     const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
     for (int f : topology.vertex_faces[a]) {
-      const Face& t = mesh.faces[f];
-      if (t[0] == b || t[1] == b || t[2] == b) face_touched[f] = 1;
+      const Face& t = mesh.faces()[f];
+      if (t[0] == b || t[1] == b || t[2] == b) out.touched[f] = 1;
     }
   }
+  return out;
+}
 
-  // 5. Re-triangulate every touched face: boundary cycle with the new points, split by chords.
+// Step 6: every touched face re-triangulated (its boundary cycle with the new points, split
+// by its chords), so that the four paths consist of mesh edges.
+std::vector<Face> retriangulate(const TriangleMesh& mesh, const PathNodes& path,
+                                const Chords& chords) {
+  const std::vector<Vec3>& x = path.vertices;
   std::vector<Face> faces;
-  faces.reserve(mesh.faces.size() + 8 * chords.size());
-  for (int f = 0; f < static_cast<int>(mesh.faces.size()); ++f) {
-    const Face t = mesh.faces[f];
-    if (!face_touched[f]) {
+  faces.reserve(mesh.faces().size() + 8 * chords.by_face.size());
+  for (int f = 0; f < mesh.face_count(); ++f) {
+    const Face t = mesh.faces()[f];
+    if (!chords.touched[f]) {
       faces.push_back(t);
       continue;
     }
@@ -444,47 +439,49 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
     for (int i = 0; i < 3; ++i) {
       const int a = t[i], b = t[(i + 1) % 3];
       cycle.push_back(a);
-      auto it = edge_points.find(edge_key(a, b));
-      if (it == edge_points.end()) continue;
+      auto it = path.edge_points.find(edge_key(a, b));
+      if (it == path.edge_points.end()) continue;
       auto list = it->second;
       std::sort(list.begin(), list.end());
       if (a > b) std::reverse(list.begin(), list.end());  // t runs from min(a,b) to max(a,b)
       for (const auto& entry : list) cycle.push_back(entry.second);
     }
     // Local 2D frame of the face.
-    const Vec3 o = mesh.vertices[t[0]];
-    const Vec3 e1 = (mesh.vertices[t[1]] - o).normalized();
-    const Vec3 n = e1.cross(mesh.vertices[t[2]] - o).normalized();
+    const Vec3 o = x[t[0]];
+    const Vec3 e1 = (x[t[1]] - o).normalized();
+    const Vec3 n = e1.cross(x[t[2]] - o).normalized();
     const Vec3 e2 = n.cross(e1);
     auto to2d = [&](int v) {
-      const Vec3 d = mesh.vertices[v] - o;
+      const Vec3 d = x[v] - o;
       return Vec2(d.dot(e1), d.dot(e2));
     };
     std::vector<std::vector<int>> polygons{cycle};
-    for (const auto& [x, y] : chords[f]) {
-      bool placed = false;
-      for (size_t pi = 0; pi < polygons.size() && !placed; ++pi) {
-        auto& poly = polygons[pi];
-        const auto ix = std::find(poly.begin(), poly.end(), x);
-        const auto iy = std::find(poly.begin(), poly.end(), y);
-        if (ix == poly.end() || iy == poly.end()) continue;
-        size_t i0 = ix - poly.begin(), i1 = iy - poly.begin();
-        if (i0 > i1) std::swap(i0, i1);
-        std::vector<int> first(poly.begin() + i0, poly.begin() + i1 + 1);
-        std::vector<int> second(poly.begin() + i1, poly.end());
-        second.insert(second.end(), poly.begin(), poly.begin() + i0 + 1);
-        poly = std::move(first);
-        polygons.push_back(std::move(second));
-        placed = true;
+    const auto face_chords = chords.by_face.find(f);
+    if (face_chords != chords.by_face.end())
+      for (const auto& [a, b] : face_chords->second) {
+        bool placed = false;
+        for (size_t pi = 0; pi < polygons.size() && !placed; ++pi) {
+          auto& poly = polygons[pi];
+          const auto ia = std::find(poly.begin(), poly.end(), a);
+          const auto ib = std::find(poly.begin(), poly.end(), b);
+          if (ia == poly.end() || ib == poly.end()) continue;
+          size_t i0 = ia - poly.begin(), i1 = ib - poly.begin();
+          if (i0 > i1) std::swap(i0, i1);
+          std::vector<int> first(poly.begin() + i0, poly.begin() + i1 + 1);
+          std::vector<int> second(poly.begin() + i1, poly.end());
+          second.insert(second.end(), poly.begin(), poly.begin() + i0 + 1);
+          poly = std::move(first);
+          polygons.push_back(std::move(second));
+          placed = true;
+        }
+        if (!placed) {
+          std::ostringstream msg;
+          const Vec3& p = x[a];
+          msg << "boundary geodesics cross inside a face near (" << p.x() << ", " << p.y() << ", "
+              << p.z() << "): the patch is not a simple quadrilateral (grid criterion iv)";
+          throw Infeasible("corners", msg.str());
+        }
       }
-      if (!placed) {
-        std::ostringstream msg;
-        const Vec3& p = mesh.vertices[x];
-        msg << "boundary geodesics cross inside a face near (" << p.x() << ", " << p.y() << ", "
-            << p.z() << "): the patch is not a simple quadrilateral (grid criterion iv)";
-        throw Infeasible(msg.str());
-      }
-    }
     for (const auto& poly : polygons) {
       std::vector<Vec2> points;
       for (int v : poly) points.push_back(to2d(v));
@@ -492,10 +489,15 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
         faces.push_back({poly[tri[0]], poly[tri[1]], poly[tri[2]]});
     }
   }
-  mesh.faces = std::move(faces);
+  return faces;
+}
 
-  // 6. Which side of the loop is the patch.
-  const MeshTopology cut_topology = build_topology(mesh);
+// Step 7: which side of the loop is the patch: the faces flooded from the loop's left (or
+// right) without crossing it. The side that does not reach the mesh's own boundary wins, or the
+// left one (c0->c1->c2->c3 counter-clockwise) if both do; `reversed` says it was the right.
+std::vector<char> patch_region(const TriangleMesh& cut,
+                               const std::array<std::vector<int>, 4>& nodes, bool* reversed) {
+  const MeshTopology& topology = cut.topology();
   std::set<std::uint64_t> loop_edges;
   std::vector<std::pair<int, int>> directed;
   for (int i = 0; i < 4; ++i)
@@ -503,12 +505,13 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
       loop_edges.insert(edge_key(nodes[i][k], nodes[i][k + 1]));
       directed.push_back({nodes[i][k], nodes[i][k + 1]});
     }
+  const std::vector<Face>& faces = cut.faces();
   auto flood = [&](bool left) {
-    std::vector<char> in(mesh.face_count(), 0);
+    std::vector<char> in(cut.face_count(), 0);
     std::queue<int> queue;
     for (const auto& [a, b] : directed) {
-      for (int f : cut_topology.vertex_faces[a]) {
-        const Face& t = mesh.faces[f];
+      for (int f : topology.vertex_faces[a]) {
+        const Face& t = faces[f];
         for (int i = 0; i < 3; ++i) {
           const bool match =
               left ? (t[i] == a && t[(i + 1) % 3] == b) : (t[i] == b && t[(i + 1) % 3] == a);
@@ -523,9 +526,9 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
       const int f = queue.front();
       queue.pop();
       for (int i = 0; i < 3; ++i) {
-        const int g = cut_topology.face_neighbors[f][i];
+        const int g = topology.face_neighbors[f][i];
         if (g < 0 || in[g]) continue;
-        if (loop_edges.count(edge_key(mesh.faces[f][i], mesh.faces[f][(i + 1) % 3]))) continue;
+        if (loop_edges.count(edge_key(faces[f][i], faces[f][(i + 1) % 3]))) continue;
         in[g] = 1;
         queue.push(g);
       }
@@ -534,11 +537,11 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   };
   const std::vector<char> left = flood(true), right = flood(false);
   auto reaches_outer_boundary = [&](const std::vector<char>& region) {
-    for (int f = 0; f < mesh.face_count(); ++f) {
+    for (int f = 0; f < cut.face_count(); ++f) {
       if (!region[f]) continue;
       for (int i = 0; i < 3; ++i)
-        if (cut_topology.face_neighbors[f][i] < 0 &&
-            !loop_edges.count(edge_key(mesh.faces[f][i], mesh.faces[f][(i + 1) % 3])))
+        if (topology.face_neighbors[f][i] < 0 &&
+            !loop_edges.count(edge_key(faces[f][i], faces[f][(i + 1) % 3])))
           return true;
     }
     return false;
@@ -546,9 +549,10 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   auto count = [](const std::vector<char>& region) {
     return std::count(region.begin(), region.end(), 1);
   };
-  for (int f = 0; f < mesh.face_count(); ++f)
+  for (int f = 0; f < cut.face_count(); ++f)
     if (left[f] && right[f])
-      throw Infeasible("the four boundary geodesics do not enclose a region (grid criterion iv)");
+      throw Infeasible("corners",
+                       "the four boundary geodesics do not enclose a region (grid criterion iv)");
   bool use_left = true;
   if (count(left) == 0) {
     use_left = false;
@@ -556,29 +560,39 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
     use_left = false;
   }
   const std::vector<char>& region = use_left ? left : right;
-  if (count(region) == 0) throw Infeasible("the patch enclosed by the corners is empty");
+  if (count(region) == 0) throw Infeasible("corners", "the patch enclosed by the corners is empty");
+  *reversed = !use_left;
+  return region;
+}
 
-  // 7. Extract the patch.
+// Step 8: the patch: the region's faces and vertices, renumbered, its corners and sides
+// counter-clockwise.
+Patch extract_patch(const TriangleMesh& cut, const std::vector<char>& region, bool reversed,
+                    const std::array<int, 4>& corners, const std::array<std::vector<int>, 4>& nodes,
+                    int input_vertex_count) {
   Patch patch;
-  patch.corners_reversed = !use_left;
-  std::vector<int> new_index(mesh.vertex_count(), -1);
-  for (int f = 0; f < mesh.face_count(); ++f) {
+  patch.corners_reversed = reversed;
+  std::vector<int> new_index(cut.vertex_count(), -1);
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  for (int f = 0; f < cut.face_count(); ++f) {
     if (!region[f]) continue;
-    Face t = mesh.faces[f];
+    Face t = cut.faces()[f];
     for (int& v : t) {
       if (new_index[v] < 0) {
-        new_index[v] = patch.mesh.vertex_count();
-        patch.mesh.vertices.push_back(mesh.vertices[v]);
+        new_index[v] = static_cast<int>(vertices.size());
+        vertices.push_back(cut.vertices()[v]);
         patch.input_vertex.push_back(v < input_vertex_count ? v : -1);
       }
       v = new_index[v];
     }
-    patch.mesh.faces.push_back(t);
+    faces.push_back(t);
   }
+  patch.mesh = TriangleMesh(std::move(vertices), std::move(faces));
   std::array<std::vector<int>, 4> sides;
   for (int i = 0; i < 4; ++i)
     for (int v : nodes[i]) sides[i].push_back(new_index[v]);
-  if (use_left) {
+  if (!reversed) {
     for (int i = 0; i < 4; ++i) patch.corners[i] = new_index[corners[i]];
     patch.sides = sides;
   } else {  // reverse: corners c0, c3, c2, c1
@@ -594,10 +608,33 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   for (const auto& side : patch.sides)
     for (int v : side)
       if (v < 0) throw std::logic_error("patch cut: a boundary vertex is not in the patch");
-  const MeshTopology patch_topology = build_topology(patch.mesh);
-  if (patch_topology.boundary_loops.size() != 1)
-    throw Infeasible("the cut patch has " + std::to_string(patch_topology.boundary_loops.size()) +
-                     " boundary loops instead of one");
+  const size_t loops = patch.mesh.topology().boundary_loops.size();
+  if (loops != 1)
+    throw Infeasible(
+        "corners", "the cut patch has " + std::to_string(loops) + " boundary loops instead of one");
+  return patch;
+}
+
+}  // namespace
+
+Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& corner_points,
+                const GeodesicOptions& geodesic, const PatchCutOptions& options,
+                const Progress& progress) {
+  progress.report("patch: corners", 0.0);
+  const double snap = options.snap_fraction;
+  const CornerMesh corner_mesh = make_corners_vertices(input, corner_points, snap);
+  const TriangleMesh& mesh = corner_mesh.mesh;
+  const auto paths = boundary_geodesics(mesh, corner_mesh.corners, geodesic, snap, progress);
+  progress.report("patch: cutting", 0.9);
+  PathNodes path = insert_path_points(mesh, paths, snap);
+  check_simple_loop(path);
+  const Chords chords = find_chords(mesh, paths, path);
+  std::vector<Face> faces = retriangulate(mesh, path, chords);
+  const TriangleMesh cut(std::move(path.vertices), std::move(faces));
+  bool reversed = false;
+  const std::vector<char> region = patch_region(cut, path.nodes, &reversed);
+  Patch patch =
+      extract_patch(cut, region, reversed, corner_mesh.corners, path.nodes, input.vertex_count());
   progress.report("patch: cut", 1.0);
   return patch;
 }
@@ -613,7 +650,7 @@ std::array<double, 4> side_lengths(const Patch& patch) {
   for (int i = 0; i < 4; ++i)
     for (size_t k = 0; k + 1 < patch.sides[i].size(); ++k)
       lengths[i] +=
-          (patch.mesh.vertices[patch.sides[i][k + 1]] - patch.mesh.vertices[patch.sides[i][k]])
+          (patch.mesh.vertices()[patch.sides[i][k + 1]] - patch.mesh.vertices()[patch.sides[i][k]])
               .norm();
   return lengths;
 }
@@ -625,7 +662,7 @@ void check_convex_corners(const Patch& patch) {
       std::ostringstream msg;
       msg << "corner c" << i << " has inner angle " << angles[i] * 180 / kPi
           << " degrees >= 180: the patch is not convex (grid criterion iv)";
-      throw Infeasible(msg.str());
+      throw Infeasible("corners[" + std::to_string(i) + "]", msg.str());
     }
 }
 

@@ -40,9 +40,8 @@ void check_lengths(const std::array<double, 4>& L) {
   for (int i = 0; i < 4; ++i) {
     if (!std::isfinite(L[i]) || !(L[i] > 0)) {
       std::ostringstream message;
-      message << "planar patch: side length " << i << " is " << L[i]
-              << " (must be finite and positive)";
-      throw InvalidInput(message.str());
+      message << L[i] << " (must be finite and positive)";
+      throw InvalidInput("side_lengths[" + std::to_string(i) + "]", message.str());
     }
   }
 }
@@ -211,10 +210,10 @@ std::array<double, 4> planar_corner_angles(const PlanarPatch& planar) {
 
 Vec2 planar_boundary_point(const PlanarPatch& planar, Family family, int end, double t) {
   if (!(t >= 0.0 && t <= 1.0)) {
-    throw InvalidInput("planar_boundary_point: t = " + std::to_string(t) + " is outside [0,1]");
+    throw InvalidInput("t", std::to_string(t) + " is outside [0,1]");
   }
   if (end != 0 && end != 1) {
-    throw InvalidInput("planar_boundary_point: end must be 0 or 1, got " + std::to_string(end));
+    throw InvalidInput("end", "must be 0 or 1, got " + std::to_string(end));
   }
   const auto& c = planar.corners;
   if (family == Family::G) {
@@ -225,8 +224,7 @@ Vec2 planar_boundary_point(const PlanarPatch& planar, Family family, int end, do
 
 Eigen::MatrixXd planar_distance_map(const PlanarPatch& planar, Family family, int resolution) {
   if (resolution < 2) {
-    throw InvalidInput("planar_distance_map: resolution must be at least 2, got " +
-                       std::to_string(resolution));
+    throw InvalidInput("resolution", "must be at least 2, got " + std::to_string(resolution));
   }
   const int R = resolution;
   std::vector<Vec2> first(R), second(R);

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/surface_distance.h"
 
 namespace gridshell {
 namespace {
@@ -19,20 +20,26 @@ TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& spec,
     case CornerSpec::Kind::Vertices:
       for (int i = 0; i < 4; ++i) {
         if (spec.vertices[i] < 0 || spec.vertices[i] >= mesh.vertex_count())
-          throw InvalidInput("--corners: vertex index " + std::to_string(spec.vertices[i]) +
-                             " is out of range (the mesh has " +
-                             std::to_string(mesh.vertex_count()) + " vertices)");
+          throw InvalidInput("corners.vertices[" + std::to_string(i) + "]",
+                             "vertex index " + std::to_string(spec.vertices[i]) +
+                                 " is out of range (the mesh has " +
+                                 std::to_string(mesh.vertex_count()) + " vertices)");
+        if (mesh.topology().vertex_faces[spec.vertices[i]].empty())
+          throw InvalidInput(
+              "corners.vertices[" + std::to_string(i) + "]",
+              "vertex " + std::to_string(spec.vertices[i]) + " is isolated (no face uses it)");
         result.input_corners[i] = SurfacePoint::at_vertex(mesh, spec.vertices[i]);
       }
       break;
-    case CornerSpec::Kind::Points:
-      for (int i = 0; i < 4; ++i) {
+    case CornerSpec::Kind::Points: {
+      for (int i = 0; i < 4; ++i)
         if (!spec.points[i].allFinite() || spec.points[i].cwiseAbs().maxCoeff() > kMaxCoordinate)
-          throw InvalidInput("--corners: point " + std::to_string(i + 1) +
-                             " has a coordinate that is not a finite number within +-1e15");
-        result.input_corners[i] = closest_surface_point(mesh, spec.points[i]);
-      }
+          throw InvalidInput("corners.points[" + std::to_string(i) + "]",
+                             "a coordinate is not a finite number within +-1e15");
+      const SurfaceDistance closest(mesh);
+      for (int i = 0; i < 4; ++i) result.input_corners[i] = closest.closest(spec.points[i]);
       break;
+    }
     case CornerSpec::Kind::Auto: {
       const auto corners = auto_corners(mesh);
       for (int i = 0; i < 4; ++i)
@@ -40,12 +47,13 @@ TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& spec,
       break;
     }
   }
-  result.patch = cut_patch(mesh, result.input_corners, options.cut, progress);
+  result.patch = cut_patch(mesh, result.input_corners, options.geodesic, options.cut, progress);
   check_convex_corners(result.patch);
   result.stage_seconds["cut"] = seconds_since(start);
 
   start = std::chrono::steady_clock::now();
-  result.coverability = analyze_coverability(result.patch, options.coverability, progress);
+  result.coverability =
+      analyze_coverability(result.patch, options.geodesic, options.coverability, progress);
   result.stage_seconds["coverability"] = seconds_since(start);
 
   start = std::chrono::steady_clock::now();
@@ -53,7 +61,8 @@ TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& spec,
   // is covered by shortest geodesics as it is; only otherwise is the gap measured by eta and
   // smoothed away.
   if (options.smooth && !result.coverability.injectivity_ok) {
-    result.smoothing = smooth_until_coverable(result.patch, options.coverability, progress);
+    result.smoothing =
+        smooth_until_coverable(result.patch, options.geodesic, options.coverability, progress);
   } else {
     result.smoothing.eta_before = result.smoothing.eta_after = result.coverability.gap.eta;
   }

@@ -15,20 +15,20 @@ namespace gridshell {
 namespace geodesic_detail {
 
 SurfacePoint normalize_surface_point(const TriangleMesh& mesh, const SurfacePoint& point,
-                                     const char* what) {
+                                     const std::string& field) {
   if (point.face < 0 || point.face >= mesh.face_count()) {
     std::ostringstream msg;
-    msg << what << " point: face " << point.face << " is out of range (the mesh has "
-        << mesh.face_count() << " faces)";
-    throw InvalidInput(msg.str());
+    msg << "face " << point.face << " is out of range (the mesh has " << mesh.face_count()
+        << " faces)";
+    throw InvalidInput(field, msg.str());
   }
   const Vec3& w = point.barycentric;
   const double sum = w[0] + w[1] + w[2];
   if (!std::isfinite(sum) || w.minCoeff() < -1e-9 || std::abs(sum - 1.0) > 1e-9) {
     std::ostringstream msg;
-    msg << what << " point: barycentric weights (" << w[0] << ", " << w[1] << ", " << w[2]
-        << ") in face " << point.face << " must be non-negative and sum to 1";
-    throw InvalidInput(msg.str());
+    msg << "barycentric weights (" << w[0] << ", " << w[1] << ", " << w[2] << ") in face "
+        << point.face << " must be non-negative and sum to 1";
+    throw InvalidInput(field, msg.str());
   }
   SurfacePoint out = point;
   for (int i = 0; i < 3; ++i)
@@ -54,7 +54,7 @@ GeodesicMethod parse_geodesic_method(const std::string& name) {
   if (name == "fast") return GeodesicMethod::Fast;
   if (name == "cgal") return GeodesicMethod::Cgal;
   if (name == "heat") return GeodesicMethod::Heat;
-  throw InvalidInput("unknown geodesic method '" + name + "' (expected fast, cgal or heat)");
+  throw InvalidInput("", "unknown geodesic method '" + name + "' (expected fast, cgal or heat)");
 }
 
 std::string to_string(GeodesicMethod method) {
@@ -93,9 +93,9 @@ std::vector<SurfacePoint> DistanceField::path_to(const SurfacePoint& target) con
 // GeodesicSolver
 
 GeodesicSolver::GeodesicSolver(const TriangleMesh& mesh, GeodesicOptions options) {
-  for (const Vec3& p : mesh.vertices)
-    if (!p.allFinite()) throw InvalidInput("geodesic solver: the mesh has a non-finite vertex");
-  build_topology(mesh);  // throws InvalidInput for invalid indices / non-manifold meshes
+  for (int v = 0; v < mesh.vertex_count(); ++v)
+    if (!mesh.vertices()[v].allFinite())
+      throw InvalidInput("mesh.vertices[" + std::to_string(v) + "]", "non-finite coordinate");
   switch (options.method) {
     case GeodesicMethod::Fast:
       impl_ = geodesic_detail::make_fast_solver(mesh);
@@ -107,7 +107,7 @@ GeodesicSolver::GeodesicSolver(const TriangleMesh& mesh, GeodesicOptions options
       impl_ = geodesic_detail::make_heat_solver(mesh);
       break;
   }
-  if (!impl_) throw InvalidInput("unknown geodesic method");
+  if (!impl_) throw std::logic_error("GeodesicSolver: unknown geodesic method");
   impl_->method = options.method;
 }
 
@@ -126,10 +126,11 @@ DistanceField GeodesicSolver::solve(const SurfacePoint& source, const SolveOptio
                                     const Progress& progress) const {
   const SurfacePoint s = geodesic_detail::normalize_surface_point(impl_->mesh, source, "source");
   if (options.stop_at_targets && options.targets.empty())
-    throw InvalidInput("geodesic solve: stop_at_targets needs at least one target");
+    throw InvalidInput("options.stop_at_targets", "needs at least one target");
   SolveOptions checked = options;
   for (SurfacePoint& t : checked.targets)
-    t = geodesic_detail::normalize_surface_point(impl_->mesh, t, "target");
+    t = geodesic_detail::normalize_surface_point(
+        impl_->mesh, t, "options.targets[" + std::to_string(&t - checked.targets.data()) + "]");
   return impl_->solve(s, checked, progress);
 }
 

@@ -82,8 +82,8 @@ struct CgalData {
     p.face = f;
     p.barycentric = Vec3::Zero();
     for (int i = 0; i < 3; ++i) {
-      if (mesh.faces[f][i] == a) p.barycentric[i] = 1.0 - t;
-      if (mesh.faces[f][i] == b) p.barycentric[i] = t;
+      if (mesh.faces()[f][i] == a) p.barycentric[i] = 1.0 - t;
+      if (mesh.faces()[f][i] == b) p.barycentric[i] = t;
     }
     return p;
   }
@@ -132,7 +132,8 @@ class CgalField final : public DistanceField::Impl {
         shortest_path_
             .shortest_path_sequence_to_source_points(FaceIndex(q.face), data_->to_cgal(q), visitor)
             .first;
-    if (d < 0) throw InvalidInput("shortest path: the target is not reachable from the source");
+    if (d < 0)
+      throw InvalidInput("target", "not reachable from the source (another connected piece)");
     std::reverse(points.begin(), points.end());
     if (!points.empty()) {
       points.front() = source;
@@ -153,16 +154,16 @@ class CgalSolver final : public GeodesicSolver::Impl {
     mesh = input;
     auto data = std::make_shared<CgalData>();
     data->mesh = input;
-    for (const Vec3& p : input.vertices)
+    for (const Vec3& p : input.vertices())
       data->cgal.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-    data->rotation.resize(input.faces.size());
+    data->rotation.resize(input.faces().size());
     for (int f = 0; f < input.face_count(); ++f) {
-      const Face& t = input.faces[f];
+      const Face& t = input.faces()[f];
       const FaceIndex fi =
           data->cgal.add_face(VertexIndex(t[0]), VertexIndex(t[1]), VertexIndex(t[2]));
       if (fi == CgalMesh::null_face() || static_cast<int>(fi.idx()) != f)
-        throw InvalidInput("cgal geodesics: face " + std::to_string(f) +
-                           " cannot be added to a CGAL surface mesh (non-manifold)");
+        throw std::logic_error("cgal geodesics: face " + std::to_string(f) +
+                               " cannot be added to a CGAL surface mesh (non-manifold)");
       const int s = static_cast<int>(data->cgal.source(data->cgal.halfedge(fi)).idx());
       data->rotation[f] = t[0] == s ? 0 : (t[1] == s ? 1 : 2);
     }

@@ -246,12 +246,12 @@ struct FastMesh {
 std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
   auto m = std::make_shared<FastMesh>();
   m->mesh = mesh;
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   const int nv = mesh.vertex_count(), nf = mesh.face_count();
   m->half.resize(3 * static_cast<size_t>(nf));
   std::vector<double> angle(nv, 0.0);
   for (int f = 0; f < nf; ++f) {
-    const Face& t = mesh.faces[f];
+    const Face& t = mesh.faces()[f];
     for (int e = 0; e < 3; ++e) {
       HalfEdge& h = m->half[3 * f + e];
       h.va = t[e];
@@ -260,14 +260,14 @@ std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
       h.twin = -1;
       const int n = top.face_neighbors[f][e];
       if (n >= 0) {
-        const Face& nt = mesh.faces[n];
+        const Face& nt = mesh.faces()[n];
         for (int k = 0; k < 3; ++k)
           if (nt[k] == t[next3(e)] && nt[next3(k)] == t[e]) h.twin = 3 * n + k;
-        if (h.twin < 0) throw InvalidInput("geodesic solver: inconsistent face orientation");
+        if (h.twin < 0) throw std::logic_error("geodesic solver: inconsistent face orientation");
       }
-      const Vec3& a = mesh.vertices[h.va];
-      const Vec3& b = mesh.vertices[h.vb];
-      const Vec3& c = mesh.vertices[h.vc];
+      const Vec3& a = mesh.vertices()[h.va];
+      const Vec3& b = mesh.vertices()[h.vb];
+      const Vec3& c = mesh.vertices()[h.vc];
       const Vec3 ab = b - a;
       const double len = ab.norm();
       const Vec3 ex = ab / len;
@@ -276,8 +276,8 @@ std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
       h.cy = (c - a).cross(ex).norm();
       if (!(len > 0) || !(h.cy > 0) || !std::isfinite(h.cy)) {
         std::ostringstream msg;
-        msg << "geodesic solver: face " << f << " is degenerate (zero area)";
-        throw InvalidInput(msg.str());
+        msg << "degenerate (zero area): the geodesic solver needs triangles with area";
+        throw InvalidInput("mesh.faces[" + std::to_string(f) + "]", msg.str());
       }
       const double ac = (c - a).norm(), bc = (c - b).norm();
       h.u2x = h.cx / ac;
@@ -297,21 +297,21 @@ std::shared_ptr<const FastMesh> build_fast_mesh(const TriangleMesh& mesh) {
       h.left_len = m->half[3 * f + prev3(e)].len;
       h.right_len = m->half[3 * f + next3(e)].len;
       if (h.twin < 0) continue;
-      const Vec3& a = mesh.vertices[h.va];
-      const Vec3 ex = (mesh.vertices[h.vb] - a) / h.len;
-      const Vec3 d = mesh.vertices[m->half[h.twin].vc] - a;
+      const Vec3& a = mesh.vertices()[h.va];
+      const Vec3 ex = (mesh.vertices()[h.vb] - a) / h.len;
+      const Vec3 d = mesh.vertices()[m->half[h.twin].vc] - a;
       h.ox = d.dot(ex);
       h.oy = -d.cross(ex).norm();
     }
   m->vf_start.assign(nv + 1, 0);
   for (int f = 0; f < nf; ++f)
-    for (int i = 0; i < 3; ++i) ++m->vf_start[mesh.faces[f][i] + 1];
+    for (int i = 0; i < 3; ++i) ++m->vf_start[mesh.faces()[f][i] + 1];
   for (int v = 0; v < nv; ++v) m->vf_start[v + 1] += m->vf_start[v];
   m->vf_half.resize(3 * static_cast<size_t>(nf));
   {
     std::vector<int> fill(m->vf_start.begin(), m->vf_start.end() - 1);
     for (int f = 0; f < nf; ++f)
-      for (int i = 0; i < 3; ++i) m->vf_half[fill[mesh.faces[f][i]]++] = 3 * f + i;
+      for (int i = 0; i < 3; ++i) m->vf_half[fill[mesh.faces()[f][i]]++] = 3 * f + i;
   }
   m->pseudo.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {
@@ -1194,7 +1194,7 @@ void Propagator::emit_vertex(int u) {
 /// The source point s lies in face `face` (on its edge `skip_edge` if >= 0): straight segments
 /// to the face's corners, and windows onto its other edges.
 void Propagator::emit_from_point(const Vec3& s, int face, int skip_edge) {
-  const auto& P = m_.mesh.vertices;
+  const auto& P = m_.mesh.vertices();
   for (int i = 0; i < 3; ++i) {
     const int v = m_.half[3 * face + i].va;
     relax(v, (P[v] - s).norm(), kFromSource);
@@ -1559,7 +1559,7 @@ void Propagator::evaluate_targets(const SurfacePoint& source) {
       const int f = pf.face[k];
       for (int e = 0; e < 3; ++e) {
         const int v = m_.half[3 * f + e].va;
-        best = std::min(best, dist_[v] + (mesh.vertices[v] - qp).norm());
+        best = std::min(best, dist_[v] + (mesh.vertices()[v] - qp).norm());
       }
       if (f == out_.source_faces[0] || f == out_.source_faces[1])
         best = std::min(best, (s - qp).norm());
@@ -1638,6 +1638,7 @@ FastField::Best FastField::locate(const SurfacePoint& target) const {
   const TriangleMesh& mesh = m->mesh;
   if (!has_windows)
     throw InvalidInput(
+        "",
         "distance field was solved without windows (SolveOptions::keep_windows = false): it "
         "answers vertex and target distances only");
   const SurfacePoint q = normalize_surface_point(mesh, target, "target");
@@ -1654,7 +1655,7 @@ FastField::Best FastField::locate(const SurfacePoint& target) const {
     const int f = pf.face[slot];
     for (int i = 0; i < 3; ++i) {
       const int v = m->half[3 * f + i].va;
-      const double d = distances[v] + (mesh.vertices[v] - qp).norm();
+      const double d = distances[v] + (mesh.vertices()[v] - qp).norm();
       if (d < best.d) {
         best.d = d;
         best.kind = 1;
@@ -1692,7 +1693,7 @@ std::vector<SurfacePoint> FastField::path_to(const SurfacePoint& target) const {
   const TriangleMesh& mesh = m->mesh;
   const Best best = locate(target);
   if (!(best.d < kInf))
-    throw InvalidInput("shortest path: the target is not reachable from the source");
+    throw InvalidInput("target", "not reachable from the source (another connected piece)");
   std::vector<SurfacePoint> out;  // target first, built backwards
   out.push_back(normalize_surface_point(mesh, target, "target"));
   // State machine: a window with a point in its frame, or a vertex, or done.

@@ -42,9 +42,9 @@ namespace geodesic_detail {
 /// Checks a surface point against `mesh` (face index in range, finite non-negative weights
 /// summing to 1 within 1e-9) and returns it with weights below 1e-14 snapped to exactly 0 and
 /// renormalised, so that points on edges and vertices are recognised exactly. Throws
-/// InvalidInput otherwise; `what` names the point in the message ("source", "target").
+/// InvalidInput otherwise, with `field` naming the point ("source", "target").
 SurfacePoint normalize_surface_point(const TriangleMesh& mesh, const SurfacePoint& point,
-                                     const char* what);
+                                     const std::string& field);
 
 /// Number of exactly-zero weights: 0 = face interior, 1 = on an edge, 2 = at a vertex.
 int zero_weight_count(const SurfacePoint& point);

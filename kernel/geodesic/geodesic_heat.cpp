@@ -48,7 +48,7 @@ class HeatField final : public DistanceField::Impl {
 
   double distance_to(const SurfacePoint& target) const override {
     const SurfacePoint q = normalize_surface_point(*mesh, target, "target");
-    const Face& f = mesh->faces[q.face];
+    const Face& f = mesh->faces()[q.face];
     double d = 0;
     for (int i = 0; i < 3; ++i)
       if (q.barycentric[i] != 0.0) d += q.barycentric[i] * distances[f[i]];
@@ -56,7 +56,7 @@ class HeatField final : public DistanceField::Impl {
   }
 
   std::vector<SurfacePoint> path_to(const SurfacePoint&) const override {
-    throw InvalidInput("heat method gives distances only");
+    throw InvalidInput("", "the heat method gives distances only, no paths");
   }
 };
 
@@ -65,13 +65,13 @@ class HeatSolver final : public GeodesicSolver::Impl {
   explicit HeatSolver(const TriangleMesh& input) {
     mesh = input;
     shared_mesh_ = std::make_shared<const TriangleMesh>(input);
-    for (const Vec3& p : input.vertices) cgal_.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
+    for (const Vec3& p : input.vertices()) cgal_.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
     for (int f = 0; f < input.face_count(); ++f) {
-      const Face& t = input.faces[f];
+      const Face& t = input.faces()[f];
       if (cgal_.add_face(VertexIndex(t[0]), VertexIndex(t[1]), VertexIndex(t[2])) ==
           CgalMesh::null_face())
-        throw InvalidInput("heat geodesics: face " + std::to_string(f) +
-                           " cannot be added to a CGAL surface mesh (non-manifold)");
+        throw std::logic_error("heat geodesics: face " + std::to_string(f) +
+                               " cannot be added to a CGAL surface mesh (non-manifold)");
     }
     heat_ = std::make_unique<HeatMethod>(cgal_);
   }
@@ -81,6 +81,7 @@ class HeatSolver final : public GeodesicSolver::Impl {
     const int v = source.vertex(mesh);
     if (v < 0)
       throw InvalidInput(
+          "source",
           "the heat geodesic method supports vertex sources only (the source lies inside a face "
           "or on an edge)");
     progress.report("geodesic distances (heat)", 0.0);

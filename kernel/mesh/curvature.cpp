@@ -15,18 +15,18 @@ double angle_at(const Vec3& apex, const Vec3& a, const Vec3& b) {
 
 std::vector<double> vertex_angle_sums(const TriangleMesh& mesh) {
   std::vector<double> sums(mesh.vertex_count(), 0.0);
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     for (int i = 0; i < 3; ++i)
-      sums[f[i]] += angle_at(mesh.vertices[f[i]], mesh.vertices[f[(i + 1) % 3]],
-                             mesh.vertices[f[(i + 2) % 3]]);
+      sums[f[i]] += angle_at(mesh.vertices()[f[i]], mesh.vertices()[f[(i + 1) % 3]],
+                             mesh.vertices()[f[(i + 2) % 3]]);
   return sums;
 }
 
 std::vector<double> vertex_areas(const TriangleMesh& mesh) {
   std::vector<double> areas(mesh.vertex_count(), 0.0);
-  for (const Face& f : mesh.faces) {
-    const Vec3& a = mesh.vertices[f[0]];
-    const double third = (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm() / 6.0;
+  for (const Face& f : mesh.faces()) {
+    const Vec3& a = mesh.vertices()[f[0]];
+    const double third = (mesh.vertices()[f[1]] - a).cross(mesh.vertices()[f[2]] - a).norm() / 6.0;
     for (int v : f) areas[v] += third;
   }
   return areas;
@@ -34,8 +34,8 @@ std::vector<double> vertex_areas(const TriangleMesh& mesh) {
 
 std::vector<double> mixed_voronoi_areas(const TriangleMesh& mesh) {
   std::vector<double> areas(mesh.vertex_count(), 0.0);
-  for (const Face& f : mesh.faces) {
-    const Vec3 p[3] = {mesh.vertices[f[0]], mesh.vertices[f[1]], mesh.vertices[f[2]]};
+  for (const Face& f : mesh.faces()) {
+    const Vec3 p[3] = {mesh.vertices()[f[0]], mesh.vertices()[f[1]], mesh.vertices()[f[2]]};
     const double area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
     if (area <= 0) continue;
     double cot[3];
@@ -64,7 +64,7 @@ std::vector<double> mixed_voronoi_areas(const TriangleMesh& mesh) {
 }
 
 std::vector<double> gaussian_curvature(const TriangleMesh& mesh) {
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   const std::vector<double> sums = vertex_angle_sums(mesh);
   const std::vector<double> areas = mixed_voronoi_areas(mesh);
   std::vector<double> k(mesh.vertex_count(), 0.0);

@@ -37,7 +37,11 @@ namespace gridshell {
 namespace {
 namespace fs = std::filesystem;
 
-[[noreturn]] void fail(const std::string& message) { throw InvalidInput(message); }
+/// `field` names the input (the file's path, or the name given to the arrays), `message` what
+/// is wrong and where in it ("line 12: ...").
+[[noreturn]] void fail(const std::string& field, const std::string& message) {
+  throw InvalidInput(field, message);
+}
 
 std::string count_of(long long n, const char* singular, const char* plural) {
   return std::to_string(n) + " " + (n == 1 ? singular : plural);
@@ -92,6 +96,7 @@ struct RawMesh {
   std::string format;
   int index_base = 0;               ///< how the file numbers vertices: 1 for OBJ, 0 otherwise
   bool stl = false;                 ///< vertices are facet corners
+  bool arrays = false;              ///< given as arrays in memory, not read from a file
   const char* source = "the file";  ///< how messages refer to the whole input
   std::vector<Vec3> vertices;
   std::vector<int> vertex_line;  ///< per vertex; 0 when the format has no lines (binary)
@@ -110,11 +115,17 @@ struct RawMesh {
   }
 };
 
-/// "path:12: " for text formats, "path: face 7: " for binary ones.
-std::string face_where(const std::string& path, const RawMesh& raw, int polygon) {
+/// Where a face is: "line 12: " for text formats, "face 7: " for binary ones; for arrays the
+/// field itself names it ("mesh.faces[7]") and the prefix is empty.
+struct Place {
+  std::string field;
+  std::string prefix;
+};
+Place face_place(const std::string& name, const RawMesh& raw, int polygon) {
   if (raw.polygon_line[polygon] > 0)
-    return path + ":" + std::to_string(raw.polygon_line[polygon]) + ": ";
-  return path + ": " + (raw.stl ? "facet " : "face ") + std::to_string(polygon) + ": ";
+    return {name, "line " + std::to_string(raw.polygon_line[polygon]) + ": "};
+  if (raw.arrays) return {join_field(name, "faces[" + std::to_string(polygon) + "]"), ""};
+  return {name, (raw.stl ? "facet " : "face ") + std::to_string(polygon) + ": "};
 }
 
 /// A file vertex as the user finds it in the file: "vertex 5 (line 9) at (1, 2, 3)".
@@ -258,41 +269,43 @@ RawMesh parse_obj(const std::string& path, std::string_view text) {
     if (hash != std::string_view::npos) current = current.substr(0, hash);
     const std::vector<std::string_view> tokens = split(current);
     if (tokens.empty()) continue;
-    const std::string where = path + ":" + std::to_string(line) + ": ";
+    const std::string where = "line " + std::to_string(line) + ": ";
     const std::string_view keyword = tokens[0];
     if (keyword == "v") {
       if (tokens.size() < 4)
-        fail(where + "vertex has " +
-             count_of(static_cast<long long>(tokens.size()) - 1, "coordinate", "coordinates") +
-             ", expected 3");
+        fail(path,
+             where + "vertex has " +
+                 count_of(static_cast<long long>(tokens.size()) - 1, "coordinate", "coordinates") +
+                 ", expected 3");
       Vec3 p;
       for (int k = 0; k < 3; ++k) {
         if (!parse_double(tokens[k + 1], p[k]))
-          fail(where + "cannot parse vertex coordinate " + quote_token(tokens[k + 1]));
+          fail(path, where + "cannot parse vertex coordinate " + quote_token(tokens[k + 1]));
         if (!std::isfinite(p[k]))
-          fail(where + "vertex coordinate " + quote_token(tokens[k + 1]) +
-               " is not a finite number (NaN or Inf)");
+          fail(path, where + "vertex coordinate " + quote_token(tokens[k + 1]) +
+                         " is not a finite number (NaN or Inf)");
       }
       raw.add_vertex(p, line);
     } else if (keyword == "f") {
       if (tokens.size() < 4)
-        fail(where + "face has " +
-             count_of(static_cast<long long>(tokens.size()) - 1, "vertex", "vertices") +
-             ", needs at least 3");
+        fail(path, where + "face has " +
+                       count_of(static_cast<long long>(tokens.size()) - 1, "vertex", "vertices") +
+                       ", needs at least 3");
       const long long defined = static_cast<long long>(raw.vertices.size());
       for (size_t k = 1; k < tokens.size(); ++k) {
         const std::string_view corner = tokens[k];
         const std::string_view index_text = corner.substr(0, corner.find('/'));
         long long index = 0;
         if (!parse_integer(index_text, index))
-          fail(where + "cannot parse face vertex index " + quote_token(corner));
+          fail(path, where + "cannot parse face vertex index " + quote_token(corner));
         if (index == 0)
-          fail(where + "face vertex index 0 is out of range (OBJ indices start at 1)");
+          fail(path, where + "face vertex index 0 is out of range (OBJ indices start at 1)");
         if (index < 0) {
           if (-index > defined)
-            fail(where + "relative face vertex index " + std::to_string(index) +
-                 " is out of range (only " + count_of(defined, "vertex is", "vertices are") +
-                 " defined before this line)");
+            fail(path, where + "relative face vertex index " + std::to_string(index) +
+                           " is out of range (only " +
+                           count_of(defined, "vertex is", "vertices are") +
+                           " defined before this line)");
           index += defined;  // -1 is the last vertex defined so far
         } else {
           index -= 1;
@@ -302,7 +315,7 @@ RawMesh parse_obj(const std::string& path, std::string_view text) {
       }
       raw.end_polygon(line);
     } else if (std::find(std::begin(kIgnored), std::end(kIgnored), keyword) == std::end(kIgnored)) {
-      fail(where + "cannot parse line: unknown OBJ statement " + quote_token(keyword));
+      fail(path, where + "cannot parse line: unknown OBJ statement " + quote_token(keyword));
     }
   }
   return raw;
@@ -316,26 +329,26 @@ RawMesh parse_off(const std::string& path, std::string_view text) {
   raw.format = "off";
   Lexer lex(text, 0, 1, true);
   std::string_view token;
-  auto where = [&](int line) { return path + ":" + std::to_string(line) + ": "; };
+  auto where = [&](int line) { return "line " + std::to_string(line) + ": "; };
   lex.next(token);
   static const char* const kHeaders[] = {"OFF",   "COFF",   "NOFF",   "CNOFF",
                                          "STOFF", "STCOFF", "STNOFF", "STCNOFF"};
   if (std::find(std::begin(kHeaders), std::end(kHeaders), token) == std::end(kHeaders)) {
     if (token.size() >= 3 && token.substr(token.size() - 3) == "OFF")
-      fail(where(lex.line()) + "unsupported OFF variant " + quote_token(token) +
-           " (4D and n-dimensional OFF are not supported)");
-    fail(where(lex.line()) + "not an OFF file: expected the header 'OFF', found " +
-         quote_token(token));
+      fail(path, where(lex.line()) + "unsupported OFF variant " + quote_token(token) +
+                     " (4D and n-dimensional OFF are not supported)");
+    fail(path, where(lex.line()) + "not an OFF file: expected the header 'OFF', found " +
+                   quote_token(token));
   }
   auto read_count = [&](const char* what, bool same_line) {
     const bool ok = same_line ? lex.next_in_line(token) : lex.next(token);
     if (!ok)
-      fail(where(same_line ? lex.line() : lex.current_line()) + "missing " + what +
-           " count in the OFF header");
-    if (token == "BINARY") fail(where(lex.line()) + "binary OFF is not supported");
+      fail(path, where(same_line ? lex.line() : lex.current_line()) + "missing " + what +
+                     " count in the OFF header");
+    if (token == "BINARY") fail(path, where(lex.line()) + "binary OFF is not supported");
     long long n = 0;
     if (!parse_integer(token, n) || n < 0 || n > std::numeric_limits<int>::max())
-      fail(where(lex.line()) + "cannot parse " + what + " count " + quote_token(token));
+      fail(path, where(lex.line()) + "cannot parse " + what + " count " + quote_token(token));
     return static_cast<int>(n);
   };
   const int nv = read_count("vertex", false);
@@ -344,44 +357,45 @@ RawMesh parse_off(const std::string& path, std::string_view text) {
   raw.vertices.reserve(std::min<size_t>(nv, text.size() / 6));
   for (int i = 0; i < nv; ++i) {
     if (!lex.next(token))
-      fail(where(lex.current_line()) + "file ends after " + std::to_string(i) + " of " +
-           count_of(nv, "vertex", "vertices") + " (truncated)");
+      fail(path, where(lex.current_line()) + "file ends after " + std::to_string(i) + " of " +
+                     count_of(nv, "vertex", "vertices") + " (truncated)");
     const int line = lex.line();
     Vec3 p;
     for (int k = 0; k < 3; ++k) {
       if (k > 0 && !lex.next_in_line(token))
-        fail(where(line) + "vertex " + std::to_string(i) + " has " +
-             count_of(k, "coordinate", "coordinates") + ", expected 3");
+        fail(path, where(line) + "vertex " + std::to_string(i) + " has " +
+                       count_of(k, "coordinate", "coordinates") + ", expected 3");
       if (!parse_double(token, p[k]))
-        fail(where(line) + "cannot parse coordinate of vertex " + std::to_string(i) + ": " +
-             quote_token(token));
+        fail(path, where(line) + "cannot parse coordinate of vertex " + std::to_string(i) + ": " +
+                       quote_token(token));
       if (!std::isfinite(p[k]))
-        fail(where(line) + "vertex " + std::to_string(i) + " coordinate " + quote_token(token) +
-             " is not a finite number (NaN or Inf)");
+        fail(path, where(line) + "vertex " + std::to_string(i) + " coordinate " +
+                       quote_token(token) + " is not a finite number (NaN or Inf)");
     }
     raw.add_vertex(p, line);
     lex.skip_line();  // colours, normals, texture coordinates
   }
   for (int f = 0; f < nf; ++f) {
     if (!lex.next(token))
-      fail(where(lex.current_line()) + "file ends after " + std::to_string(f) + " of " +
-           count_of(nf, "face", "faces") + " (truncated)");
+      fail(path, where(lex.current_line()) + "file ends after " + std::to_string(f) + " of " +
+                     count_of(nf, "face", "faces") + " (truncated)");
     const int line = lex.line();
     long long n = 0;
     if (!parse_integer(token, n))
-      fail(where(line) + "cannot parse vertex count of face " + std::to_string(f) + ": " +
-           quote_token(token));
+      fail(path, where(line) + "cannot parse vertex count of face " + std::to_string(f) + ": " +
+                     quote_token(token));
     if (n < 3)
-      fail(where(line) + "face " + std::to_string(f) + " has " + count_of(n, "vertex", "vertices") +
-           ", needs at least 3");
+      fail(path, where(line) + "face " + std::to_string(f) + " has " +
+                     count_of(n, "vertex", "vertices") + ", needs at least 3");
     for (long long k = 0; k < n; ++k) {
       if (!lex.next_in_line(token))
-        fail(where(line) + "face " + std::to_string(f) + " lists " +
-             count_of(k, "vertex index", "vertex indices") + ", expected " + std::to_string(n));
+        fail(path, where(line) + "face " + std::to_string(f) + " lists " +
+                       count_of(k, "vertex index", "vertex indices") + ", expected " +
+                       std::to_string(n));
       long long index = 0;
       if (!parse_integer(token, index))
-        fail(where(line) + "cannot parse vertex index of face " + std::to_string(f) + ": " +
-             quote_token(token));
+        fail(path, where(line) + "cannot parse vertex index of face " + std::to_string(f) + ": " +
+                       quote_token(token));
       raw.corners.push_back(static_cast<int>(std::clamp<long long>(
           index, std::numeric_limits<int>::min(), std::numeric_limits<int>::max())));
     }
@@ -486,7 +500,7 @@ class PlyBinaryReader {
     }
     return ReadResult::Ok;
   }
-  std::string where(const std::string& path) const { return path + ": "; }
+  std::string where() const { return ""; }
   std::string token() const { return {}; }
   int line() const { return 0; }
   static constexpr bool kBinary = true;
@@ -513,8 +527,8 @@ class PlyAsciiReader {
     }
     return parse_double(token_, out) ? ReadResult::Ok : ReadResult::Bad;
   }
-  std::string where(const std::string& path) const {
-    return path + ":" + std::to_string(ended_ ? lex_.current_line() : lex_.line()) + ": ";
+  std::string where() const {
+    return "line " + std::to_string(ended_ ? lex_.current_line() : lex_.line()) + ": ";
   }
   std::string token() const { return quote_token(token_); }
   int line() const { return lex_.line(); }
@@ -538,14 +552,14 @@ void read_ply_body(const std::string& path, Reader& reader, const std::vector<Pl
       auto item_name = [&] { return element.name + " " + std::to_string(item); };
       auto check = [&](ReadResult r, const PlyProperty& property) {
         if (r == ReadResult::End) {
-          fail(reader.where(path) + (Reader::kBinary ? "truncated binary data: " : "") +
-               "file ends in " + item_name() + " of " + std::to_string(element.count) +
-               " (element '" + element.name + "', property '" + property.name + "')" +
-               (Reader::kBinary ? "" : " (truncated)"));
+          fail(path, reader.where() + (Reader::kBinary ? "truncated binary data: " : "") +
+                         "file ends in " + item_name() + " of " + std::to_string(element.count) +
+                         " (element '" + element.name + "', property '" + property.name + "')" +
+                         (Reader::kBinary ? "" : " (truncated)"));
         }
         if (r == ReadResult::Bad)
-          fail(reader.where(path) + "cannot parse property '" + property.name + "' of " +
-               item_name() + ": " + reader.token());
+          fail(path, reader.where() + "cannot parse property '" + property.name + "' of " +
+                         item_name() + ": " + reader.token());
       };
       Vec3 p = Vec3::Zero();
       int line = 0;
@@ -559,9 +573,9 @@ void read_ply_body(const std::string& path, Reader& reader, const std::vector<Pl
             for (int c = 0; c < 3; ++c)
               if (k == xyz[c]) {
                 if (!std::isfinite(value))
-                  fail(reader.where(path) + "vertex " + std::to_string(item) +
-                       " has a non-finite coordinate " + property.name + " = " +
-                       (std::isnan(value) ? "NaN" : "Inf"));
+                  fail(path, reader.where() + "vertex " + std::to_string(item) +
+                                 " has a non-finite coordinate " + property.name + " = " +
+                                 (std::isnan(value) ? "NaN" : "Inf"));
                 p[c] = value;
               }
           continue;
@@ -570,18 +584,18 @@ void read_ply_body(const std::string& path, Reader& reader, const std::vector<Pl
         if (k == 0) line = reader.line();
         const bool indices = is_face && k == index_property;
         if (!(value >= 0 && value == std::floor(value) && value <= 1e9))
-          fail(reader.where(path) + "invalid list length " + std::to_string(value) +
-               " in property '" + property.name + "' of " + item_name());
+          fail(path, reader.where() + "invalid list length " + std::to_string(value) +
+                         " in property '" + property.name + "' of " + item_name());
         const long long n = static_cast<long long>(value);
         if (indices && n < 3)
-          fail(reader.where(path) + "face " + std::to_string(item) + " has " +
-               count_of(n, "vertex", "vertices") + ", needs at least 3");
+          fail(path, reader.where() + "face " + std::to_string(item) + " has " +
+                         count_of(n, "vertex", "vertices") + ", needs at least 3");
         for (long long j = 0; j < n; ++j) {
           check(reader.read(property.type, value), property);
           if (!indices) continue;
           if (value != std::floor(value))
-            fail(reader.where(path) + "face " + std::to_string(item) +
-                 " has a non-integer vertex index " + std::to_string(value));
+            fail(path, reader.where() + "face " + std::to_string(item) +
+                           " has a non-integer vertex index " + std::to_string(value));
           raw.corners.push_back(static_cast<int>(std::clamp<double>(
               value, std::numeric_limits<int>::min(), std::numeric_limits<int>::max())));
         }
@@ -606,11 +620,12 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     return true;
   };
-  auto where = [&] { return path + ":" + std::to_string(line_no) + ": "; };
+  auto where = [&] { return "line " + std::to_string(line_no) + ": "; };
   std::string_view line;
   next_line(line);
   if (split(line) != std::vector<std::string_view>{"ply"})
-    fail(where() + "not a PLY file: the first line must be 'ply', found " + quote_token(line));
+    fail(path,
+         where() + "not a PLY file: the first line must be 'ply', found " + quote_token(line));
   enum class Format { None, Ascii, Little, Big } format = Format::None;
   std::vector<PlyElement> elements;
   bool ended = false;
@@ -618,7 +633,7 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
     const std::vector<std::string_view> t = split(line);
     if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
     if (t[0] == "format") {
-      if (t.size() < 2) fail(where() + "PLY format line names no format");
+      if (t.size() < 2) fail(path, where() + "PLY format line names no format");
       if (t[1] == "ascii")
         format = Format::Ascii;
       else if (t[1] == "binary_little_endian")
@@ -626,14 +641,14 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
       else if (t[1] == "binary_big_endian")
         format = Format::Big;
       else
-        fail(where() + "unknown PLY format " + quote_token(t[1]));
+        fail(path, where() + "unknown PLY format " + quote_token(t[1]));
     } else if (t[0] == "element") {
       long long count = 0;
       if (t.size() != 3 || !parse_integer(t[2], count) || count < 0)
-        fail(where() + "cannot parse PLY element line " + quote_token(line));
+        fail(path, where() + "cannot parse PLY element line " + quote_token(line));
       elements.push_back({std::string(t[1]), count, line_no, {}});
     } else if (t[0] == "property") {
-      if (elements.empty()) fail(where() + "PLY property before any element");
+      if (elements.empty()) fail(path, where() + "PLY property before any element");
       PlyProperty property;
       bool ok = false;
       if (t.size() == 5 && t[1] == "list") {
@@ -644,19 +659,20 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
         property.name = t[2];
         ok = ply_type(t[1], property.type);
       }
-      if (!ok) fail(where() + "cannot parse PLY property line " + quote_token(line));
+      if (!ok) fail(path, where() + "cannot parse PLY property line " + quote_token(line));
       if (property.list &&
           (property.count_type == PlyType::Float32 || property.count_type == PlyType::Float64))
-        fail(where() + "PLY list length type must be an integer type in " + quote_token(line));
+        fail(path,
+             where() + "PLY list length type must be an integer type in " + quote_token(line));
       elements.back().properties.push_back(property);
     } else if (t[0] == "end_header") {
       ended = true;
     } else {
-      fail(where() + "cannot parse PLY header line " + quote_token(line));
+      fail(path, where() + "cannot parse PLY header line " + quote_token(line));
     }
   }
-  if (!ended) fail(path + ": PLY header has no 'end_header' line (wrong header or truncated)");
-  if (format == Format::None) fail(path + ": PLY header has no 'format' line");
+  if (!ended) fail(path, "PLY header has no 'end_header' line (wrong header or truncated)");
+  if (format == Format::None) fail(path, "PLY header has no 'format' line");
 
   int vertex_element = -1, face_element = -1, index_property = -1;
   int xyz[3] = {-1, -1, -1};
@@ -664,7 +680,7 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
     if (elements[e].name == "vertex" && vertex_element < 0) vertex_element = e;
     if (elements[e].name == "face" && face_element < 0) face_element = e;
   }
-  if (vertex_element < 0) fail(path + ": PLY header declares no 'vertex' element");
+  if (vertex_element < 0) fail(path, "PLY header declares no 'vertex' element");
   {
     const PlyElement& v = elements[vertex_element];
     static const char* const kAxes[] = {"x", "y", "z"};
@@ -672,8 +688,8 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
       for (int k = 0; k < static_cast<int>(v.properties.size()); ++k)
         if (v.properties[k].name == kAxes[c]) xyz[c] = k;
       if (xyz[c] < 0 || v.properties[xyz[c]].list)
-        fail(path + ":" + std::to_string(v.line) + ": PLY vertex element has no scalar '" +
-             kAxes[c] + "' property");
+        fail(path, "line " + std::to_string(v.line) + ": PLY vertex element has no scalar '" +
+                       kAxes[c] + "' property");
     }
   }
   if (face_element >= 0) {
@@ -682,8 +698,9 @@ RawMesh parse_ply(const std::string& path, std::string_view text) {
       if (f.properties[k].name == "vertex_indices" || f.properties[k].name == "vertex_index")
         index_property = k;
     if (index_property < 0 || !f.properties[index_property].list)
-      fail(path + ":" + std::to_string(f.line) +
-           ": PLY face element has no 'vertex_indices' (or 'vertex_index') list property");
+      fail(path,
+           "line " + std::to_string(f.line) +
+               ": PLY face element has no 'vertex_indices' (or 'vertex_index') list property");
   }
   raw.vertices.reserve(std::min<size_t>(elements[vertex_element].count, text.size() / 3));
   if (format == Format::Ascii) {
@@ -728,8 +745,8 @@ RawMesh parse_stl_binary(const std::string& path, std::string_view data, std::ui
         pos += 4;
       }
       if (!p.allFinite())
-        fail(path + ": facet " + std::to_string(f) + ": corner " + std::to_string(c) +
-             " has a non-finite coordinate (NaN or Inf)");
+        fail(path, "facet " + std::to_string(f) + ": corner " + std::to_string(c) +
+                       " has a non-finite coordinate (NaN or Inf)");
       raw.corners.push_back(static_cast<int>(raw.vertices.size()));
       raw.add_vertex(p, 0);
     }
@@ -745,14 +762,14 @@ RawMesh parse_stl_ascii(const std::string& path, std::string_view text) {
   raw.stl = true;
   Lexer lex(text, 0, 1, false);
   std::string_view token;
-  auto where = [&](int line) { return path + ":" + std::to_string(line) + ": "; };
+  auto where = [&](int line) { return "line " + std::to_string(line) + ": "; };
   auto expect = [&](std::string_view word) {
     if (!lex.next(token))
-      fail(where(lex.current_line()) + "file ends inside a facet, expected '" + std::string(word) +
-           "' (truncated)");
+      fail(path, where(lex.current_line()) + "file ends inside a facet, expected '" +
+                     std::string(word) + "' (truncated)");
     if (token != word)
-      fail(where(lex.line()) + "cannot parse STL: expected '" + std::string(word) + "', found " +
-           quote_token(token));
+      fail(path, where(lex.line()) + "cannot parse STL: expected '" + std::string(word) +
+                     "', found " + quote_token(token));
   };
   expect("solid");
   lex.skip_line();  // solid name
@@ -762,51 +779,51 @@ RawMesh parse_stl_ascii(const std::string& path, std::string_view text) {
       lex.skip_line();
       if (!lex.next(token)) break;
       if (token != "solid")
-        fail(where(lex.line()) +
-             "cannot parse STL: expected 'solid' or the end of the file, "
-             "found " +
-             quote_token(token));
+        fail(path, where(lex.line()) +
+                       "cannot parse STL: expected 'solid' or the end of the file, "
+                       "found " +
+                       quote_token(token));
       lex.skip_line();
       continue;
     }
     if (token != "facet")
-      fail(where(lex.line()) + "cannot parse STL: expected 'facet' or 'endsolid', found " +
-           quote_token(token));
+      fail(path, where(lex.line()) + "cannot parse STL: expected 'facet' or 'endsolid', found " +
+                     quote_token(token));
     const int facet_line = lex.line();
     expect("normal");
     for (int k = 0; k < 3; ++k)
       if (!lex.next(token))
-        fail(where(lex.current_line()) + "file ends inside a facet normal (truncated)");
+        fail(path, where(lex.current_line()) + "file ends inside a facet normal (truncated)");
     expect("outer");
     expect("loop");
     int corners = 0;
     while (true) {
       if (!lex.next(token))
-        fail(where(lex.current_line()) + "file ends inside facet " + std::to_string(facet) +
-             " (truncated)");
+        fail(path, where(lex.current_line()) + "file ends inside facet " + std::to_string(facet) +
+                       " (truncated)");
       if (token == "endloop") break;
       if (token != "vertex")
-        fail(where(lex.line()) + "cannot parse STL: expected 'vertex' or 'endloop', found " +
-             quote_token(token));
+        fail(path, where(lex.line()) + "cannot parse STL: expected 'vertex' or 'endloop', found " +
+                       quote_token(token));
       const int line = lex.line();
       Vec3 p;
       for (int k = 0; k < 3; ++k) {
         if (!lex.next_in_line(token))
-          fail(where(line) + "vertex has " + count_of(k, "coordinate", "coordinates") +
-               ", expected 3");
+          fail(path, where(line) + "vertex has " + count_of(k, "coordinate", "coordinates") +
+                         ", expected 3");
         if (!parse_double(token, p[k]))
-          fail(where(line) + "cannot parse vertex coordinate " + quote_token(token));
+          fail(path, where(line) + "cannot parse vertex coordinate " + quote_token(token));
         if (!std::isfinite(p[k]))
-          fail(where(line) + "vertex coordinate " + quote_token(token) +
-               " is not a finite number (NaN or Inf)");
+          fail(path, where(line) + "vertex coordinate " + quote_token(token) +
+                         " is not a finite number (NaN or Inf)");
       }
       raw.corners.push_back(static_cast<int>(raw.vertices.size()));
       raw.add_vertex(p, line);
       ++corners;
     }
     if (corners < 3)
-      fail(where(facet_line) + "facet " + std::to_string(facet) + " has " +
-           count_of(corners, "vertex", "vertices") + ", needs at least 3");
+      fail(path, where(facet_line) + "facet " + std::to_string(facet) + " has " +
+                     count_of(corners, "vertex", "vertices") + ", needs at least 3");
     expect("endfacet");
     raw.end_polygon(facet_line);
     ++facet;
@@ -830,15 +847,15 @@ RawMesh parse_stl(const std::string& path, std::string_view data) {
     const bool text = solid_prefix && looks_like_text(data);
     if (expected == data.size() && !text) return parse_stl_binary(path, data, n);
     if (!solid_prefix && looks_like_text(data))
-      fail(path + ": not an STL file: text that does not start with 'solid'");
+      fail(path, "not an STL file: text that does not start with 'solid'");
     if (!text)
-      fail(path + ": truncated binary data: binary STL header declares " +
-           count_of(n, "triangle", "triangles") + " (" + std::to_string(expected) +
-           " bytes) but the file has " + std::to_string(data.size()) + " bytes");
+      fail(path, "truncated binary data: binary STL header declares " +
+                     count_of(n, "triangle", "triangles") + " (" + std::to_string(expected) +
+                     " bytes) but the file has " + std::to_string(data.size()) + " bytes");
   } else if (!solid_prefix) {
-    fail(path + ": not an STL file: too short for a binary STL (" +
-         count_of(static_cast<long long>(data.size()), "byte", "bytes") +
-         ") and does not start with 'solid'");
+    fail(path, "not an STL file: too short for a binary STL (" +
+                   count_of(static_cast<long long>(data.size()), "byte", "bytes") +
+                   ") and does not start with 'solid'");
   }
   return parse_stl_ascii(path, data);
 }
@@ -986,43 +1003,54 @@ OrientationResult orient_consistently(std::vector<Face>& faces) {
   return result;
 }
 
-TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& report,
-                    const MeshLoadOptions& options) {
+// ---------------------------------------------------------------------------------------------
+// From the parsed contents to a checked mesh: the steps of `finish`, in order.
+
+/// The triangles of the polygons (fan-split), each with the polygon it came from. Checks that
+/// there are faces, that the used coordinates are within kMaxCoordinate and that every index
+/// is in range.
+struct Triangles {
+  std::vector<Face> faces;
+  std::vector<int> polygon;  ///< per triangle
+};
+Triangles triangulate(const std::string& name, const RawMesh& raw, LoadReport& report) {
   const int nv = static_cast<int>(raw.vertices.size());
   const int np = raw.polygon_count();
-  report.format = raw.format;
-  report.file_vertices = nv;
-  report.file_faces = np;
   if (np == 0)
-    fail(path + ": no faces (" + raw.source + " defines " + count_of(nv, "vertex", "vertices") +
-         " but no faces)");
-  // Coordinates beyond kMaxCoordinate (the vertices faces use; isolated ones are dropped below).
+    fail(name, std::string("no faces (") + raw.source + " defines " +
+                   count_of(nv, "vertex", "vertices") + " but no faces)");
+  // Coordinates beyond kMaxCoordinate (the vertices faces use; isolated ones are dropped later).
   for (int index : raw.corners)
     if (index >= 0 && index < nv && raw.vertices[index].cwiseAbs().maxCoeff() > kMaxCoordinate)
-      fail(path + ": " + vertex_label(raw, index) +
-           ": a coordinate beyond +-1e15 (rescale the model)");
-
-  // Index range, then fan triangulation.
-  std::vector<Face> triangles;
-  std::vector<int> triangle_polygon;
-  triangles.reserve(raw.corners.size());
+      fail(raw.arrays ? join_field(name, "vertices[" + std::to_string(index) + "]") : name,
+           vertex_label(raw, index) + ": a coordinate beyond +-1e15 (rescale the model)");
+  Triangles out;
+  out.faces.reserve(raw.corners.size());
   for (int p = 0; p < np; ++p) {
     const size_t begin = raw.polygon_begin[p], end = raw.polygon_begin[p + 1];
     for (size_t k = begin; k < end; ++k) {
       const int index = raw.corners[k];
-      if (index < 0 || index >= nv)
-        fail(face_where(path, raw, p) + "face vertex index " +
-             std::to_string(static_cast<long long>(index) + raw.index_base) + " is out of range (" +
-             raw.source + " has " + count_of(nv, "vertex", "vertices") + ")");
+      if (index < 0 || index >= nv) {
+        const Place place = face_place(name, raw, p);
+        fail(place.field, place.prefix + "face vertex index " +
+                              std::to_string(static_cast<long long>(index) + raw.index_base) +
+                              " is out of range (" + raw.source + " has " +
+                              count_of(nv, "vertex", "vertices") + ")");
+      }
     }
     if (end - begin > 3) ++report.polygons_triangulated;
     for (size_t k = begin + 1; k + 1 < end; ++k) {
-      triangles.push_back({raw.corners[begin], raw.corners[k], raw.corners[k + 1]});
-      triangle_polygon.push_back(p);
+      out.faces.push_back({raw.corners[begin], raw.corners[k], raw.corners[k + 1]});
+      out.polygon.push_back(p);
     }
   }
+  return out;
+}
 
-  // Weld duplicates.
+/// For each file vertex its representative after welding coincident vertices (within
+/// options.duplicate_tolerance of the bounding-box diagonal).
+std::vector<int> weld_duplicates(const RawMesh& raw, const MeshLoadOptions& options,
+                                 LoadReport& report) {
   Vec3 lo = raw.vertices[0], hi = lo;
   for (const Vec3& p : raw.vertices) {
     lo = lo.cwiseMin(p);
@@ -1030,32 +1058,44 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
   }
   const double diagonal = (hi - lo).norm();
   const double tolerance = std::max(0.0, options.duplicate_tolerance) * diagonal;
-  const std::vector<int> rep = weld(raw.vertices, std::isfinite(tolerance) ? tolerance : 0.0);
-  for (int v = 0; v < nv; ++v) report.duplicate_vertices_merged += rep[v] != v;
+  std::vector<int> rep = weld(raw.vertices, std::isfinite(tolerance) ? tolerance : 0.0);
+  for (size_t v = 0; v < rep.size(); ++v) report.duplicate_vertices_merged += rep[v] != int(v);
+  return rep;
+}
 
-  // Drop degenerate faces.
-  TriangleMesh mesh;
-  std::vector<int> kept_polygon;
-  for (size_t t = 0; t < triangles.size(); ++t) {
-    const Face f = {rep[triangles[t][0]], rep[triangles[t][1]], rep[triangles[t][2]]};
+/// The welded triangles without degenerate ones (repeated vertex or zero area); `triangles`
+/// keeps only the survivors, with their polygons.
+void drop_degenerate_faces(const std::string& name, const RawMesh& raw, const std::vector<int>& rep,
+                           Triangles& triangles, LoadReport& report) {
+  Triangles kept;
+  for (size_t t = 0; t < triangles.faces.size(); ++t) {
+    const Face f = {rep[triangles.faces[t][0]], rep[triangles.faces[t][1]],
+                    rep[triangles.faces[t][2]]};
     if (f[0] == f[1] || f[1] == f[2] || f[2] == f[0] ||
         zero_area(raw.vertices[f[0]], raw.vertices[f[1]], raw.vertices[f[2]])) {
       ++report.degenerate_faces_removed;
       continue;
     }
-    mesh.faces.push_back(f);
-    kept_polygon.push_back(triangle_polygon[t]);
+    kept.faces.push_back(f);
+    kept.polygon.push_back(triangles.polygon[t]);
   }
-  if (mesh.faces.empty())
-    fail(path + ": no faces left: all " +
-         count_of(report.degenerate_faces_removed, "face is", "faces are") +
-         " degenerate (repeated vertex or zero area)");
+  if (kept.faces.empty())
+    fail(name, "no faces left: all " +
+                   count_of(report.degenerate_faces_removed, "face is", "faces are") +
+                   " degenerate (repeated vertex or zero area)");
+  triangles = std::move(kept);
+}
 
-  // Drop isolated vertices; the survivors keep their file order.
+/// Drops the vertices no face uses; the survivors keep their file order. Renumbers `faces`,
+/// fills report.vertex_of_file_vertex and returns the loaded vertex -> file vertex map.
+std::vector<int> drop_isolated_vertices(const RawMesh& raw, const std::vector<int>& rep,
+                                        std::vector<Face>& faces, std::vector<Vec3>& vertices,
+                                        LoadReport& report) {
+  const int nv = static_cast<int>(raw.vertices.size());
   std::vector<int> new_index(nv, -1);
-  for (const Face& f : mesh.faces)
+  for (const Face& f : faces)
     for (int v : f) new_index[v] = 0;
-  std::vector<int> file_vertex_of;  // loaded vertex -> file vertex
+  std::vector<int> file_vertex_of;
   for (int v = 0; v < nv; ++v) {
     if (rep[v] != v) continue;
     if (new_index[v] < 0) {
@@ -1064,17 +1104,28 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
     }
     new_index[v] = static_cast<int>(file_vertex_of.size());
     file_vertex_of.push_back(v);
-    mesh.vertices.push_back(raw.vertices[v]);
+    vertices.push_back(raw.vertices[v]);
   }
-  for (Face& f : mesh.faces)
+  for (Face& f : faces)
     for (int& v : f) v = new_index[v];
   report.vertex_of_file_vertex.resize(nv);
   for (int v = 0; v < nv; ++v) report.vertex_of_file_vertex[v] = new_index[rep[v]];
+  return file_vertex_of;
+}
 
-  // Orientation and manifoldness.
-  const OrientationResult orientation = orient_consistently(mesh.faces);
-  auto file_vertex = [&](int v) { return vertex_label(raw, file_vertex_of[v]); };
-  const TopologyProblem problem = check_manifold(mesh);
+/// Orients the faces consistently (flipping the minority of each piece) and checks that the
+/// result is manifold, naming the file's elements. Returns the number of flipped faces.
+int orient_and_check_manifold(const std::string& name, const RawMesh& raw,
+                              const std::vector<int>& file_vertex_of,
+                              const std::vector<int>& polygon, int vertex_count,
+                              std::vector<Face>& faces) {
+  const OrientationResult orientation = orient_consistently(faces);
+  auto label = [&](int v) { return vertex_label(raw, file_vertex_of[v]); };
+  auto vertex_field = [&](int v) {
+    return raw.arrays ? join_field(name, "vertices[" + std::to_string(file_vertex_of[v]) + "]")
+                      : name;
+  };
+  const TopologyProblem problem = check_manifold(vertex_count, faces);
   using Kind = TopologyProblem::Kind;
   if (problem.kind == Kind::NonManifoldEdge ||
       (problem.kind == Kind::InconsistentOrientation && orientation.conflict_face < 0 &&
@@ -1083,71 +1134,80 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
         problem.kind == Kind::NonManifoldEdge ? problem.element : orientation.crowded_edge[0];
     const int b =
         problem.kind == Kind::NonManifoldEdge ? problem.other : orientation.crowded_edge[1];
-    fail(path + ": non-manifold edge between " + file_vertex(a) + " and " + file_vertex(b) +
-         ": it is shared by more than two faces");
+    fail(vertex_field(a), "non-manifold edge between " + label(a) + " and " + label(b) +
+                              ": it is shared by more than two faces");
   }
   if (problem.kind == Kind::NonManifoldVertex)
-    fail(path + ": non-manifold vertex: " + file_vertex(problem.element) +
-         ": its faces do not form a single fan (surface pieces touch at this vertex)");
+    fail(vertex_field(problem.element),
+         "non-manifold vertex: " + label(problem.element) +
+             ": its faces do not form a single fan (surface pieces touch at this vertex)");
   if (problem.kind == Kind::InconsistentOrientation) {
     const int face = orientation.conflict_face >= 0 ? orientation.conflict_face : problem.element;
-    fail(path +
-         ": inconsistent orientation that cannot be fixed: the surface is not "
-         "orientable (like a Moebius strip); " +
-         face_label(raw, kept_polygon[face]) + " cannot agree with all its neighbours");
+    const Place place = face_place(name, raw, polygon[face]);
+    fail(place.field, place.prefix +
+                          "inconsistent orientation that cannot be fixed: the surface is not "
+                          "orientable (like a Moebius strip); " +
+                          face_label(raw, polygon[face]) + " cannot agree with all its neighbours");
   }
-  if (problem.kind != Kind::None) fail(path + ": " + problem.message());
+  if (problem.kind != Kind::None) fail(name, problem.message());
+  return orientation.flipped;
+}
 
-  if (options.require_single_boundary) {
-    const MeshTopology topology = build_topology(mesh);
-    const size_t loops = topology.boundary_loops.size();
-    if (loops == 0)
-      fail(path +
-           ": the surface is closed (no boundary); a gridshell target must be an open "
-           "disk-like patch with exactly one boundary loop");
-    if (loops > 1)
-      fail(path + ": the surface has " + std::to_string(loops) +
-           " boundary loops; a gridshell target must be a disk-like patch with exactly one "
-           "(holes or separate pieces are not supported)");
-    // One boundary loop is not enough for a disk: a disk plus a separate closed piece, or a
-    // surface with handles, also have one. Count pieces, then check the Euler characteristic.
-    std::vector<int> piece(mesh.face_count(), -1);
-    int pieces = 0;
-    for (int seed = 0; seed < mesh.face_count(); ++seed) {
-      if (piece[seed] >= 0) continue;
-      std::vector<int> stack{seed};
-      piece[seed] = pieces;
-      while (!stack.empty()) {
-        const int f = stack.back();
-        stack.pop_back();
-        for (int g : topology.face_neighbors[f])
-          if (g >= 0 && piece[g] < 0) {
-            piece[g] = pieces;
-            stack.push_back(g);
-          }
-      }
-      ++pieces;
+/// Checks that the mesh is a topological disk: one boundary loop, one piece, Euler
+/// characteristic 1.
+void check_disk(const std::string& name, const TriangleMesh& mesh) {
+  const MeshTopology& topology = mesh.topology();
+  const size_t loops = topology.boundary_loops.size();
+  if (loops == 0)
+    fail(name,
+         "the surface is closed (no boundary); a gridshell target must be an open "
+         "disk-like patch with exactly one boundary loop");
+  if (loops > 1)
+    fail(name, "the surface has " + std::to_string(loops) +
+                   " boundary loops; a gridshell target must be a disk-like patch with exactly "
+                   "one (holes or separate pieces are not supported)");
+  // One boundary loop is not enough for a disk: a disk plus a separate closed piece, or a
+  // surface with handles, also have one. Count pieces, then check the Euler characteristic.
+  std::vector<int> piece(mesh.face_count(), -1);
+  int pieces = 0;
+  for (int seed = 0; seed < mesh.face_count(); ++seed) {
+    if (piece[seed] >= 0) continue;
+    std::vector<int> stack{seed};
+    piece[seed] = pieces;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      for (int g : topology.face_neighbors[f])
+        if (g >= 0 && piece[g] < 0) {
+          piece[g] = pieces;
+          stack.push_back(g);
+        }
     }
-    if (pieces > 1)
-      fail(path + ": the surface consists of " + std::to_string(pieces) +
-           " separate pieces; a gridshell target must be one disk-like patch");
-    long long edges = 0;
-    for (const auto& neighbors : topology.face_neighbors)
-      for (int g : neighbors) edges += g < 0 ? 2 : 1;  // interior edges are seen twice
-    edges /= 2;
-    const long long euler = static_cast<long long>(mesh.vertex_count()) - edges + mesh.face_count();
-    if (euler != 1)
-      fail(path + ": the surface is not a topological disk (Euler characteristic " +
-           std::to_string(euler) + ", " + std::to_string((1 - euler) / 2) +
-           " handle(s)); a gridshell target must be a disk-like patch");
+    ++pieces;
   }
+  if (pieces > 1)
+    fail(name, "the surface consists of " + std::to_string(pieces) +
+                   " separate pieces; a gridshell target must be one disk-like patch");
+  long long edges = 0;
+  for (const auto& neighbors : topology.face_neighbors)
+    for (int g : neighbors) edges += g < 0 ? 2 : 1;  // interior edges are seen twice
+  edges /= 2;
+  const long long euler = static_cast<long long>(mesh.vertex_count()) - edges + mesh.face_count();
+  if (euler != 1)
+    fail(name, "the surface is not a topological disk (Euler characteristic " +
+                   std::to_string(euler) + ", " + std::to_string((1 - euler) / 2) +
+                   " handle(s)); a gridshell target must be a disk-like patch");
+}
 
-  // Warnings, one line per repair kind.
+/// One warning line per repair kind.
+void add_repair_warnings(const std::string& name, const RawMesh& raw, const std::vector<int>& rep,
+                         int flipped, const MeshLoadOptions& options, LoadReport& report) {
+  const int nv = static_cast<int>(raw.vertices.size());
   if (report.duplicate_vertices_merged > 0) {
     if (raw.stl) {
       int distinct = 0;
       for (int v = 0; v < nv; ++v) distinct += rep[v] == v;
-      report.warnings.push_back("note: " + path + ": welded " +
+      report.warnings.push_back("note: " + name + ": welded " +
                                 count_of(nv, "triangle corner", "triangle corners") + " into " +
                                 count_of(distinct, "vertex", "vertices") +
                                 " (normal for STL, which stores every triangle separately)");
@@ -1155,25 +1215,44 @@ TriangleMesh finish(const std::string& path, const RawMesh& raw, LoadReport& rep
       std::ostringstream tol;
       tol << options.duplicate_tolerance;
       report.warnings.push_back(
-          "warning: " + path + ": merged " +
+          "warning: " + name + ": merged " +
           count_of(report.duplicate_vertices_merged, "duplicate vertex", "duplicate vertices") +
           " (closer than " + tol.str() + " x the bounding-box diagonal)");
     }
   }
   if (report.degenerate_faces_removed > 0)
     report.warnings.push_back(
-        "warning: " + path + ": removed " +
+        "warning: " + name + ": removed " +
         count_of(report.degenerate_faces_removed, "degenerate face", "degenerate faces") +
         " (repeated vertex or zero area)");
   if (report.isolated_vertices_removed > 0)
     report.warnings.push_back(
-        "warning: " + path + ": removed " +
+        "warning: " + name + ": removed " +
         count_of(report.isolated_vertices_removed, "isolated vertex", "isolated vertices") +
         " (not used by any face)");
-  if (orientation.flipped > 0)
-    report.warnings.push_back("warning: " + path + ": flipped " +
-                              count_of(orientation.flipped, "face", "faces") +
+  if (flipped > 0)
+    report.warnings.push_back("warning: " + name + ": flipped " +
+                              count_of(flipped, "face", "faces") +
                               " to make the orientation consistent");
+}
+
+/// Parsed contents -> checked, repaired mesh. `name` is the field every error names.
+TriangleMesh finish(const std::string& name, const RawMesh& raw, LoadReport& report,
+                    const MeshLoadOptions& options) {
+  report.format = raw.format;
+  report.file_vertices = static_cast<int>(raw.vertices.size());
+  report.file_faces = raw.polygon_count();
+  Triangles triangles = triangulate(name, raw, report);
+  const std::vector<int> rep = weld_duplicates(raw, options, report);
+  drop_degenerate_faces(name, raw, rep, triangles, report);
+  std::vector<Vec3> vertices;
+  const std::vector<int> file_vertex_of =
+      drop_isolated_vertices(raw, rep, triangles.faces, vertices, report);
+  const int flipped = orient_and_check_manifold(name, raw, file_vertex_of, triangles.polygon,
+                                                static_cast<int>(vertices.size()), triangles.faces);
+  TriangleMesh mesh(std::move(vertices), std::move(triangles.faces));
+  if (options.require_single_boundary) check_disk(name, mesh);
+  add_repair_warnings(name, raw, rep, flipped, options, report);
   return mesh;
 }
 
@@ -1181,21 +1260,21 @@ std::string read_file(const std::string& path) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (ec && ec != std::errc::no_such_file_or_directory)
-    fail(path + ": cannot open mesh file: " + ec.message());
-  if (!fs::exists(status)) fail(path + ": cannot open mesh file: no such file");
-  if (fs::is_directory(status)) fail(path + ": cannot read mesh file: it is a directory");
+    fail(path, "cannot open mesh file: " + ec.message());
+  if (!fs::exists(status)) fail(path, "cannot open mesh file: no such file");
+  if (fs::is_directory(status)) fail(path, "cannot read mesh file: it is a directory");
   // A FIFO would block in open() (uninterruptibly), a device such as /dev/zero never ends.
   if (!fs::is_regular_file(status))
-    fail(path + ": cannot read mesh file: not a regular file (a device, FIFO or socket)");
+    fail(path, "cannot read mesh file: not a regular file (a device, FIFO or socket)");
   constexpr std::uintmax_t kMaxBytes = std::uintmax_t{4} << 30;
   if (const std::uintmax_t size = fs::file_size(path, ec); !ec && size > kMaxBytes)
-    fail(path + ": cannot read mesh file: " + std::to_string(size >> 20) +
-         " MiB, more than the 4096 MiB gridshell reads");
+    fail(path, "cannot read mesh file: " + std::to_string(size >> 20) +
+                   " MiB, more than the 4096 MiB gridshell reads");
   std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path + ": cannot open mesh file: " + std::strerror(errno));
+  if (!in) fail(path, std::string("cannot open mesh file: ") + std::strerror(errno));
   std::ostringstream out;
   out << in.rdbuf();
-  if (in.bad()) fail(path + ": cannot read mesh file: " + std::strerror(errno));
+  if (in.bad()) fail(path, std::string("cannot read mesh file: ") + std::strerror(errno));
   return out.str();
 }
 
@@ -1207,26 +1286,59 @@ std::string format_double(double value) {
 
 }  // namespace
 
-TriangleMesh load_mesh(const std::string& path, LoadReport* report,
-                       const MeshLoadOptions& options) {
-  std::string extension = fs::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
+std::optional<MeshFormat> mesh_format_from_name(const std::string& name) {
+  std::string t = name;
+  std::transform(t.begin(), t.end(), t.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".obj" && extension != ".off" && extension != ".ply" && extension != ".stl")
-    fail(path + ": unknown mesh file extension " +
-         (extension.empty() ? std::string("(none)") : quote_token(extension)) +
-         "; supported: .obj, .off, .ply, .stl");
-  const std::string data = read_file(path);
+  if (!t.empty() && t.front() == '.') t.erase(0, 1);
+  const std::string extension = fs::path(t).extension().string();
+  if (!extension.empty()) t = extension.substr(1);
+  if (t == "obj") return MeshFormat::Obj;
+  if (t == "off") return MeshFormat::Off;
+  if (t == "ply") return MeshFormat::Ply;
+  if (t == "stl") return MeshFormat::Stl;
+  return std::nullopt;
+}
+
+const char* to_string(MeshFormat format) {
+  switch (format) {
+    case MeshFormat::Obj:
+      return "obj";
+    case MeshFormat::Off:
+      return "off";
+    case MeshFormat::Ply:
+      return "ply";
+    case MeshFormat::Stl:
+      return "stl";
+  }
+  return "obj";
+}
+
+TriangleMesh read_mesh(std::string_view data, MeshFormat format, const std::string& name,
+                       LoadReport* report, const MeshLoadOptions& options) {
   if (std::all_of(data.begin(), data.end(), [](char c) { return is_space(c) || c == '\n'; }))
-    fail(path + ": the file is empty");
-  RawMesh raw = extension == ".obj"   ? parse_obj(path, data)
-                : extension == ".off" ? parse_off(path, data)
-                : extension == ".ply" ? parse_ply(path, data)
-                                      : parse_stl(path, data);
+    fail(name, "the file is empty");
+  RawMesh raw = format == MeshFormat::Obj   ? parse_obj(name, data)
+                : format == MeshFormat::Off ? parse_off(name, data)
+                : format == MeshFormat::Ply ? parse_ply(name, data)
+                                            : parse_stl(name, data);
   LoadReport local;
   LoadReport& out = report ? *report : local;
   out = LoadReport{};
-  return finish(path, raw, out, options);
+  return finish(name, raw, out, options);
+}
+
+TriangleMesh load_mesh(const std::string& path, LoadReport* report,
+                       const MeshLoadOptions& options) {
+  std::string extension = fs::path(path).extension().string();
+  const std::optional<MeshFormat> format =
+      extension.empty() ? std::nullopt : mesh_format_from_name(extension);
+  if (!format)
+    fail(path, "unknown mesh file extension " +
+                   (extension.empty() ? std::string("(none)") : quote_token(extension)) +
+                   "; supported: .obj, .off, .ply, .stl");
+  const std::string data = read_file(path);
+  return read_mesh(data, *format, path, report, options);
 }
 
 TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& vertices,
@@ -1234,13 +1346,14 @@ TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& 
                               const MeshLoadOptions& options) {
   RawMesh raw;
   raw.format = "arrays";
+  raw.arrays = true;
   raw.source = "the mesh";
-  if (vertices.empty()) fail(name + ": no vertices");
+  if (vertices.empty()) fail(join_field(name, "vertices"), "empty: the mesh has no vertices");
   raw.vertices.reserve(vertices.size());
   for (size_t v = 0; v < vertices.size(); ++v) {
     if (!vertices[v].allFinite())
-      fail(name + ": vertex " + std::to_string(v) + " has a non-finite coordinate " +
-           format_point(vertices[v]));
+      fail(join_field(name, "vertices[" + std::to_string(v) + "]"),
+           "non-finite coordinate " + format_point(vertices[v]));
     raw.add_vertex(vertices[v], 0);
   }
   raw.corners.reserve(3 * faces.size());
@@ -1254,14 +1367,16 @@ TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& 
   return finish(name, raw, out, options);
 }
 
-std::string obj_text(const TriangleMesh& mesh) {
-  std::string text = "# gridshell mesh: " + std::to_string(mesh.vertex_count()) + " vertices, " +
-                     std::to_string(mesh.face_count()) + " faces\n";
-  text.reserve(text.size() + mesh.vertices.size() * 60 + mesh.faces.size() * 24);
-  for (const Vec3& p : mesh.vertices)
+std::string obj_text(const TriangleMesh& mesh) { return obj_text(mesh.vertices(), mesh.faces()); }
+
+std::string obj_text(const std::vector<Vec3>& vertices, const std::vector<Face>& faces) {
+  std::string text = "# gridshell mesh: " + std::to_string(vertices.size()) + " vertices, " +
+                     std::to_string(faces.size()) + " faces\n";
+  text.reserve(text.size() + vertices.size() * 60 + faces.size() * 24);
+  for (const Vec3& p : vertices)
     text += "v " + format_double(p.x()) + " " + format_double(p.y()) + " " + format_double(p.z()) +
             "\n";
-  for (const Face& f : mesh.faces)
+  for (const Face& f : faces)
     text += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " +
             std::to_string(f[2] + 1) + "\n";
   return text;
@@ -1273,7 +1388,7 @@ void save_obj(const TriangleMesh& mesh, const std::string& path) {
 
 void write_file_atomically(const std::string& path, const std::string& contents) {
   const fs::path target(path);
-  if (target.filename().empty()) fail(path + ": cannot write file: not a file name");
+  if (target.filename().empty()) fail(path, "cannot write file: not a file name");
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   static std::atomic<unsigned> counter{0};
@@ -1286,11 +1401,11 @@ void write_file_atomically(const std::string& path, const std::string& contents)
     fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0 && errno != EEXIST) break;
   }
-  if (fd < 0) fail(path + ": cannot write file: " + std::strerror(errno));
+  if (fd < 0) fail(path, std::string("cannot write file: ") + std::strerror(errno));
   auto abandon = [&](int error) {
     ::close(fd);
     ::unlink(temporary.c_str());
-    fail(path + ": cannot write file: " + std::strerror(error));
+    fail(path, std::string("cannot write file: ") + std::strerror(error));
   };
   size_t written = 0;
   while (written < contents.size()) {
@@ -1305,13 +1420,13 @@ void write_file_atomically(const std::string& path, const std::string& contents)
   if (::close(fd) != 0) {
     const int error = errno;
     ::unlink(temporary.c_str());
-    fail(path + ": cannot write file: " + std::strerror(error));
+    fail(path, std::string("cannot write file: ") + std::strerror(error));
   }
   std::error_code ec;
   fs::rename(temporary, target, ec);
   if (ec) {
     ::unlink(temporary.c_str());
-    fail(path + ": cannot write file: " + ec.message());
+    fail(path, "cannot write file: " + ec.message());
   }
 }
 

@@ -39,15 +39,29 @@ std::string TopologyProblem::message() const {
   return out.str();
 }
 
-TopologyProblem check_manifold(const TriangleMesh& mesh) {
+std::string TopologyProblem::field() const {
+  switch (kind) {
+    case Kind::None:
+      return "";
+    case Kind::InvalidIndex:
+    case Kind::InconsistentOrientation:
+      return "faces[" + std::to_string(element) + "]";
+    case Kind::NonManifoldEdge:
+    case Kind::NonManifoldVertex:
+      return "vertices[" + std::to_string(element) + "]";
+  }
+  return "";
+}
+
+TopologyProblem check_manifold(int nv, const std::vector<Face>& faces) {
   TopologyProblem problem;
-  const int nv = mesh.vertex_count();
+  const int nf = static_cast<int>(faces.size());
   std::unordered_map<std::uint64_t, int> directed;  // directed edge -> count
   std::unordered_map<std::uint64_t, int> undirected;
-  directed.reserve(mesh.faces.size() * 3);
-  undirected.reserve(mesh.faces.size() * 3);
-  for (int f = 0; f < mesh.face_count(); ++f) {
-    const Face& t = mesh.faces[f];
+  directed.reserve(faces.size() * 3);
+  undirected.reserve(faces.size() * 3);
+  for (int f = 0; f < nf; ++f) {
+    const Face& t = faces[f];
     for (int i = 0; i < 3; ++i) {
       if (t[i] < 0 || t[i] >= nv || t[i] == t[(i + 1) % 3]) {
         problem.kind = TopologyProblem::Kind::InvalidIndex;
@@ -72,16 +86,16 @@ TopologyProblem check_manifold(const TriangleMesh& mesh) {
   }
   // Vertex manifoldness: the faces around a vertex must form one fan (a single chain or cycle).
   std::vector<std::vector<int>> vertex_faces(nv);
-  for (int f = 0; f < mesh.face_count(); ++f)
-    for (int v : mesh.faces[f]) vertex_faces[v].push_back(f);
+  for (int f = 0; f < nf; ++f)
+    for (int v : faces[f]) vertex_faces[v].push_back(f);
   for (int v = 0; v < nv; ++v) {
-    const auto& faces = vertex_faces[v];
-    if (faces.size() <= 1) continue;
+    const auto& fan = vertex_faces[v];
+    if (fan.size() <= 1) continue;
     // For each incident face: the "next" vertex (after v) and "previous" vertex (before v).
     std::unordered_map<int, int> next_of_prev;  // prev vertex -> face index in list
-    std::vector<int> nextv(faces.size()), prevv(faces.size());
-    for (size_t k = 0; k < faces.size(); ++k) {
-      const Face& t = mesh.faces[faces[k]];
+    std::vector<int> nextv(fan.size()), prevv(fan.size());
+    for (size_t k = 0; k < fan.size(); ++k) {
+      const Face& t = faces[fan[k]];
       const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
       nextv[k] = t[(i + 1) % 3];
       prevv[k] = t[(i + 2) % 3];
@@ -89,23 +103,23 @@ TopologyProblem check_manifold(const TriangleMesh& mesh) {
     }
     // Walk from a start face (a face whose next vertex is no one's prev, if the fan is open).
     std::unordered_map<int, int> by_next;
-    for (size_t k = 0; k < faces.size(); ++k) by_next[nextv[k]] = static_cast<int>(k);
+    for (size_t k = 0; k < fan.size(); ++k) by_next[nextv[k]] = static_cast<int>(k);
     int start = 0;
-    for (size_t k = 0; k < faces.size(); ++k)
+    for (size_t k = 0; k < fan.size(); ++k)
       if (!by_next.count(prevv[k])) {
         start = static_cast<int>(k);
         break;
       }
     size_t visited = 0;
     int k = start;
-    std::vector<char> seen(faces.size(), 0);
+    std::vector<char> seen(fan.size(), 0);
     while (k >= 0 && !seen[k]) {
       seen[k] = 1;
       ++visited;
       auto it = next_of_prev.find(nextv[k]);
       k = it == next_of_prev.end() ? -1 : it->second;
     }
-    if (visited != faces.size()) {
+    if (visited != fan.size()) {
       problem.kind = TopologyProblem::Kind::NonManifoldVertex;
       problem.element = v;
       return problem;
@@ -114,10 +128,11 @@ TopologyProblem check_manifold(const TriangleMesh& mesh) {
   return problem;
 }
 
-MeshTopology build_topology(const TriangleMesh& mesh) {
-  const TopologyProblem problem = check_manifold(mesh);
-  if (problem.kind != TopologyProblem::Kind::None) throw InvalidInput(problem.message());
-  const int nv = mesh.vertex_count(), nf = mesh.face_count();
+MeshTopology build_topology(int nv, const std::vector<Face>& faces) {
+  const TopologyProblem problem = check_manifold(nv, faces);
+  if (problem.kind != TopologyProblem::Kind::None)
+    throw InvalidInput(problem.field(), problem.message());
+  const int nf = static_cast<int>(faces.size());
   MeshTopology top;
   top.face_neighbors.assign(nf, {-1, -1, -1});
   top.vertex_faces.assign(nv, {});
@@ -126,13 +141,13 @@ MeshTopology build_topology(const TriangleMesh& mesh) {
   half.reserve(nf * 3);
   for (int f = 0; f < nf; ++f)
     for (int i = 0; i < 3; ++i) {
-      half[edge_key(mesh.faces[f][i], mesh.faces[f][(i + 1) % 3])] = f * 3 + i;
-      top.vertex_faces[mesh.faces[f][i]].push_back(f);
+      half[edge_key(faces[f][i], faces[f][(i + 1) % 3])] = f * 3 + i;
+      top.vertex_faces[faces[f][i]].push_back(f);
     }
   std::unordered_map<int, int> boundary_next;  // boundary vertex a -> b along a boundary edge
   for (int f = 0; f < nf; ++f)
     for (int i = 0; i < 3; ++i) {
-      const int a = mesh.faces[f][i], b = mesh.faces[f][(i + 1) % 3];
+      const int a = faces[f][i], b = faces[f][(i + 1) % 3];
       auto it = half.find(edge_key(b, a));
       if (it != half.end()) {
         top.face_neighbors[f][i] = it->second / 3;
@@ -157,18 +172,6 @@ MeshTopology build_topology(const TriangleMesh& mesh) {
     top.boundary_loops.push_back(std::move(loop));
   }
   return top;
-}
-
-std::array<int, 2> find_edge(const TriangleMesh& mesh, const MeshTopology& topology, int a, int b) {
-  if (a < 0 || a >= mesh.vertex_count()) return {-1, -1};
-  for (int f : topology.vertex_faces[a]) {
-    const Face& t = mesh.faces[f];
-    for (int i = 0; i < 3; ++i) {
-      const int x = t[i], y = t[(i + 1) % 3];
-      if ((x == a && y == b) || (x == b && y == a)) return {f, i};
-    }
-  }
-  return {-1, -1};
 }
 
 }  // namespace gridshell

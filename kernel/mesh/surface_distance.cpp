@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "gridshell/mesh/normals.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/normals.h"
 
 namespace gridshell {
 namespace {
@@ -30,12 +30,12 @@ struct SurfaceDistance::Impl {
 };
 
 SurfaceDistance::SurfaceDistance(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
-  if (mesh.faces.empty()) throw InvalidInput("target surface: the mesh has no faces");
+  if (mesh.faces().empty()) throw InvalidInput("", "the surface has no faces");
   impl_->mesh = mesh;
-  impl_->triangles.reserve(mesh.faces.size());
-  for (const Face& f : mesh.faces)
-    impl_->triangles.emplace_back(to_point(mesh.vertices[f[0]]), to_point(mesh.vertices[f[1]]),
-                                  to_point(mesh.vertices[f[2]]));
+  impl_->triangles.reserve(mesh.faces().size());
+  for (const Face& f : mesh.faces())
+    impl_->triangles.emplace_back(to_point(mesh.vertices()[f[0]]), to_point(mesh.vertices()[f[1]]),
+                                  to_point(mesh.vertices()[f[2]]));
   impl_->normals = vertex_normals(mesh);
   impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
   impl_->tree.build();
@@ -54,9 +54,9 @@ SurfacePoint SurfaceDistance::closest(const Vec3& point) const {
   const auto [closest, primitive] = impl_->tree.closest_point_and_primitive(to_point(point));
   SurfacePoint result;
   result.face = static_cast<int>(primitive - impl_->triangles.cbegin());
-  const Face& f = impl_->mesh.faces[result.face];
-  const Vec3 a = impl_->mesh.vertices[f[0]], b = impl_->mesh.vertices[f[1]],
-             c = impl_->mesh.vertices[f[2]];
+  const Face& f = impl_->mesh.faces()[result.face];
+  const Vec3 a = impl_->mesh.vertices()[f[0]], b = impl_->mesh.vertices()[f[1]],
+             c = impl_->mesh.vertices()[f[2]];
   const Vec3 p(closest.x(), closest.y(), closest.z());
   // Barycentric weights of p in abc (p lies in the triangle up to rounding).
   const Vec3 v0 = b - a, v1 = c - a, v2 = p - a;
@@ -77,14 +77,18 @@ SurfacePoint SurfaceDistance::closest(const Vec3& point) const {
 
 Vec3 SurfaceDistance::normal_at_closest(const Vec3& point) const {
   const SurfacePoint p = closest(point);
-  const Face& f = impl_->mesh.faces[p.face];
+  const Face& f = impl_->mesh.faces()[p.face];
   Vec3 n = Vec3::Zero();
   for (int i = 0; i < 3; ++i) n += p.barycentric[i] * impl_->normals[f[i]];
   if (n.norm() == 0) {
-    const Vec3 a = impl_->mesh.vertices[f[0]];
-    n = (impl_->mesh.vertices[f[1]] - a).cross(impl_->mesh.vertices[f[2]] - a);
+    const Vec3 a = impl_->mesh.vertices()[f[0]];
+    n = (impl_->mesh.vertices()[f[1]] - a).cross(impl_->mesh.vertices()[f[2]] - a);
   }
   return n.normalized();
+}
+
+SurfacePoint closest_surface_point(const TriangleMesh& mesh, const Vec3& point) {
+  return SurfaceDistance(mesh).closest(point);
 }
 
 }  // namespace gridshell

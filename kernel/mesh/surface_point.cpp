@@ -11,58 +11,55 @@ SurfacePoint SurfacePoint::at_vertex(const TriangleMesh& mesh, int vertex) {
     std::ostringstream msg;
     msg << "vertex " << vertex << " is out of range (the mesh has " << mesh.vertex_count()
         << " vertices)";
-    throw InvalidInput(msg.str());
+    throw InvalidInput("", msg.str());
   }
-  for (int f = 0; f < mesh.face_count(); ++f)
-    for (int i = 0; i < 3; ++i)
-      if (mesh.faces[f][i] == vertex) {
-        SurfacePoint p;
-        p.face = f;
-        p.barycentric = Vec3::Zero();
-        p.barycentric[i] = 1.0;
-        return p;
-      }
-  throw InvalidInput("vertex " + std::to_string(vertex) + " is isolated (no face uses it)");
+  const std::vector<int>& faces = mesh.topology().vertex_faces[vertex];
+  if (faces.empty())
+    throw InvalidInput("", "vertex " + std::to_string(vertex) + " is isolated (no face uses it)");
+  const int f = faces.front();
+  const Face& face = mesh.faces()[f];
+  SurfacePoint p;
+  p.face = f;
+  p.barycentric = Vec3::Zero();
+  p.barycentric[face[0] == vertex ? 0 : face[1] == vertex ? 1 : 2] = 1.0;
+  return p;
 }
 
 SurfacePoint SurfacePoint::on_edge(const TriangleMesh& mesh, int a, int b, double t) {
   if (!(t >= 0.0 && t <= 1.0)) {
     std::ostringstream msg;
     msg << "edge parameter t = " << t << " is outside [0, 1]";
-    throw InvalidInput(msg.str());
+    throw InvalidInput("", msg.str());
   }
-  for (int f = 0; f < mesh.face_count(); ++f) {
-    const Face& face = mesh.faces[f];
-    for (int i = 0; i < 3; ++i) {
-      const int j = (i + 1) % 3;
-      if ((face[i] == a && face[j] == b) || (face[i] == b && face[j] == a)) {
-        SurfacePoint p;
-        p.face = f;
-        p.barycentric = Vec3::Zero();
-        const int ia = face[i] == a ? i : j, ib = face[i] == a ? j : i;
-        p.barycentric[ia] = 1.0 - t;
-        p.barycentric[ib] = t;
-        if (t == 0.0) p.barycentric[ia] = 1.0;  // exact vertex
-        if (t == 1.0) p.barycentric[ib] = 1.0;
-        return p;
-      }
-    }
+  const auto [f, i] = find_edge(mesh, a, b);
+  if (f >= 0) {
+    const Face& face = mesh.faces()[f];
+    const int j = (i + 1) % 3;
+    SurfacePoint p;
+    p.face = f;
+    p.barycentric = Vec3::Zero();
+    const int ia = face[i] == a ? i : j, ib = face[i] == a ? j : i;
+    p.barycentric[ia] = 1.0 - t;
+    p.barycentric[ib] = t;
+    if (t == 0.0) p.barycentric[ia] = 1.0;  // exact vertex
+    if (t == 1.0) p.barycentric[ib] = 1.0;
+    return p;
   }
-  throw InvalidInput("vertices " + std::to_string(a) + " and " + std::to_string(b) +
-                     " are not joined by an edge of the mesh");
+  throw InvalidInput("", "vertices " + std::to_string(a) + " and " + std::to_string(b) +
+                             " are not joined by an edge of the mesh");
 }
 
 Vec3 SurfacePoint::position(const TriangleMesh& mesh) const {
-  const Face& f = mesh.faces.at(face);
-  return barycentric[0] * mesh.vertices[f[0]] + barycentric[1] * mesh.vertices[f[1]] +
-         barycentric[2] * mesh.vertices[f[2]];
+  const Face& f = mesh.faces().at(face);
+  return barycentric[0] * mesh.vertices()[f[0]] + barycentric[1] * mesh.vertices()[f[1]] +
+         barycentric[2] * mesh.vertices()[f[2]];
 }
 
 int SurfacePoint::vertex(const TriangleMesh& mesh) const {
   if (face < 0 || face >= mesh.face_count()) return -1;
   for (int i = 0; i < 3; ++i)
     if (barycentric[i] == 1.0 && barycentric[(i + 1) % 3] == 0.0 && barycentric[(i + 2) % 3] == 0.0)
-      return mesh.faces[face][i];
+      return mesh.faces()[face][i];
   return -1;
 }
 

@@ -55,7 +55,7 @@ Material material_by_name(const std::string& name) {
     if (m.name == name) return m;
     known += (known.empty() ? "" : ", ") + m.name;
   }
-  throw InvalidInput("material: unknown material '" + name + "' (known: " + known + ")");
+  throw InvalidInput("", "unknown material '" + name + "' (known: " + known + ")");
 }
 
 namespace {
@@ -242,54 +242,60 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
     : options_(options), target_(target), distance_(target) {
   // --- validation -------------------------------------------------------------------------
   if (!(width > 0) || !std::isfinite(width))
-    throw InvalidInput("lamella_width: must be a positive number");
+    throw InvalidInput("lamella_width", "must be a positive number");
   if (!(thickness > 0) || !std::isfinite(thickness))
-    throw InvalidInput("lamella_thickness: must be a positive number");
+    throw InvalidInput("lamella_thickness", "must be a positive number");
   if (grid.g.size() < 2 || grid.h.size() < 2)
-    throw InvalidInput("members: each family needs at least its two boundary members");
+    throw InvalidInput("design.members", "each family needs at least its two boundary members");
   const Material& mat = options.material;
   if (!(mat.young_modulus > 0) || !(mat.shear_modulus > 0) || !std::isfinite(mat.young_modulus) ||
       !std::isfinite(mat.shear_modulus))
-    throw InvalidInput("material: Young's and shear moduli must be positive numbers");
+    throw InvalidInput("options.young_modulus",
+                       "Young's and shear moduli must be positive numbers");
   if (!(options.friction_mu >= 0) || !(options.friction_epsilon > 0))
-    throw InvalidInput("friction: mu must be >= 0 and epsilon > 0");
+    throw InvalidInput("options.friction_mu", "mu must be >= 0 and epsilon > 0");
   if (!(options.edges_per_interval >= 1) || options.edges_per_interval > 64)
-    throw InvalidInput("edges_per_interval: must be between 1 and 64");
-  if (options.max_iterations < 1) throw InvalidInput("max_iterations: must be at least 1");
+    throw InvalidInput("options.edges_per_interval", "must be between 1 and 64");
+  if (options.max_iterations < 1)
+    throw InvalidInput("options.max_iterations", "must be at least 1");
+  int list_index = 0;  // design.members lists g then h
   for (const auto* family : {&grid.g, &grid.h})
     for (const Member& m : *family) {
+      const std::string field = "design.members[" + std::to_string(list_index++) + "]";
       const std::string name =
           std::string(m.family == Family::G ? "g" : "h") + std::to_string(m.index);
       if (m.surface.size() < 2)
-        throw InvalidInput("members: member " + name + " has fewer than 2 surface points");
+        throw InvalidInput(field, "member " + name + " has fewer than 2 surface points");
       for (const Vec3& p : m.surface)
-        if (!finite(p)) throw InvalidInput("members: member " + name + " has a non-finite point");
+        if (!finite(p)) throw InvalidInput(field, "member " + name + " has a non-finite point");
       if (!(m.planar_length > 0) || !std::isfinite(m.planar_length))
-        throw InvalidInput("members: member " + name + " has no positive planar length");
+        throw InvalidInput(field, "member " + name + " has no positive planar length");
     }
   const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
-  for (const Crossing& c : grid.crossings)
+  for (size_t k = 0; k < grid.crossings.size(); ++k) {
+    const Crossing& c = grid.crossings[k];
     if (c.g < 0 || c.g >= ng || c.h < 0 || c.h >= nh)
-      throw InvalidInput("crossings: crossing (" + std::to_string(c.g) + ", " +
-                         std::to_string(c.h) + ") names a member that does not exist");
+      throw InvalidInput("design.crossings[" + std::to_string(k) + "]",
+                         "crossing (" + std::to_string(c.g) + ", " + std::to_string(c.h) +
+                             ") names a member that does not exist");
+  }
 
   // --- scale ------------------------------------------------------------------------------
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Vec3& v : target.vertices) {
+  for (const Vec3& v : target.vertices()) {
     lo = lo.cwiseMin(v);
     hi = hi.cwiseMax(v);
   }
   const double extent = (hi - lo).maxCoeff();
   if (!(extent > 0) || !std::isfinite(extent))
-    throw InvalidInput("patch: the target surface has no extent");
+    throw InvalidInput("design.patch", "the target surface has no extent");
   for (const auto& [value, name] :
        {std::pair{width, "lamella_width"}, std::pair{thickness, "lamella_thickness"}})
     if (!(value >= 1e-6 * extent && value <= 0.5 * extent)) {
       char message[200];
-      std::snprintf(message, sizeof message,
-                    "%s: %g is outside [1e-6, 0.5] x the target's extent (%g)", name, value,
-                    extent);
-      throw InvalidInput(message);
+      std::snprintf(message, sizeof message, "%g is outside [1e-6, 0.5] x the target's extent (%g)",
+                    value, extent);
+      throw InvalidInput(name, message);
     }
   scale_ = options.reference_extent / extent;
   width_ = width * scale_;
@@ -327,8 +333,11 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
         cumulative.push_back(cumulative.back() + (m.surface[k] - m.surface[k - 1]).norm());
       const double surface_length = cumulative.back();
       if (!(surface_length > 0))
-        throw InvalidInput(std::string("members: member ") + (m.family == Family::G ? "g" : "h") +
-                           std::to_string(m.index) + ": its surface polyline has zero length");
+        throw InvalidInput(
+            "design.members[" +
+                std::to_string(m.family == Family::G ? m.index : grid.g.size() + m.index) + "]",
+            std::string("member ") + (m.family == Family::G ? "g" : "h") + std::to_string(m.index) +
+                ": its surface polyline has zero length");
       // Start on the geodesic, offset by half the thickness: g below the surface, h above it
       // (the connection puts h on the material-normal side of g).
       const double side = m.family == Family::G ? -0.5 : 0.5;
@@ -398,16 +407,16 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
   }
   for (size_t k = 0; k < anchors.size(); ++k) {
     const Anchor& a = anchors[k];
-    const std::string where = "anchors[" + std::to_string(k) + "]: ";
+    const std::string field = "design.anchors[" + std::to_string(k) + "]";
     if (!finite(a.position) || !finite(a.normal) || !(a.normal.norm() > 0))
-      throw InvalidInput(where + "anchor at crossing (" + std::to_string(a.g) + ", " +
-                         std::to_string(a.h) + ") has a non-finite position or normal");
+      throw InvalidInput(field, "anchor at crossing (" + std::to_string(a.g) + ", " +
+                                    std::to_string(a.h) + ") has a non-finite position or normal");
     int found = -1;
     for (size_t j = 0; j < joints_.size(); ++j)
       if (joints_[j].g == a.g && joints_[j].h == a.h) found = static_cast<int>(j);
     if (found < 0)
-      throw InvalidInput(where + "anchor at (" + std::to_string(a.g) + ", " + std::to_string(a.h) +
-                         ") is not a crossing of the grid");
+      throw InvalidInput(field, "anchor at (" + std::to_string(a.g) + ", " + std::to_string(a.h) +
+                                    ") is not a crossing of the grid");
     if (joints_[found].anchor >= 0) continue;  // the same crossing anchored twice
     joints_[found].anchor = static_cast<int>(anchors_.size());
     anchors_.push_back({a.position * scale_, a.normal.normalized()});
@@ -787,7 +796,8 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
     if (!newton->evaluate()) {
       if (run.iterations == 0)  // the start itself: the input's fault
         throw InvalidInput(
-            "members: the grid laid on its geodesics has folded or degenerate rod edges (the "
+            "design.members",
+            "the grid laid on its geodesics has folded or degenerate rod edges (the "
             "energy cannot be evaluated there); check the members' surface polylines");
       throw std::runtime_error("simulation: the state left the energy's domain");
     }

@@ -63,9 +63,9 @@ v1::Design to_proto(const Design& design, const v1::DesignOptions& options,
     anchor->set_boundary_curvature(a.boundary_curvature);
   }
   const Patch& patch = design.target.patch;
-  for (const Vec3& v : patch.mesh.vertices)
+  for (const Vec3& v : patch.mesh.vertices())
     add_point(out.mutable_patch()->mutable_vertices(), {v.x(), v.y(), v.z()});
-  for (const Face& f : patch.mesh.faces)
+  for (const Face& f : patch.mesh.faces())
     add_point(out.mutable_patch()->mutable_faces(), {double(f[0]), double(f[1]), double(f[2])});
   for (int c : patch.corners) out.mutable_patch()->add_corners(c);
   for (const Vec2& p : design.cladding_g.points)

@@ -11,8 +11,9 @@ namespace {
 
 using google::protobuf::ListValue;
 
+/// Every field here is a field of the Design message (the caller names where it came from).
 [[noreturn]] void fail(const std::string& field, const std::string& problem) {
-  throw InvalidInput("design." + field + ": " + problem);
+  throw InvalidInput(field, problem);
 }
 
 double number(const google::protobuf::Value& value, const std::string& field) {
@@ -107,10 +108,10 @@ void fill_run(const DeploymentRun& run, v1::SimulationRun* out) {
 Design design_from_proto(const v1::Design& in) {
   Design design;
   Patch& patch = design.target.patch;
-  for (const Vec3& v : points<3>(in.patch().vertices(), "patch.vertices"))
-    patch.mesh.vertices.push_back(v);
-  const int nv = patch.mesh.vertex_count();
+  std::vector<Vec3> vertices = points<3>(in.patch().vertices(), "patch.vertices");
+  const int nv = static_cast<int>(vertices.size());
   const auto faces = points<3>(in.patch().faces(), "patch.faces");
+  std::vector<Face> patch_faces;
   for (size_t i = 0; i < faces.size(); ++i) {
     Face f;
     for (int k = 0; k < 3; ++k) {
@@ -121,9 +122,14 @@ Design design_from_proto(const v1::Design& in) {
                                                            std::to_string(nv) + " vertices");
       f[k] = static_cast<int>(v);
     }
-    patch.mesh.faces.push_back(f);
+    patch_faces.push_back(f);
   }
-  if (patch.mesh.faces.empty()) fail("patch.faces", "the target patch has no faces");
+  if (patch_faces.empty()) fail("patch.faces", "the target patch has no faces");
+  try {
+    patch.mesh = TriangleMesh(std::move(vertices), std::move(patch_faces));
+  } catch (const Error& e) {
+    rethrow_within(e, "patch");  // "patch.faces[12]": not a manifold patch
+  }
   if (in.patch().corners_size() == 4)
     for (int k = 0; k < 4; ++k) {
       const int c = in.patch().corners(k);

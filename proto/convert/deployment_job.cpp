@@ -6,14 +6,15 @@
 #include <thread>
 
 #include "gridshell/convert_deployment.h"
-#include "gridshell/simulation/deployment_export.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/simulation/deployment_export.h"
 
 namespace gridshell {
 namespace {
 
+/// The fields are those of a SimulationOptions message (the caller names where it came from).
 void require(bool ok, const std::string& field, const std::string& problem) {
-  if (!ok) throw InvalidInput(field + ": " + problem);
+  if (!ok) throw InvalidInput(field, problem);
 }
 
 bool positive(double v) { return std::isfinite(v) && v > 0; }
@@ -33,8 +34,8 @@ double parse_length_unit(const std::string& unit, const std::string& field) {
   char* end = nullptr;
   const double v = std::strtod(unit.c_str(), &end);
   if (end && *end == '\0' && positive(v)) return v;
-  throw InvalidInput(field + ": expected mm, cm, m, in, ft or a positive number of metres, got '" +
-                     unit + "'");
+  throw InvalidInput(
+      field, "expected mm, cm, m, in, ft or a positive number of metres, got '" + unit + "'");
 }
 
 v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
@@ -49,8 +50,12 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
   // a name the material is then "custom"). "custom" by name needs both moduli.
   if (o.material() != "custom") {
     const bool overridden = o.young_modulus() != 0 || o.shear_modulus() != 0;
-    const Material preset =
-        material_by_name(o.material().empty() ? defaults.material.name : o.material());
+    Material preset;
+    try {
+      preset = material_by_name(o.material().empty() ? defaults.material.name : o.material());
+    } catch (const Error& e) {
+      rethrow_within(e, "material");
+    }
     if (o.young_modulus() == 0) o.set_young_modulus(preset.young_modulus);
     if (o.shear_modulus() == 0) o.set_shear_modulus(preset.shear_modulus);
     o.set_material(o.material().empty() && overridden ? "custom" : preset.name);
@@ -126,8 +131,18 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
                                  const v1::SimulationOptions& requested,
                                  const std::string& design_name, const Progress& progress,
                                  int threads) {
-  v1::SimulationOptions options = resolve_simulation_options(requested);
-  const Design design = design_from_proto(design_message);
+  v1::SimulationOptions options;
+  Design design;
+  try {
+    options = resolve_simulation_options(requested);
+  } catch (const Error& e) {
+    rethrow_within(e, "options");
+  }
+  try {
+    design = design_from_proto(design_message);
+  } catch (const Error& e) {
+    rethrow_within(e, "design");
+  }
   options.set_lamella_width(design.lamella_width);
   options.set_lamella_thickness(design.lamella_thickness);
   DeploymentJob job;
@@ -141,8 +156,15 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   const int available =
       threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   auto simulate = [&](const SimulationOptions& o) {
-    return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
-                               design.lamella_thickness, o, progress);
+    try {
+      return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
+                                 design.lamella_thickness, o, progress);
+    } catch (const InvalidInput& e) {
+      // The lamella's cross-section comes from the design's options.
+      if (e.field() == "lamella_width" || e.field() == "lamella_thickness")
+        throw InvalidInput("design.options." + e.field(), e.message());
+      throw;
+    }
   };
   if (without && with && available >= 2) {
     without_options.threads = with_options.threads = std::max(1, available / 2);

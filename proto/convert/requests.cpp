@@ -4,12 +4,13 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <utility>
 
 #include "gridshell/convert.h"
 #include "gridshell/design/design_export.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell {
 namespace {
@@ -23,13 +24,23 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-/// The name of a field in the caller's vocabulary.
-std::string field(FieldNames names, const char* request_path, const char* flag) {
-  return names == FieldNames::Request ? request_path : flag;
-}
-
 std::string indexed(const std::string& name, long long index) {
   return name + "[" + std::to_string(index) + "]";
+}
+
+/// "mesh.faces[7]" -> "mesh.indices[21]", "mesh.vertices[2]" -> "mesh.positions[6]".
+std::string packed_field(const std::string& field) {
+  for (const auto& [element, packed] : {std::pair{"mesh.faces[", "mesh.indices["},
+                                        std::pair{"mesh.vertices[", "mesh.positions["}}) {
+    const std::string prefix = element;
+    if (field.rfind(prefix, 0) != 0 || field.back() != ']') continue;
+    const std::string number = field.substr(prefix.size(), field.size() - prefix.size() - 1);
+    long long index = 0;
+    const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), index);
+    if (ec != std::errc() || end != number.data() + number.size()) continue;
+    return packed + std::to_string(3 * index) + "]";
+  }
+  return field;
 }
 
 std::string shortest(double value) {
@@ -38,48 +49,25 @@ std::string shortest(double value) {
   return std::string(buffer, end);
 }
 
-// The kernel names the CLI flags it was written for ("--corners: ...", "--alpha ..."); API
-// callers see the request fields instead.
-std::string to_request_names(const std::string& message) {
-  static const std::pair<std::string, std::string> kFlags[] = {
-      {"--corners", "corners"},
-      {"--alpha", "options.alpha"},
-      {"--lamella-width", "options.lamella_width"},
-      {"--lamella-thickness", "options.lamella_thickness"},
-      {"--members-u", "options.members_u"},
-      {"--members-v", "options.members_v"}};
-  for (const auto& [flag, path] : kFlags)
-    if (message.rfind(flag, 0) == 0) return path + message.substr(flag.size());
-  return message;
-}
-
-template <class Function>
-auto with_field_names(FieldNames names, Function&& function) {
-  if (names == FieldNames::CommandLine) return function();
+GeodesicMethod any_method(const std::string& text, const std::string& field) {
   try {
-    return function();
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(to_request_names(e.what()));
-  } catch (const Infeasible& e) {
-    throw Infeasible(to_request_names(e.what()));
+    return parse_geodesic_method(text.empty() ? "fast" : text);
+  } catch (const Error& e) {
+    rethrow_within(e, field);
   }
 }
 
-GeodesicMethod exact_method(const std::string& text, const std::string& name, const char* what) {
-  GeodesicMethod method;
-  try {
-    method = parse_geodesic_method(text.empty() ? "fast" : text);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(name + ": " + e.what());
-  }
+GeodesicMethod exact_method(const std::string& text, const std::string& field, const char* what) {
+  const GeodesicMethod method = any_method(text, field);
   if (method == GeodesicMethod::Heat)
-    throw InvalidInput(name + ": " + what + " needs exact geodesics; use fast or cgal, not heat");
+    throw InvalidInput(field,
+                       std::string(what) + " needs exact geodesics; use fast or cgal, not heat");
   return method;
 }
 
-double eta_max_option(bool has, double value, const std::string& name, double fallback) {
+double eta_max_option(bool has, double value, const std::string& field, double fallback) {
   if (!has) return fallback;
-  if (!(value >= 1.0)) throw InvalidInput(name + ": must be >= 1 (it is a ratio of path lengths)");
+  if (!(value >= 1.0)) throw InvalidInput(field, "must be >= 1 (it is a ratio of path lengths)");
   return value;
 }
 
@@ -98,15 +86,15 @@ std::string corner_label(const v1::Corners& corners) {
 }
 
 /// The mesh vertex that sent vertex `v` became; InvalidInput naming `at` if there is none.
-int loaded_vertex(const LoadReport& load, int v, const std::string& at) {
+int loaded_vertex(const LoadReport& load, int v, const std::string& field) {
   const auto& map = load.vertex_of_file_vertex;
   if (v < 0 || v >= static_cast<int>(map.size()))
-    throw InvalidInput(at + ": vertex index " + std::to_string(v) +
-                       " is out of range (the mesh has " + std::to_string(map.size()) +
-                       " vertices, numbered from 0)");
+    throw InvalidInput(field, "vertex index " + std::to_string(v) +
+                                  " is out of range (the mesh has " + std::to_string(map.size()) +
+                                  " vertices, numbered from 0)");
   if (map[v] < 0)
-    throw InvalidInput(at + ": vertex " + std::to_string(v) +
-                       " was removed as an isolated vertex (no face uses it)");
+    throw InvalidInput(field, "vertex " + std::to_string(v) +
+                                  " was removed as an isolated vertex (no face uses it)");
   return map[v];
 }
 
@@ -120,76 +108,79 @@ int sent_vertex(const LoadReport& load, int v) {
 
 }  // namespace
 
-TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report, FieldNames names) {
+TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report) {
   const int positions = mesh.positions_size(), indices = mesh.indices_size();
-  if (positions == 0) throw InvalidInput("mesh.positions: empty: the mesh has no vertices");
+  if (positions == 0) throw InvalidInput("mesh.positions", "empty: the mesh has no vertices");
   if (positions % 3 != 0)
-    throw InvalidInput("mesh.positions: " + std::to_string(positions) +
-                       " numbers is not a multiple of 3 (x, y, z per vertex)");
-  if (indices == 0) throw InvalidInput("mesh.indices: empty: the mesh has no faces");
+    throw InvalidInput(
+        "mesh.positions",
+        std::to_string(positions) + " numbers is not a multiple of 3 (x, y, z per vertex)");
+  if (indices == 0) throw InvalidInput("mesh.indices", "empty: the mesh has no faces");
   if (indices % 3 != 0)
-    throw InvalidInput("mesh.indices: " + std::to_string(indices) +
-                       " numbers is not a multiple of 3 (three vertex indices per triangle)");
+    throw InvalidInput("mesh.indices",
+                       std::to_string(indices) +
+                           " numbers is not a multiple of 3 (three vertex indices per triangle)");
   const int vertex_count = positions / 3;
   std::vector<Vec3> vertices(vertex_count);
   for (int k = 0; k < positions; ++k) {
     const double value = mesh.positions(k);
     if (!std::isfinite(value))
-      throw InvalidInput(indexed("mesh.positions", k) + ": " +
-                         (std::isnan(value) ? "NaN" : "infinite") + " coordinate (" + "xyz"[k % 3] +
-                         " of vertex " + std::to_string(k / 3) + ")");
+      throw InvalidInput(indexed("mesh.positions", k),
+                         std::string(std::isnan(value) ? "NaN" : "infinite") + " coordinate (" +
+                             "xyz"[k % 3] + " of vertex " + std::to_string(k / 3) + ")");
     vertices[k / 3][k % 3] = value;
   }
   std::vector<Face> faces(indices / 3);
   for (int k = 0; k < indices; ++k) {
     const int index = mesh.indices(k);
     if (index < 0 || index >= vertex_count)
-      throw InvalidInput(indexed("mesh.indices", k) + ": vertex index " + std::to_string(index) +
-                         " is out of range (the mesh has " + std::to_string(vertex_count) +
-                         " vertices, numbered from 0)");
+      throw InvalidInput(indexed("mesh.indices", k), "vertex index " + std::to_string(index) +
+                                                         " is out of range (the mesh has " +
+                                                         std::to_string(vertex_count) +
+                                                         " vertices, numbered from 0)");
     faces[k / 3][k % 3] = index;
   }
-  return mesh_from_arrays("mesh", vertices, faces, report);
+  try {
+    return mesh_from_arrays("mesh", vertices, faces, report);
+  } catch (const InvalidInput& e) {
+    // The loader names faces and vertices; the request has them packed: face k is
+    // mesh.indices[3k..3k+2], vertex k is mesh.positions[3k..3k+2].
+    throw InvalidInput(packed_field(e.field()), e.message());
+  }
 }
 
 v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name) {
   v1::Mesh out;
   out.set_name(name);
   out.mutable_positions()->Reserve(3 * mesh.vertex_count());
-  for (const Vec3& p : mesh.vertices)
+  for (const Vec3& p : mesh.vertices())
     for (int k = 0; k < 3; ++k) out.add_positions(p[k]);
   out.mutable_indices()->Reserve(3 * mesh.face_count());
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     for (int v : f) out.add_indices(v);
   return out;
 }
 
-CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load, FieldNames names) {
-  const std::string name = field(names, "corners", "--corners");
-  const std::string vertices_name = field(names, "corners.vertices", "--corners");
-  const std::string points_name = field(names, "corners.points", "--corners");
+CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load) {
   CornerSpec spec;
   const bool vertices = corners.vertices_size() > 0, points = corners.points_size() > 0;
-  if (vertices && points) throw InvalidInput(name + ": give either vertices or points, not both");
+  if (vertices && points) throw InvalidInput("corners", "give either vertices or points, not both");
   if (vertices) {
     if (corners.vertices_size() != 4)
-      throw InvalidInput(vertices_name + ": expected 4 vertex indices, got " +
-                         std::to_string(corners.vertices_size()));
+      throw InvalidInput("corners.vertices", "expected 4 vertex indices, got " +
+                                                 std::to_string(corners.vertices_size()));
     spec.kind = CornerSpec::Kind::Vertices;
     for (int i = 0; i < 4; ++i)
-      spec.vertices[i] =
-          loaded_vertex(load, corners.vertices(i),
-                        names == FieldNames::Request ? indexed(vertices_name, i) : name);
+      spec.vertices[i] = loaded_vertex(load, corners.vertices(i), indexed("corners.vertices", i));
   } else if (points) {
     if (corners.points_size() != 12)
-      throw InvalidInput(points_name + ": expected 4 points (12 numbers x, y, z), got " +
-                         std::to_string(corners.points_size()) + " numbers");
+      throw InvalidInput("corners.points", "expected 4 points (12 numbers x, y, z), got " +
+                                               std::to_string(corners.points_size()) + " numbers");
     spec.kind = CornerSpec::Kind::Points;
     for (int k = 0; k < 12; ++k) {
       const double value = corners.points(k);
       if (!std::isfinite(value))
-        throw InvalidInput((names == FieldNames::Request ? indexed(points_name, k) : name) +
-                           ": not a finite number");
+        throw InvalidInput(indexed("corners.points", k), "not a finite number");
       spec.points[k / 3][k % 3] = value;
     }
   } else {
@@ -209,24 +200,50 @@ v1::Corners to_proto(const CornerSpec& spec, const std::string& label) {
   return out;
 }
 
+void parse_alpha(const std::string& text, DesignOptions& options) {
+  if (text == "min") {
+    options.alpha = DesignOptions::Alpha::Min;
+    return;
+  }
+  if (text == "max") {
+    options.alpha = DesignOptions::Alpha::Max;
+    return;
+  }
+  std::string number = text;
+  double factor = 1.0;
+  if (number.size() > 3 && number.substr(number.size() - 3) == "deg") {
+    number = number.substr(0, number.size() - 3);
+    factor = std::numbers::pi / 180;
+  }
+  double value = 0;
+  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), value);
+  if (number.empty() || ec != std::errc() || end != number.data() + number.size() ||
+      !std::isfinite(value))
+    throw InvalidInput("options.alpha",
+                       "expected min, max, an angle in radians or NNdeg, got '" + text + "'");
+  value *= factor;
+  if (!(value > 0 && value < std::numbers::pi))
+    throw InvalidInput("options.alpha", "the planar corner angle must be between 0 and pi radians");
+  options.alpha = DesignOptions::Alpha::Value;
+  options.alpha_value = value;
+}
+
 // Patch ------------------------------------------------------------------------------------------
 
-PatchInputs prepare_patch(const v1::PatchRequest& request, FieldNames names) {
+PatchInputs prepare_patch(const v1::PatchRequest& request) {
   PatchInputs in;
-  in.mesh = to_mesh(request.mesh(), &in.load, names);
-  in.corners = to_corner_spec(request.corners(), in.load, names);
+  in.mesh = to_mesh(request.mesh(), &in.load);
+  in.corners = to_corner_spec(request.corners(), in.load);
   const v1::PatchRequest::Options& o = request.options();
-  in.options.cut.method = in.options.coverability.method = exact_method(
-      o.geodesic_method(), field(names, "options.geodesic_method", "--method"), "the patch");
-  in.options.coverability.eta_max =
-      eta_max_option(o.has_eta_max(), o.eta_max(), field(names, "options.eta_max", "--eta-max"),
-                     in.options.coverability.eta_max);
+  in.options.geodesic.method =
+      exact_method(o.geodesic_method(), "options.geodesic_method", "the patch");
+  in.options.coverability.eta_max = eta_max_option(o.has_eta_max(), o.eta_max(), "options.eta_max",
+                                                   in.options.coverability.eta_max);
   if (o.has_max_smoothing_iterations()) {
     const int n = o.max_smoothing_iterations();
     if (n < 0 || n > kMaxSmoothingIterations)
-      throw InvalidInput(
-          field(names, "options.max_smoothing_iterations", "--max-smoothing-iterations") +
-          ": must be between 0 and " + std::to_string(kMaxSmoothingIterations));
+      throw InvalidInput("options.max_smoothing_iterations",
+                         "must be between 0 and " + std::to_string(kMaxSmoothingIterations));
     in.options.coverability.max_smoothing_iterations = n;
   }
   in.options.smooth = !o.no_smoothing();
@@ -235,9 +252,9 @@ PatchInputs prepare_patch(const v1::PatchRequest& request, FieldNames names) {
 
 v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progress,
                           const RunSettings& settings) {
-  return with_field_names(settings.names, [&] {
+  {
     const auto start = std::chrono::steady_clock::now();
-    PatchInputs in = prepare_patch(request, settings.names);
+    PatchInputs in = prepare_patch(request);
     in.options.coverability.threads = settings.threads;
     const TargetPatch result = make_target_patch(in.mesh, in.corners, in.options, progress);
 
@@ -250,7 +267,7 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
     for (int i = 0; i < 4; ++i) {
       v1::Corner* corner = report.add_corners();
       const int pv = result.patch.corners[i];
-      const Vec3& p = result.patch.mesh.vertices[pv];
+      const Vec3& p = result.patch.mesh.vertices()[pv];
       for (int k = 0; k < 3; ++k) corner->add_position(p[k]);
       corner->set_patch_vertex(pv);
       // Indices as sent, so the caller can pass them back as corners.
@@ -270,7 +287,7 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
     report.set_eta_max(in.options.coverability.eta_max);
     report.set_smoothing_iterations(result.smoothing.iterations);
     report.set_max_smoothing_displacement(result.smoothing.max_displacement);
-    report.set_geodesic_method(to_string(in.options.cut.method));
+    report.set_geodesic_method(to_string(in.options.geodesic.method));
     for (const std::string& w : request.mesh().warnings()) report.add_warnings(w);
     for (const std::string& w : in.load.warnings) report.add_warnings(w);
     if (result.patch.corners_reversed)
@@ -287,50 +304,46 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
     *out.mutable_patch() = to_proto(result.patch.mesh, "patch");
     report.set_seconds(seconds_since(start));
     return out;
-  });
+  }
 }
 
 // Design -----------------------------------------------------------------------------------------
 
-DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names) {
+DesignInputs prepare_design(const v1::DesignRequest& request) {
   DesignInputs in;
-  in.mesh = to_mesh(request.mesh(), &in.load, names);
-  in.corners = to_corner_spec(request.corners(), in.load, names);
+  in.mesh = to_mesh(request.mesh(), &in.load);
+  in.corners = to_corner_spec(request.corners(), in.load);
   const v1::DesignRequest::Options& o = request.options();
   DesignOptions& options = in.options;
-  options.patch.cut.method = options.patch.coverability.method = exact_method(
-      o.geodesic_method(), field(names, "options.geodesic_method", "--method"), "the design");
-  options.patch.coverability.eta_max =
-      eta_max_option(o.has_eta_max(), o.eta_max(), field(names, "options.eta_max", "--eta-max"),
-                     options.patch.coverability.eta_max);
+  options.patch.geodesic.method =
+      exact_method(o.geodesic_method(), "options.geodesic_method", "the design");
+  options.patch.coverability.eta_max = eta_max_option(
+      o.has_eta_max(), o.eta_max(), "options.eta_max", options.patch.coverability.eta_max);
   const std::string alpha = o.has_alpha() ? o.alpha() : "min";
-  parse_alpha(alpha, options);  // names --alpha; with_field_names translates
-  for (const auto& [count, request_path, flag] :
-       {std::tuple{o.members_u(), "options.members_u", "--members-u"},
-        std::tuple{o.members_v(), "options.members_v", "--members-v"}})
+  parse_alpha(alpha, options);
+  for (const auto& [count, field] : {std::pair{o.members_u(), "options.members_u"},
+                                     std::pair{o.members_v(), "options.members_v"}})
     if (count < 0 || count > kMaxMembers)
-      throw InvalidInput(field(names, request_path, flag) + ": must be between 0 (automatic) and " +
-                         std::to_string(kMaxMembers));
+      throw InvalidInput(field, "must be between 0 (automatic) and " + std::to_string(kMaxMembers));
   options.members_g = o.members_u();
   options.members_h = o.members_v();
   if (!(o.lamella_width() >= 0) || !std::isfinite(o.lamella_width()))
-    throw InvalidInput(field(names, "options.lamella_width", "--lamella-width") +
-                       ": must be positive (or 0 for 1% of the longest side)");
+    throw InvalidInput("options.lamella_width",
+                       "must be positive (or 0 for 1% of the longest side)");
   if (!(o.lamella_thickness() >= 0) || !std::isfinite(o.lamella_thickness()))
-    throw InvalidInput(field(names, "options.lamella_thickness", "--lamella-thickness") +
-                       ": must be positive (or 0 for a tenth of the width)");
+    throw InvalidInput("options.lamella_thickness",
+                       "must be positive (or 0 for a tenth of the width)");
   options.members.lamella_width = o.lamella_width();
   options.members.lamella_thickness = o.lamella_thickness();
   if (o.interior_anchors() < 0 || o.interior_anchors() > kMaxInteriorAnchors)
-    throw InvalidInput(field(names, "options.interior_anchors", "--interior-anchors") +
-                       ": must be between 0 (boundary anchors only) and " +
-                       std::to_string(kMaxInteriorAnchors));
+    throw InvalidInput(
+        "options.interior_anchors",
+        "must be between 0 (boundary anchors only) and " + std::to_string(kMaxInteriorAnchors));
   options.anchors.interior = o.interior_anchors();
   if (o.has_resolution()) {
     const int r = o.resolution();
     if (r != 0 && (r < 8 || r > 1000))
-      throw InvalidInput(field(names, "options.resolution", "--resolution") +
-                         ": must be 0 (adaptive) or 8..1000");
+      throw InvalidInput("options.resolution", "must be 0 (adaptive) or 8..1000");
     options.maps.resolution = r;
   }
 
@@ -346,7 +359,7 @@ DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names) 
   record.set_max_spacing(options.members.max_spacing);
   record.set_min_members(options.members.min_members);
   record.set_max_members(options.members.max_members);
-  record.set_geodesic_method(to_string(options.patch.cut.method));
+  record.set_geodesic_method(to_string(options.patch.geodesic.method));
   record.set_length_tolerance(options.grid.length_tolerance);
   record.set_interior_anchors(options.anchors.interior);
   return in;
@@ -354,9 +367,9 @@ DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names) 
 
 v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& progress,
                             const RunSettings& settings) {
-  return with_field_names(settings.names, [&] {
+  {
     const auto start = std::chrono::steady_clock::now();
-    DesignInputs in = prepare_design(request, settings.names);
+    DesignInputs in = prepare_design(request);
     in.options.maps.threads = in.options.grid.threads = settings.threads;
     in.options.patch.coverability.threads = settings.threads;
     const Design design = make_design(in.mesh, in.corners, in.options, progress);
@@ -377,7 +390,7 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     add_view("maps.svg", maps_svg(design));
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
     return out;
-  });
+  }
 }
 
 }  // namespace gridshell
@@ -412,37 +425,28 @@ TimedField timed_field(const TriangleMesh& mesh, GeodesicMethod method, const Su
   return out;
 }
 
-GeodesicMethod any_method(const std::string& text, const std::string& name) {
-  try {
-    return parse_geodesic_method(text.empty() ? "fast" : text);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(name + ": " + e.what());
-  }
-}
-
 }  // namespace
 
-GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request, FieldNames names) {
-  return with_field_names(names, [&] {
+GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request) {
+  {
     GeodesicInputs in;
     LoadReport load;
-    in.mesh = to_mesh(request.mesh(), &load, names);
-    in.source = loaded_vertex(load, request.source(), field(names, "source", "--source"));
-    in.method = any_method(request.method(), field(names, "method", "--method"));
-    if (!request.compare().empty())
-      in.reference = any_method(request.compare(), field(names, "compare", "--compare"));
+    in.mesh = to_mesh(request.mesh(), &load);
+    in.source = loaded_vertex(load, request.source(), "source");
+    in.method = any_method(request.method(), "method");
+    if (!request.compare().empty()) in.reference = any_method(request.compare(), "compare");
     in.repeat = request.repeat() == 0 ? 1 : request.repeat();
     if (in.repeat < 1 || in.repeat > kMaxRepeat)
-      throw InvalidInput(field(names, "repeat", "--repeat") + ": must be between 1 and " +
-                         std::to_string(kMaxRepeat) + " (0 = 1)");
+      throw InvalidInput("repeat",
+                         "must be between 1 and " + std::to_string(kMaxRepeat) + " (0 = 1)");
     return in;
-  });
+  }
 }
 
 v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progress& progress,
                                 const RunSettings& settings) {
-  return with_field_names(settings.names, [&] {
-    const GeodesicInputs in = prepare_geodesic(request, settings.names);
+  {
+    const GeodesicInputs in = prepare_geodesic(request);
     const TriangleMesh& mesh = in.mesh;
     const SurfacePoint source = SurfacePoint::at_vertex(mesh, in.source);
     const TimedField main = timed_field(mesh, in.method, source, in.repeat, progress);
@@ -478,7 +482,7 @@ v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progre
     if (request.distances())
       out.mutable_distances()->Add(main.distances.begin(), main.distances.end());
     return out;
-  });
+  }
 }
 
 }  // namespace gridshell

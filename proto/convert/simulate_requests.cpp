@@ -9,26 +9,6 @@
 namespace gridshell {
 namespace {
 
-/// resolve_simulation_options names bare fields ("notches: ..."); API callers see the request
-/// path, CLI users the flag.
-std::string name_option(const std::string& message, FieldNames names, const std::string& prefix) {
-  if (names == FieldNames::Request) return prefix + message;
-  static const std::pair<std::string, std::string> kFlags[] = {
-      {"notches", "--notches"},
-      {"solver", "--solver"},
-      {"material", "--material"},
-      {"young_modulus", "--young"},
-      {"shear_modulus", "--shear"},
-      {"friction_mu", "--mu"},
-      {"edges_per_interval", "--edges-per-interval"},
-      {"max_iterations", "--max-iterations"},
-      {"unit_in_meters", "--unit"},
-      {"unit", "--unit"}};
-  for (const auto& [field, flag] : kFlags)
-    if (message.rfind(field + ":", 0) == 0) return flag + message.substr(field.size());
-  return message;
-}
-
 v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOptions& options,
                             const std::string& name, const Progress& progress, int threads) {
   DeploymentJob job = run_deployment_job(design, options, name, progress, threads);
@@ -50,18 +30,17 @@ v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOption
 }  // namespace
 
 v1::SimulationOptions prepare_simulation_options(const v1::SimulationOptions& options,
-                                                 FieldNames names, const std::string& prefix) {
+                                                 const std::string& prefix) {
   try {
     return resolve_simulation_options(options);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(name_option(e.what(), names, prefix));
+  } catch (const Error& e) {
+    rethrow_within(e, prefix);
   }
 }
 
 v1::SimulateResult run_simulate(const v1::SimulateRequest& request, const Progress& progress,
                                 const RunSettings& settings) {
-  const v1::SimulationOptions options =
-      prepare_simulation_options(request.options(), settings.names);
+  const v1::SimulationOptions options = prepare_simulation_options(request.options(), "options");
   const std::string name = request.design_name().empty() ? "design.json" : request.design_name();
   return simulate(request.design(), options, name, progress, settings.threads);
 }
@@ -70,13 +49,12 @@ v1::RunResult run_run(const v1::RunRequest& request, const Progress& progress,
                       const RunSettings& settings) {
   // Check the simulation options before the (longer) design runs.
   const v1::SimulationOptions options =
-      prepare_simulation_options(request.simulation(), settings.names, "simulation.");
+      prepare_simulation_options(request.simulation(), "simulation");
   v1::RunResult out;
   try {
     *out.mutable_design() = run_design(request.design(), progress, settings);
-  } catch (const InvalidInput& e) {
-    if (settings.names == FieldNames::CommandLine) throw;
-    throw InvalidInput(std::string("design.") + e.what());  // the DesignRequest inside
+  } catch (const Error& e) {
+    rethrow_within(e, "design");  // the DesignRequest inside
   }
   *out.mutable_simulation() =
       simulate(out.design().design(), options, "design.json", progress, settings.threads);

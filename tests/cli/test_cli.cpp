@@ -42,7 +42,7 @@ TEST(CliPatch, WritesPatchObjAndJsonWithAllFields) {
     double length = 0;
     for (size_t k = 0; k + 1 < side.size(); ++k)
       length +=
-          (patch.vertices[side[k + 1].get<int>()] - patch.vertices[side[k].get<int>()]).norm();
+          (patch.vertices()[side[k + 1].get<int>()] - patch.vertices()[side[k].get<int>()]).norm();
     EXPECT_NEAR(length, report["boundary_lengths"][i].get<double>(), 1e-6 * length);
   }
 }
@@ -69,7 +69,7 @@ TEST(CliPatch, FarCornerPointIsInvalidInput) {
       run_cli("patch example:plane --quiet --corners '1e200,0,0;10,0,0;10,10,0;0,10,0' --out " +
               testing::temp_dir());
   EXPECT_EQ(result.exit_code, 2) << result.err;
-  EXPECT_NE(result.err.find("--corners: point 1"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("--corners (corner 1)"), std::string::npos) << result.err;
 }
 
 // An unusable --out is the user's input (exit 2) and found before any work is done.

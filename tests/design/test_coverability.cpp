@@ -39,7 +39,7 @@ TEST(GaussianCurvature, SphereIsOneOverRSquared) {
                 R * std::cos(theta) * std::cos(phi));
   });
   const std::vector<double> k = gaussian_curvature(mesh);
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   for (int v = 0; v < mesh.vertex_count(); ++v)
     if (!topology.is_boundary_vertex[v]) {
       EXPECT_NEAR(k[v] * R * R, 1.0, 0.05) << v;
@@ -60,7 +60,7 @@ TEST(GaussianCurvature, SaddleIsNegative) {
   const TriangleMesh hypar = grid_mesh(16, 16, [](double u, double v) {
     return Vec3(u - 0.5, v - 0.5, (u - 0.5) * (u - 0.5) - (v - 0.5) * (v - 0.5));
   });
-  const MeshTopology topology = build_topology(hypar);
+  const MeshTopology& topology = hypar.topology();
   const std::vector<double> k = gaussian_curvature(hypar);
   for (int v = 0; v < hypar.vertex_count(); ++v)
     if (!topology.is_boundary_vertex[v]) {
@@ -103,7 +103,7 @@ TEST(Coverability, LongestMemberDistanceDoesNotDependOnThreads) {
   for (int threads : {1, 2, 5}) {
     CoverabilityOptions options;
     options.threads = threads;
-    longest.push_back(analyze_coverability(patch, options).longest_member_distance);
+    longest.push_back(analyze_coverability(patch, {}, options).longest_member_distance);
   }
   EXPECT_EQ(longest[0], longest[1]);
   EXPECT_EQ(longest[0], longest[2]);
@@ -129,17 +129,17 @@ TEST(Coverability, SharpBumpHasAGapThatSmoothingCloses) {
   EXPECT_FALSE(report.injectivity_ok);
   EXPECT_GT(report.gap.eta, 1.0015);
   // The peak is the top of the bump; q1 is on the side opposite p1.
-  EXPECT_LT((patch.mesh.vertices[report.gap.peak] - Vec3(5, 5, 3)).head<2>().norm(), 1.0);
-  const std::vector<Vec3> before = patch.mesh.vertices;
+  EXPECT_LT((patch.mesh.vertices()[report.gap.peak] - Vec3(5, 5, 3)).head<2>().norm(), 1.0);
+  const std::vector<Vec3> before = patch.mesh.vertices();
   const SmoothingResult result = smooth_until_coverable(patch);
   EXPECT_NEAR(result.eta_before, report.gap.eta, 1e-12);
   EXPECT_GT(result.iterations, 0);
   EXPECT_LE(result.eta_after, 1.0015);
   EXPECT_GT(result.max_displacement, 0.0);
-  const MeshTopology topology = build_topology(patch.mesh);
+  const MeshTopology& topology = patch.mesh.topology();
   for (int v = 0; v < patch.mesh.vertex_count(); ++v)
     if (topology.is_boundary_vertex[v]) {
-      EXPECT_EQ(patch.mesh.vertices[v], before[v]) << v;
+      EXPECT_EQ(patch.mesh.vertices()[v], before[v]) << v;
     }
 }
 
@@ -149,7 +149,7 @@ TEST(Coverability, SmoothingCapIsInfeasible) {
   CoverabilityOptions options;
   options.max_smoothing_iterations = 1;
   try {
-    smooth_until_coverable(patch, options);
+    smooth_until_coverable(patch, {}, options);
     FAIL() << "cap not enforced";
   } catch (const Infeasible& e) {
     EXPECT_NE(std::string(e.what()).find("eta"), std::string::npos) << e.what();
@@ -159,26 +159,26 @@ TEST(Coverability, SmoothingCapIsInfeasible) {
 TEST(LaplacianSmoothing, KeepsAPlaneFlatAndFixedVerticesFixed) {
   TriangleMesh mesh = grid_mesh(
       10, 10, [](double u, double v) { return Vec3(10 * u + 0.3 * std::sin(9 * v), 10 * v, 0); });
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   std::vector<char> fixed(topology.is_boundary_vertex.begin(), topology.is_boundary_vertex.end());
-  const std::vector<Vec3> before = mesh.vertices;
+  const std::vector<Vec3> before = mesh.vertices();
   const double moved = laplacian_smoothing_step(mesh, fixed, 0.5);
   EXPECT_GT(moved, 0.0);
   for (int v = 0; v < mesh.vertex_count(); ++v) {
-    EXPECT_NEAR(mesh.vertices[v].z(), 0.0, 1e-12);
+    EXPECT_NEAR(mesh.vertices()[v].z(), 0.0, 1e-12);
     if (fixed[v]) {
-      EXPECT_EQ(mesh.vertices[v], before[v]);
+      EXPECT_EQ(mesh.vertices()[v], before[v]);
     }
   }
 }
 
 TEST(LaplacianSmoothing, FlattensABump) {
   TriangleMesh mesh = sharp_bump(20, 3.0);
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   std::vector<char> fixed(topology.is_boundary_vertex.begin(), topology.is_boundary_vertex.end());
   auto height = [&] {
     double h = 0;
-    for (const Vec3& p : mesh.vertices) h = std::max(h, p.z());
+    for (const Vec3& p : mesh.vertices()) h = std::max(h, p.z());
     return h;
   };
   const double h0 = height();

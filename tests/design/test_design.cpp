@@ -7,8 +7,8 @@
 #include <set>
 
 #include "gridshell/design/design.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "support.h"
 
@@ -157,10 +157,11 @@ TEST(Design, ExplicitMemberCountsAndAlphaChoice) {
   EXPECT_EQ(min.grid.g.size(), 7u);
   EXPECT_EQ(min.grid.h.size(), 9u);
   EXPECT_DOUBLE_EQ(min.alpha_bar, min.alpha_range.min);
-  parse_alpha("max", options);
+  options.alpha = DesignOptions::Alpha::Max;
   const Design max = make_design(example.mesh, corners, options);
   EXPECT_DOUBLE_EQ(max.alpha_bar, max.alpha_range.max);
-  parse_alpha(std::to_string(0.5 * (min.alpha_range.min + min.alpha_range.max)), options);
+  options.alpha = DesignOptions::Alpha::Value;
+  options.alpha_value = 0.5 * (min.alpha_range.min + min.alpha_range.max);
   expect_grid_criteria(make_design(example.mesh, corners, options), "double-vault mid alpha");
   options.alpha_value = min.alpha_range.max + 0.1;
   EXPECT_THROW(make_design(example.mesh, corners, options), Infeasible);
@@ -242,25 +243,6 @@ TEST(Design, InteriorAnchorsAtCrownsAndNoneOnASaddle) {
   {
     const Design d = design("hypar");
     EXPECT_TRUE(inner(place_anchors(d.target.patch, d.grid, options)).empty());
-  }
-}
-
-TEST(ParseAlpha, AcceptsMinMaxRadiansAndDegrees) {
-  DesignOptions options;
-  parse_alpha("max", options);
-  EXPECT_EQ(options.alpha, DesignOptions::Alpha::Max);
-  parse_alpha("90deg", options);
-  EXPECT_EQ(options.alpha, DesignOptions::Alpha::Value);
-  EXPECT_NEAR(options.alpha_value, kPi / 2, 1e-15);
-  parse_alpha("1.25", options);
-  EXPECT_DOUBLE_EQ(options.alpha_value, 1.25);
-  for (const char* bad : {"", "abc", "4", "-1", "0", "200deg", "nan"}) {
-    try {
-      parse_alpha(bad, options);
-      ADD_FAILURE() << "accepted '" << bad << "'";
-    } catch (const InvalidInput& e) {
-      EXPECT_NE(std::string(e.what()).find("--alpha"), std::string::npos);
-    }
   }
 }
 

@@ -13,11 +13,12 @@
 #include <string>
 
 #include "gridshell/design/distance_map.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/example_surfaces.h"
-#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/design/planar_patch.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/surface_distance.h"
 #include "support.h"
 
 namespace gridshell {
@@ -54,7 +55,7 @@ const Patch& bump_patch() {
   return patch;
 }
 
-Vec3 corner(const Patch& patch, int i) { return patch.mesh.vertices[patch.corners[i]]; }
+Vec3 corner(const Patch& patch, int i) { return patch.mesh.vertices()[patch.corners[i]]; }
 
 double relative_error(double value, double expected) {
   return std::abs(value - expected) / std::max(1.0, std::abs(expected));
@@ -90,10 +91,10 @@ TEST(PointOnChain, ArcLengthParameterAndExactEdgePoints) {
       const SurfacePoint p = point_on_chain(mesh, chain, t);
       // Walk the chain to arc length t * L.
       double remaining = t * length;
-      Vec3 expected = mesh.vertices[chain.back()];
+      Vec3 expected = mesh.vertices()[chain.back()];
       int a = -1, b = -1;
       for (size_t k = 0; k + 1 < chain.size(); ++k) {
-        const Vec3 &p0 = mesh.vertices[chain[k]], &p1 = mesh.vertices[chain[k + 1]];
+        const Vec3 &p0 = mesh.vertices()[chain[k]], &p1 = mesh.vertices()[chain[k + 1]];
         const double segment = (p1 - p0).norm();
         if (remaining <= segment) {
           expected = p0 + (remaining / segment) * (p1 - p0);
@@ -106,7 +107,7 @@ TEST(PointOnChain, ArcLengthParameterAndExactEdgePoints) {
       EXPECT_LT((p.position(mesh) - expected).norm(), 1e-12 * length) << "side " << side;
       // On an edge of its face: the opposite vertex has weight exactly 0, the edge is ab.
       if (p.vertex(mesh) < 0) {
-        const Face& f = mesh.faces[p.face];
+        const Face& f = mesh.faces()[p.face];
         int zeros = 0;
         for (int k = 0; k < 3; ++k) {
           if (p.barycentric[k] == 0.0) {
@@ -276,9 +277,8 @@ TEST(DistanceMaps, ErrorsFromWorkersAndCallbackPropagate) {
   const Patch& patch = bump_patch();
   // A solver built on another (tiny) mesh: the sources' faces are out of its range, so the solves
   // on the worker threads throw InvalidInput, which must reach the caller.
-  TriangleMesh tiny;
-  tiny.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)};
-  tiny.faces = {{0, 1, 2}, {1, 3, 2}};
+  const TriangleMesh tiny({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)},
+                          {{0, 1, 2}, {1, 3, 2}});
   const GeodesicSolver wrong(tiny);
   for (int threads : {1, 4}) {
     EXPECT_THROW(compute_distance_maps(patch, wrong, {.resolution = 20, .threads = threads}),

@@ -8,12 +8,13 @@
 #include <numbers>
 
 #include "gridshell/design/cladding.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/example_surfaces.h"
-#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/design/members.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/design/target_patch.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/surface_distance.h"
 #include "support.h"
 
 namespace gridshell {
@@ -326,39 +327,55 @@ void expect_invalid(const MemberPlacementOptions& o, const std::string& name,
                   setup.planar, o);
     ADD_FAILURE() << "accepted; expected an error naming " << name;
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    EXPECT_EQ(e.field(), name) << e.what();
   }
 }
 
 TEST(PlaceMembers, InvalidOptionsNameTheOption) {
   MemberPlacementOptions o;
-  o.lamella_width = 0;
-  expect_invalid(o, "--lamella-width");
+  o.lamella_width = -1;
+  expect_invalid(o, "options.lamella_width");
   o = {};
   o.lamella_width = std::nan("");
-  expect_invalid(o, "--lamella-width");
+  expect_invalid(o, "options.lamella_width");
   o = {};
   o.lamella_thickness = -1;
-  expect_invalid(o, "--lamella-thickness");
+  expect_invalid(o, "options.lamella_thickness");
   o = {};
   o.max_spacing = 0;
-  expect_invalid(o, "max_spacing");
+  expect_invalid(o, "options.max_spacing");
   o.max_spacing = 1.5;
-  expect_invalid(o, "max_spacing");
+  expect_invalid(o, "options.max_spacing");
   o = {};
   o.min_members = -1;
-  expect_invalid(o, "min_members");
+  expect_invalid(o, "options.min_members");
   o = {};
   o.min_members = 5;
   o.max_members = 3;
-  expect_invalid(o, "max_members");
+  expect_invalid(o, "options.max_members");
   o = {};
   o.count = -2;
-  expect_invalid(o, "--members-u", Family::G);
-  expect_invalid(o, "--members-v", Family::H);
+  expect_invalid(o, "options.members_u", Family::G);
+  expect_invalid(o, "options.members_v", Family::H);
   o = {};
   o.clearance = -0.1;
-  expect_invalid(o, "clearance");
+  expect_invalid(o, "options.clearance");
+}
+
+TEST(LamellaSize, ZeroMeansOnePercentOfTheLongestSideAndATenthOfTheWidth) {
+  const FlatSetup setup = square_setup();
+  const std::array<double, 4> sides = side_lengths(setup.patch);
+  const double longest = *std::max_element(sides.begin(), sides.end());
+  MemberPlacementOptions o;  // both 0 by default: automatic
+  LamellaSize size = lamella_size(setup.patch, o);
+  EXPECT_DOUBLE_EQ(size.width, 0.01 * longest);
+  EXPECT_DOUBLE_EQ(size.thickness, 0.001 * longest);
+  o.lamella_width = 0.7;
+  size = lamella_size(setup.patch, o);
+  EXPECT_DOUBLE_EQ(size.width, 0.7);
+  EXPECT_DOUBLE_EQ(size.thickness, 0.07);
+  o.lamella_thickness = 0.05;
+  EXPECT_DOUBLE_EQ(lamella_size(setup.patch, o).thickness, 0.05);
 }
 
 TEST(PlaceMembers, InvalidCladdingIsRejected) {

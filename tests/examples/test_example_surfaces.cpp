@@ -11,8 +11,8 @@
 #include <numbers>
 #include <set>
 
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 
 namespace gridshell {
@@ -48,28 +48,28 @@ constexpr double kMinAngleDegrees = 15.0;
 constexpr double kMinNormalZ = 0.02;
 
 Vec3 face_normal(const TriangleMesh& mesh, const Face& f) {
-  const Vec3& a = mesh.vertices[f[0]];
-  return (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a);
+  const Vec3& a = mesh.vertices()[f[0]];
+  return (mesh.vertices()[f[1]] - a).cross(mesh.vertices()[f[2]] - a);
 }
 
 /// Interior angle of face f at its local corner k.
 double corner_angle(const TriangleMesh& mesh, const Face& f, int k) {
-  const Vec3& p = mesh.vertices[f[k]];
-  const Vec3 e1 = mesh.vertices[f[(k + 1) % 3]] - p, e2 = mesh.vertices[f[(k + 2) % 3]] - p;
+  const Vec3& p = mesh.vertices()[f[k]];
+  const Vec3 e1 = mesh.vertices()[f[(k + 1) % 3]] - p, e2 = mesh.vertices()[f[(k + 2) % 3]] - p;
   return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
 }
 
 /// Sum of the face angles at every vertex.
 std::vector<double> angle_sums(const TriangleMesh& mesh) {
   std::vector<double> sums(mesh.vertex_count(), 0.0);
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     for (int k = 0; k < 3; ++k) sums[f[k]] += corner_angle(mesh, f, k);
   return sums;
 }
 
 double min_angle_degrees(const TriangleMesh& mesh) {
   double smallest = kPi;
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     for (int k = 0; k < 3; ++k) smallest = std::min(smallest, corner_angle(mesh, f, k));
   return smallest * 180.0 / kPi;
 }
@@ -82,23 +82,23 @@ void expect_valid_disk(const ExampleSurface& example, double min_angle_degrees_b
   ASSERT_GT(mesh.face_count(), 8);
 
   // Manifold, consistently oriented, a single boundary loop (a disk: V - E + F = 1).
-  const TopologyProblem problem = check_manifold(mesh);
+  const TopologyProblem problem = check_manifold(mesh.vertex_count(), mesh.faces());
   ASSERT_EQ(problem.kind, TopologyProblem::Kind::None) << problem.message();
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   ASSERT_EQ(topology.boundary_loops.size(), 1u);
   std::set<std::pair<int, int>> edges;
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     for (int k = 0; k < 3; ++k)
       edges.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
   EXPECT_EQ(mesh.vertex_count() - static_cast<int>(edges.size()) + mesh.face_count(), 1);
   std::vector<char> used(mesh.vertex_count(), 0);
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     for (int v : f) used[v] = 1;
   EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0) << "unreferenced vertices";
 
   // Orientation: every normal points up (all examples are height fields).
   double lowest_normal_z = 1.0;
-  for (const Face& f : mesh.faces) {
+  for (const Face& f : mesh.faces()) {
     const Vec3 n = face_normal(mesh, f);
     ASSERT_GT(n.norm(), 0.0);
     lowest_normal_z = std::min(lowest_normal_z, n.normalized().z());
@@ -186,8 +186,8 @@ TEST(ExampleSurfaces, ExamplesAreCentredOnTheGround) {
   for (const std::string& name : example_names()) {
     SCOPED_TRACE(name);
     const TriangleMesh mesh = make_example(name).mesh;
-    Vec3 lo = mesh.vertices.front(), hi = lo;
-    for (const Vec3& p : mesh.vertices) {
+    Vec3 lo = mesh.vertices().front(), hi = lo;
+    for (const Vec3& p : mesh.vertices()) {
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
     }
@@ -205,9 +205,9 @@ TEST(ExampleSurfaces, DiagonalsAlternate) {
     // Count edges whose xy direction lies in each open quadrant pair (slope > 0 or < 0) and
     // is clearly not axis-aligned; both kinds must be common.
     int rising = 0, falling = 0;
-    for (const Face& f : mesh.faces) {
+    for (const Face& f : mesh.faces()) {
       for (int k = 0; k < 3; ++k) {
-        const Vec3 d = mesh.vertices[f[(k + 1) % 3]] - mesh.vertices[f[k]];
+        const Vec3 d = mesh.vertices()[f[(k + 1) % 3]] - mesh.vertices()[f[k]];
         const double slope = d.x() * d.y() / (d.head<2>().squaredNorm() + 1e-300);
         if (slope > 0.2) ++rising;
         if (slope < -0.2) ++falling;
@@ -220,7 +220,7 @@ TEST(ExampleSurfaces, DiagonalsAlternate) {
 
 /// Angle defect 2 pi - (sum of face angles) at every interior vertex.
 std::vector<double> interior_defects(const TriangleMesh& mesh) {
-  const MeshTopology topology = build_topology(mesh);
+  const MeshTopology& topology = mesh.topology();
   const std::vector<double> sums = angle_sums(mesh);
   std::vector<double> defects;
   for (int v = 0; v < mesh.vertex_count(); ++v)
@@ -253,10 +253,10 @@ TEST(ExampleSurfaces, SphereIsPositivelyCurvedEverywhere) {
   // Discrete Gauss-Bonnet: the defects approximate the curvature 1/R^2 times the vertex areas
   // (a third of the incident faces' area), summed over the interior vertices.
   const double R = (2 * 50.0 * 50.0 + 29.9 * 29.9) / (2 * 29.9);
-  const MeshTopology topology = build_topology(sphere.mesh);
+  const MeshTopology& topology = sphere.mesh.topology();
   double total_defect = 0, interior_area = 0;
   for (double d : defects) total_defect += d;
-  for (const Face& f : sphere.mesh.faces)
+  for (const Face& f : sphere.mesh.faces())
     for (int v : f)
       if (!topology.is_boundary_vertex[v]) interior_area += face_normal(sphere.mesh, f).norm() / 6;
   EXPECT_NEAR(total_defect, interior_area / (R * R), 0.01 * total_defect);
@@ -266,24 +266,26 @@ TEST(ExampleSurfaces, SphereIsATrueSphere) {
   const TriangleMesh mesh = make_example("sphere").mesh;
   const double R = (2 * 50.0 * 50.0 + 29.9 * 29.9) / (2 * 29.9);
   const Vec3 centre(0, 0, 29.9 - R);
-  for (const Vec3& p : mesh.vertices) ASSERT_NEAR((p - centre).norm(), R, 1e-6 * R);
+  for (const Vec3& p : mesh.vertices()) ASSERT_NEAR((p - centre).norm(), R, 1e-6 * R);
 }
 
 TEST(ExampleSurfaces, AnalyticFormulasHold) {
   // Hypar: z - 0.02 x y is the constant shift to z >= 0 (12.5).
-  for (const Vec3& p : make_example("hypar").mesh.vertices)
-    ASSERT_NEAR(p.z() - 0.02 * p.x() * p.y(), 12.5, 1e-9);
+  const TriangleMesh hypar_mesh = make_example("hypar").mesh;
+  for (const Vec3& p : hypar_mesh.vertices()) ASSERT_NEAR(p.z() - 0.02 * p.x() * p.y(), 12.5, 1e-9);
   // Cylinder: every vertex at distance 62.5 from the axis (parallel to y, 62.5 below the crown).
-  for (const Vec3& p : make_example("cylinder").mesh.vertices)
+  const TriangleMesh cylinder_mesh = make_example("cylinder").mesh;
+  for (const Vec3& p : cylinder_mesh.vertices())
     ASSERT_NEAR(std::hypot(p.x(), p.z() - (25.0 - 62.5)), 62.5, 1e-9);
   // Plane: flat.
-  for (const Vec3& p : make_example("plane").mesh.vertices) ASSERT_EQ(p.z(), 0.0);
+  const TriangleMesh plane_mesh = make_example("plane").mesh;
+  for (const Vec3& p : plane_mesh.vertices()) ASSERT_EQ(p.z(), 0.0);
   // Cone: the two side boundaries (rulings) are straight lines that meet at an apex outside
   // the patch.
   const ExampleSurface cone = make_example("cone");
   const std::array<int, 4>& c = cone.corners;
-  const Vec3 a0 = cone.mesh.vertices[c[0]], a1 = cone.mesh.vertices[c[3]];  // left ruling
-  const Vec3 b0 = cone.mesh.vertices[c[1]], b1 = cone.mesh.vertices[c[2]];  // right ruling
+  const Vec3 a0 = cone.mesh.vertices()[c[0]], a1 = cone.mesh.vertices()[c[3]];  // left ruling
+  const Vec3 b0 = cone.mesh.vertices()[c[1]], b1 = cone.mesh.vertices()[c[2]];  // right ruling
   // Closest points of the two lines.
   const Vec3 da = a1 - a0, db = b1 - b0, w = a0 - b0;
   const double aa = da.dot(da), ab = da.dot(db), bb = db.dot(db), aw = da.dot(w), bw = db.dot(w);
@@ -326,7 +328,8 @@ TEST(ExampleSurfaces, ExtremeResolutionScalesStayValid) {
     const ExampleSurface fine = make_example(name, 6.0);
     EXPECT_NEAR(fine.mesh.vertex_count() / base, 36.0, 3.6);
     EXPECT_GT(min_angle_degrees(fine.mesh), kMinAngleDegrees);
-    for (const Face& f : fine.mesh.faces) ASSERT_GT(face_normal(fine.mesh, f).normalized().z(), 0);
+    for (const Face& f : fine.mesh.faces())
+      ASSERT_GT(face_normal(fine.mesh, f).normalized().z(), 0);
     if (name == "sphere") expect_valid_disk(fine, kMinAngleDegrees);
   }
 }
@@ -334,10 +337,10 @@ TEST(ExampleSurfaces, ExtremeResolutionScalesStayValid) {
 TEST(ExampleSurfaces, IsDeterministic) {
   for (const std::string& name : example_names()) {
     const ExampleSurface a = make_example(name), b = make_example(name);
-    ASSERT_EQ(a.mesh.vertices.size(), b.mesh.vertices.size()) << name;
-    for (std::size_t i = 0; i < a.mesh.vertices.size(); ++i)
-      ASSERT_EQ(a.mesh.vertices[i], b.mesh.vertices[i]) << name;
-    EXPECT_EQ(a.mesh.faces, b.mesh.faces) << name;
+    ASSERT_EQ(a.mesh.vertices().size(), b.mesh.vertices().size()) << name;
+    for (std::size_t i = 0; i < a.mesh.vertices().size(); ++i)
+      ASSERT_EQ(a.mesh.vertices()[i], b.mesh.vertices()[i]) << name;
+    EXPECT_EQ(a.mesh.faces(), b.mesh.faces()) << name;
     EXPECT_EQ(a.corners, b.corners) << name;
   }
 }

@@ -23,9 +23,9 @@
 #include <set>
 #include <thread>
 
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "support.h"
@@ -84,17 +84,16 @@ TriangleMesh grid_mesh(int nx, int ny, const std::function<Vec3(double, double)>
       throw std::logic_error("grid_mesh: jitter folds a triangle; lower it");
   }
   std::vector<int> index(uv.size(), -1);
-  TriangleMesh mesh;
+  std::vector<Vec3> vertices;
   for (Face& f : faces)
     for (int& k : f) {
       if (index[k] < 0) {
-        index[k] = mesh.vertex_count();
-        mesh.vertices.push_back(map(uv[k].x(), uv[k].y()));
+        index[k] = static_cast<int>(vertices.size());
+        vertices.push_back(map(uv[k].x(), uv[k].y()));
       }
       k = index[k];
     }
-  mesh.faces = faces;
-  return mesh;
+  return TriangleMesh(std::move(vertices), std::move(faces));
 }
 
 /// Height field over a 10 x 8 rectangle with a Gaussian bump (positive curvature) and a
@@ -155,7 +154,7 @@ SurfacePoint face_point(int face, double a, double b) {
 SurfacePoint random_face_point(const TriangleMesh& mesh, std::mt19937& rng) {
   std::uniform_real_distribution<double> uni(0.02, 1.0);
   SurfacePoint p;
-  p.face = static_cast<int>(rng() % mesh.faces.size());
+  p.face = static_cast<int>(rng() % mesh.faces().size());
   p.barycentric = Vec3(uni(rng), uni(rng), uni(rng));
   p.barycentric /= p.barycentric.sum();
   return p;
@@ -205,14 +204,14 @@ void expect_valid_path(const TriangleMesh& mesh, const MeshTopology& top,
 std::vector<std::pair<std::string, SurfacePoint>> test_sources(const TriangleMesh& mesh,
                                                                const MeshTopology& top) {
   Vec3 centre = Vec3::Zero();
-  for (const Vec3& p : mesh.vertices) centre += p;
+  for (const Vec3& p : mesh.vertices()) centre += p;
   centre /= mesh.vertex_count();
   int interior = -1, corner = -1;
   for (int v = 0; v < mesh.vertex_count(); ++v) {
     if (top.vertex_faces[v].empty()) continue;
     if (!top.is_boundary_vertex[v]) {
       if (interior < 0 ||
-          (mesh.vertices[v] - centre).norm() < (mesh.vertices[interior] - centre).norm())
+          (mesh.vertices()[v] - centre).norm() < (mesh.vertices()[interior] - centre).norm())
         interior = v;
     } else if (corner < 0 || top.vertex_faces[v].size() < top.vertex_faces[corner].size()) {
       corner = v;
@@ -221,7 +220,7 @@ std::vector<std::pair<std::string, SurfacePoint>> test_sources(const TriangleMes
   const std::vector<int>& loop = top.boundary_loops.at(0);
   const int boundary = loop[loop.size() / 3];
   // An interior edge at the interior vertex, a boundary edge further along the loop.
-  const Face& f = mesh.faces[top.vertex_faces[interior][0]];
+  const Face& f = mesh.faces()[top.vertex_faces[interior][0]];
   const int i = f[0] == interior ? 0 : (f[1] == interior ? 1 : 2);
   const int other = f[(i + 1) % 3];
   const int b0 = loop[(2 * loop.size()) / 3], b1 = loop[(2 * loop.size()) / 3 + 1];
@@ -272,7 +271,7 @@ void compare_with_cgal(const TriangleMesh& mesh, const MeshTopology& top,
     lean.keep_windows = false;
     for (int k = 0; k < 6; ++k) lean.targets.push_back(random_face_point(mesh, trng));
     for (int k = 0; k < 3; ++k) {
-      const Face& t = mesh.faces[random_face_point(mesh, trng).face];
+      const Face& t = mesh.faces()[random_face_point(mesh, trng).face];
       lean.targets.push_back(SurfacePoint::on_edge(mesh, t[k], t[(k + 1) % 3], 0.35));
     }
     const DistanceField dl = fast.solve(source, lean);
@@ -322,7 +321,7 @@ void compare_with_cgal(const TriangleMesh& mesh, const MeshTopology& top,
   // Points on edges (interior and boundary ones) and a path to one.
   for (int k = 0; k < 4; ++k) {
     const SurfacePoint f = random_face_point(mesh, rng);
-    const Face& t = mesh.faces[f.face];
+    const Face& t = mesh.faces()[f.face];
     const SurfacePoint q = SurfacePoint::on_edge(mesh, t[k % 3], t[(k + 1) % 3], 0.2 + 0.15 * k);
     const double d_fast = df.distance_to(q), d_cgal = dc.distance_to(q);
     EXPECT_LE(rel_error(d_fast, d_cgal, floor), 1e-9)
@@ -349,7 +348,7 @@ void compare_with_cgal(const TriangleMesh& mesh, const MeshTopology& top,
 
 void compare_all_sources(const std::string& name, const TriangleMesh& mesh, int queries = 10,
                          int paths = 3) {
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   const GeodesicSolver fast(mesh);
   const GeodesicSolver cgal(mesh, {GeodesicMethod::Cgal});
   CompareStats stats;
@@ -384,7 +383,7 @@ TEST(GeodesicFast, MatchesCgalOnFullResolutionExamples) {
   for (const std::string& name : example_names()) {
     if (name == "cylinder") continue;
     const ExampleSurface ex = make_example(name);
-    const MeshTopology top = build_topology(ex.mesh);
+    const MeshTopology& top = ex.mesh.topology();
     const GeodesicSolver fast(ex.mesh);
     const GeodesicSolver cgal(ex.mesh, {GeodesicMethod::Cgal});
     CompareStats stats;
@@ -409,7 +408,7 @@ TEST(GeodesicFast, FlatIrregularSquareGivesEuclideanDistances) {
       },
       0.25, 11);
   const GeodesicSolver solver(mesh);
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   const double floor = 1e-12 * diagonal(mesh);
   std::mt19937 rng(5);
   for (const auto& [kind, source] : test_sources(mesh, top)) {
@@ -418,7 +417,7 @@ TEST(GeodesicFast, FlatIrregularSquareGivesEuclideanDistances) {
     double worst = 0;
     for (int v = 0; v < mesh.vertex_count(); ++v)
       worst = std::max(
-          worst, rel_error(field.vertex_distances()[v], (mesh.vertices[v] - s).norm(), floor));
+          worst, rel_error(field.vertex_distances()[v], (mesh.vertices()[v] - s).norm(), floor));
     for (int k = 0; k < 30; ++k) {
       const SurfacePoint q = random_face_point(mesh, rng);
       worst =
@@ -438,12 +437,12 @@ TEST(GeodesicFast, LShapeDistanceBendsAroundReflexCorner) {
   const TriangleMesh mesh = grid_mesh(
       12, 12, [](double u, double v) { return Vec3(6 * u, 6 * v, 0); }, 0.3, 4,
       [](double u, double v) { return !(u > 0.5 && v > 0.5); });
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   const GeodesicSolver solver(mesh);
   const Vec3 c(3, 3, 0);
   int corner = -1, s = -1, t = -1;
   for (int v = 0; v < mesh.vertex_count(); ++v) {
-    const Vec3& p = mesh.vertices[v];
+    const Vec3& p = mesh.vertices()[v];
     if ((p - c).norm() < 1e-12) corner = v;
     if ((p - Vec3(6, 0.5, 0)).norm() < 1e-12) s = v;  // boundary vertex on the right edge
     if ((p - Vec3(0.5, 6, 0)).norm() < 1e-12) t = v;  // boundary vertex on the top edge
@@ -452,12 +451,12 @@ TEST(GeodesicFast, LShapeDistanceBendsAroundReflexCorner) {
   ASSERT_GE(s, 0);
   ASSERT_GE(t, 0);
   const DistanceField field = solver.solve(SurfacePoint::at_vertex(mesh, s));
-  const Vec3 ps = mesh.vertices[s];
+  const Vec3 ps = mesh.vertices()[s];
   // Points of the upper arm behind the ray s->c (seen from s the segment would cross the missing
   // square) are reached around the corner; all others in a straight line.
   int around = 0;
   for (int v = 0; v < mesh.vertex_count(); ++v) {
-    const Vec3& p = mesh.vertices[v];
+    const Vec3& p = mesh.vertices()[v];
     const Vec3 d1 = c - ps, d2 = p - c;
     const bool hidden = p.y() > 3 + 1e-9 && d1.x() * d2.y() - d1.y() * d2.x() < -1e-9;
     const double expected = hidden ? (c - ps).norm() + (p - c).norm() : (p - ps).norm();
@@ -471,7 +470,7 @@ TEST(GeodesicFast, LShapeDistanceBendsAroundReflexCorner) {
   bool through_corner = false;
   for (const SurfacePoint& p : path) through_corner |= p.vertex(mesh) == corner;
   EXPECT_TRUE(through_corner);
-  const double expected = (c - ps).norm() + (mesh.vertices[t] - c).norm();
+  const double expected = (c - ps).norm() + (mesh.vertices()[t] - c).norm();
   EXPECT_NEAR(path_length(mesh, path), expected, 1e-12 * expected);
   // Points inside faces of the hidden part.
   std::mt19937 rng(9);
@@ -491,8 +490,8 @@ TEST(GeodesicFast, DevelopableCylinderExampleMatchesUnrolledDistance) {
   const ExampleSurface ex = make_example("cylinder");
   const TriangleMesh& mesh = ex.mesh;
   const double R = 62.5, theta0 = 2 * std::atan(0.5);
-  Vec3 lo = mesh.vertices[0], hi = lo;
-  for (const Vec3& p : mesh.vertices) {
+  Vec3 lo = mesh.vertices()[0], hi = lo;
+  for (const Vec3& p : mesh.vertices()) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
@@ -500,14 +499,14 @@ TEST(GeodesicFast, DevelopableCylinderExampleMatchesUnrolledDistance) {
   std::set<long long> columns;
   std::vector<double> theta(mesh.vertex_count());
   for (int v = 0; v < mesh.vertex_count(); ++v) {
-    theta[v] = std::atan2(mesh.vertices[v].x() - xmid, mesh.vertices[v].z() - zaxis);
+    theta[v] = std::atan2(mesh.vertices()[v].x() - xmid, mesh.vertices()[v].z() - zaxis);
     columns.insert(std::llround(theta[v] * 1e8));
   }
   const double dtheta = 2 * theta0 / (columns.size() - 1);
   const double chord = 2 * R * std::sin(dtheta / 2);
   std::vector<Vec2> plane(mesh.vertex_count());
   for (int v = 0; v < mesh.vertex_count(); ++v)
-    plane[v] = Vec2(std::round((theta[v] + theta0) / dtheta) * chord, mesh.vertices[v].y());
+    plane[v] = Vec2(std::round((theta[v] + theta0) / dtheta) * chord, mesh.vertices()[v].y());
   const GeodesicSolver solver(mesh);
   for (int s : {ex.corners[0], ex.corners[2], mesh.vertex_count() / 2 + 7}) {
     const auto d = solver.distances(SurfacePoint::at_vertex(mesh, s));
@@ -539,19 +538,19 @@ TEST(GeodesicFast, ConvergesToSphericalCapDistance) {
     const TriangleMesh mesh = spherical_cap(n, R);
     int pole = 0;
     for (int v = 0; v < mesh.vertex_count(); ++v)
-      if (mesh.vertices[v].z() > mesh.vertices[pole].z()) pole = v;
+      if (mesh.vertices()[v].z() > mesh.vertices()[pole].z()) pole = v;
     // A second source off the pole (on the boundary) as well.
     int rim = 0;
     for (int v = 0; v < mesh.vertex_count(); ++v)
-      if (mesh.vertices[v].x() < mesh.vertices[rim].x()) rim = v;
+      if (mesh.vertices()[v].x() < mesh.vertices()[rim].x()) rim = v;
     const GeodesicSolver solver(mesh);
     double worst = 0;
     for (int s : {pole, rim}) {
       const auto d = solver.distances(SurfacePoint::at_vertex(mesh, s));
-      const Vec3 ps = mesh.vertices[s].normalized();
+      const Vec3 ps = mesh.vertices()[s].normalized();
       for (int v = 0; v < mesh.vertex_count(); ++v) {
         const double exact =
-            R * std::acos(std::clamp(ps.dot(mesh.vertices[v].normalized()), -1.0, 1.0));
+            R * std::acos(std::clamp(ps.dot(mesh.vertices()[v].normalized()), -1.0, 1.0));
         worst = std::max(worst, std::abs(d[v] - exact) / R);
       }
     }
@@ -580,7 +579,7 @@ TEST(GeodesicFast, ConvergesToCylinderUnrolledDistance) {
     for (int s : {0, mesh.vertex_count() / 2}) {
       const auto d = solver.distances(SurfacePoint::at_vertex(mesh, s));
       const auto unroll = [&](int v) {
-        const Vec3& p = mesh.vertices[v];
+        const Vec3& p = mesh.vertices()[v];
         return Vec2(r * std::atan2(p.z(), p.x()), p.y());
       };
       for (int v = 0; v < mesh.vertex_count(); ++v)
@@ -675,7 +674,7 @@ TEST(GeodesicHeat, WithinAFewPercentOfExactOnSmoothSurface) {
   const GeodesicSolver exact(mesh);
   const GeodesicSolver heat(mesh, {GeodesicMethod::Heat});
   EXPECT_EQ(heat.method(), GeodesicMethod::Heat);
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   for (const auto& [kind, source] : test_sources(mesh, top)) {
     if (source.vertex(mesh) < 0) continue;
     const auto e = exact.distances(source);
@@ -697,7 +696,7 @@ TEST(GeodesicHeat, WithinAFewPercentOfExactOnSmoothSurface) {
     EXPECT_LT(worst, 0.15) << kind;
     // Barycentric interpolation inside a face.
     const SurfacePoint q = face_point(11, 0.25, 0.5);
-    const Face& f = mesh.faces[11];
+    const Face& f = mesh.faces()[11];
     EXPECT_NEAR(h.distance_to(q),
                 0.25 * h.vertex_distances()[f[0]] + 0.5 * h.vertex_distances()[f[1]] +
                     0.25 * h.vertex_distances()[f[2]],
@@ -712,14 +711,15 @@ TEST(GeodesicHeat, WithinAFewPercentOfExactOnSmoothSurface) {
 
 TEST(Geodesic, SurfacePointHelpers) {
   const TriangleMesh mesh = bump_saddle_mesh();
-  const Face& f = mesh.faces[10];
+  const Face& f = mesh.faces()[10];
   const SurfacePoint v = SurfacePoint::at_vertex(mesh, f[1]);
   EXPECT_EQ(v.vertex(mesh), f[1]);
-  EXPECT_EQ((v.position(mesh) - mesh.vertices[f[1]]).norm(), 0.0);
+  EXPECT_EQ((v.position(mesh) - mesh.vertices()[f[1]]).norm(), 0.0);
   const SurfacePoint e = SurfacePoint::on_edge(mesh, f[2], f[0], 0.25);
   EXPECT_EQ(e.vertex(mesh), -1);
-  EXPECT_LT((e.position(mesh) - (0.75 * mesh.vertices[f[2]] + 0.25 * mesh.vertices[f[0]])).norm(),
-            1e-15);
+  EXPECT_LT(
+      (e.position(mesh) - (0.75 * mesh.vertices()[f[2]] + 0.25 * mesh.vertices()[f[0]])).norm(),
+      1e-15);
   int zeros = 0;
   for (int i = 0; i < 3; ++i) zeros += e.barycentric[i] == 0.0;
   EXPECT_EQ(zeros, 1);
@@ -729,8 +729,9 @@ TEST(Geodesic, SurfacePointHelpers) {
   EXPECT_THROW(SurfacePoint::at_vertex(mesh, mesh.vertex_count()), InvalidInput);
   EXPECT_THROW(SurfacePoint::on_edge(mesh, f[0], f[1], 1.5), InvalidInput);
   EXPECT_THROW(SurfacePoint::on_edge(mesh, 0, mesh.vertex_count() - 1, 0.5), InvalidInput);
-  TriangleMesh with_isolated = mesh;
-  with_isolated.vertices.push_back(Vec3(100, 100, 100));
+  std::vector<Vec3> more = mesh.vertices();
+  more.push_back(Vec3(100, 100, 100));
+  const TriangleMesh with_isolated(std::move(more), mesh.faces());
   EXPECT_THROW(SurfacePoint::at_vertex(with_isolated, mesh.vertex_count()), InvalidInput);
 }
 
@@ -758,22 +759,41 @@ TEST(Geodesic, RejectsInvalidInput) {
   EXPECT_THROW(solver.solve(face_point(0, -0.1, 0.5)), InvalidInput);
   const DistanceField field = solver.solve(face_point(0, 0.3, 0.3));
   EXPECT_THROW(field.distance_to(face_point(0, 2.0, 0.3)), InvalidInput);
-  TriangleMesh bad = mesh;
-  bad.faces.push_back({0, 1, 2});
-  bad.faces.push_back({0, 1, 3});  // edge 0-1 now shared by too many faces
-  EXPECT_THROW(GeodesicSolver{bad}, InvalidInput);
-  TriangleMesh bad_index = mesh;
-  bad_index.faces[0][1] = mesh.vertex_count() + 5;
-  EXPECT_THROW(GeodesicSolver{bad_index}, InvalidInput);
+  // A mesh that is not manifold, or has an invalid index, cannot even be made: every solver's
+  // mesh carries a valid topology.
+  std::vector<Face> crowded = mesh.faces();
+  crowded.push_back({0, 1, 2});
+  crowded.push_back({0, 1, 3});  // edge 0-1 now shared by too many faces
+  EXPECT_THROW(TriangleMesh(mesh.vertices(), crowded), InvalidInput);
+  std::vector<Face> bad_index = mesh.faces();
+  bad_index[0][1] = mesh.vertex_count() + 5;
+  try {
+    TriangleMesh(mesh.vertices(), bad_index);
+    FAIL() << "invalid index accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "faces[0]");
+  }
+  // A non-finite vertex is refused by the solver.
+  std::vector<Vec3> far = mesh.vertices();
+  far[3] = Vec3(std::numeric_limits<double>::quiet_NaN(), 0, 0);
+  try {
+    GeodesicSolver{TriangleMesh(far, mesh.faces())};
+    FAIL() << "NaN vertex accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "mesh.vertices[3]");
+  }
 }
 
 TEST(Geodesic, OtherComponentIsUnreachable) {
-  TriangleMesh mesh = bump_saddle_mesh();
-  const int offset = mesh.vertex_count();
+  const TriangleMesh first = bump_saddle_mesh();
+  const int offset = first.vertex_count();
   const TriangleMesh second = irregular_mesh();
-  for (const Vec3& p : second.vertices) mesh.vertices.push_back(p + Vec3(0, 0, 50));
-  for (const Face& f : second.faces)
-    mesh.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  std::vector<Vec3> vertices = first.vertices();
+  std::vector<Face> faces = first.faces();
+  for (const Vec3& p : second.vertices()) vertices.push_back(p + Vec3(0, 0, 50));
+  for (const Face& f : second.faces())
+    faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  const TriangleMesh mesh(std::move(vertices), std::move(faces));
   for (GeodesicMethod method : {GeodesicMethod::Fast, GeodesicMethod::Cgal}) {
     const GeodesicSolver solver(mesh, {method});
     const DistanceField field = solver.solve(SurfacePoint::at_vertex(mesh, 5));
@@ -819,8 +839,8 @@ TEST(Geodesic, ShortestPathShorthandAndPathLength) {
 /// ray's angle in the unfolding (cumulative), `total` the apex's angle sum.
 TriangleMesh saddle_cone(int sectors, int rings, double a, std::vector<double>& psi,
                          double& total) {
-  TriangleMesh mesh;
-  mesh.vertices.push_back(Vec3::Zero());
+  std::vector<Vec3> vertices{Vec3::Zero()};
+  std::vector<Face> faces;
   std::vector<Vec3> ray(sectors);
   for (int k = 0; k < sectors; ++k) {
     const double phi = 2 * kPi * k / sectors;
@@ -833,15 +853,15 @@ TriangleMesh saddle_cone(int sectors, int rings, double a, std::vector<double>& 
   }
   total = psi[sectors];
   for (int r = 1; r <= rings; ++r)
-    for (int k = 0; k < sectors; ++k) mesh.vertices.push_back(r * ray[k]);
+    for (int k = 0; k < sectors; ++k) vertices.push_back(r * ray[k]);
   const auto id = [&](int r, int k) { return r == 0 ? 0 : 1 + (r - 1) * sectors + k % sectors; };
-  for (int k = 0; k < sectors; ++k) mesh.faces.push_back({0, id(1, k), id(1, k + 1)});
+  for (int k = 0; k < sectors; ++k) faces.push_back({0, id(1, k), id(1, k + 1)});
   for (int r = 1; r < rings; ++r)
     for (int k = 0; k < sectors; ++k) {
-      mesh.faces.push_back({id(r, k), id(r + 1, k), id(r + 1, k + 1)});
-      mesh.faces.push_back({id(r, k), id(r + 1, k + 1), id(r, k + 1)});
+      faces.push_back({id(r, k), id(r + 1, k), id(r + 1, k + 1)});
+      faces.push_back({id(r, k), id(r + 1, k + 1), id(r, k + 1)});
     }
-  return mesh;
+  return TriangleMesh(std::move(vertices), std::move(faces));
 }
 
 TEST(GeodesicFast, PathsBendOnlyAroundTheSaddleInsideItsCone) {
@@ -855,7 +875,7 @@ TEST(GeodesicFast, PathsBendOnlyAroundTheSaddleInsideItsCone) {
   const TriangleMesh mesh = saddle_cone(sectors, rings, 0.4, psi, total);
   ASSERT_GT(total, 2.4 * kPi);  // a strong saddle
   ASSERT_LT(total, 2.9 * kPi);
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   const GeodesicSolver solver(mesh);
   const auto polar = [&](int v, double& r, double& angle) {
     if (v == 0) {
@@ -889,7 +909,7 @@ TEST(GeodesicFast, PathsBendOnlyAroundTheSaddleInsideItsCone) {
     std::mt19937 rng(s);
     for (int n = 0; n < 300; ++n) {
       const SurfacePoint q = random_face_point(mesh, rng);
-      const Face& f = mesh.faces[q.face];
+      const Face& f = mesh.faces()[q.face];
       std::set<int> rays;
       for (int v : f)
         if (v != 0) rays.insert((v - 1) % sectors);
@@ -932,13 +952,13 @@ TEST(GeodesicFast, PathsBendOnlyAroundTheSaddleInsideItsCone) {
 
 TEST(GeodesicSolveOptions, WithoutWindowsVertexAndTargetDistancesEqualTheCompleteField) {
   for (const TriangleMesh& mesh : {bump_saddle_mesh(), irregular_mesh(), nonconvex_mesh()}) {
-    const MeshTopology top = build_topology(mesh);
+    const MeshTopology& top = mesh.topology();
     const GeodesicSolver solver(mesh);
     std::mt19937 rng(21);
     SolveOptions lean;
     lean.keep_windows = false;
     for (int k = 0; k < 8; ++k) lean.targets.push_back(random_face_point(mesh, rng));
-    const Face& f = mesh.faces[5];
+    const Face& f = mesh.faces()[5];
     lean.targets.push_back(SurfacePoint::on_edge(mesh, f[0], f[1], 0.3));
     lean.targets.push_back(SurfacePoint::at_vertex(mesh, f[2]));
     for (const auto& [kind, source] : test_sources(mesh, top)) {
@@ -963,7 +983,7 @@ TEST(GeodesicSolveOptions, StopAtTargetsIsExactOnTheTargetsFaces) {
   // bounds), yet distances and paths in the targets' closed faces equal the complete field's.
   const ExampleSurface ex = make_example("waves-bump", 0.5);
   const TriangleMesh& mesh = ex.mesh;
-  const MeshTopology top = build_topology(mesh);
+  const MeshTopology& top = mesh.topology();
   const GeodesicSolver solver(mesh), cgal(mesh, {GeodesicMethod::Cgal});
   const int s = mesh.vertex_count() / 2 + 7;
   const SurfacePoint source = SurfacePoint::at_vertex(mesh, s);
@@ -974,12 +994,12 @@ TEST(GeodesicSolveOptions, StopAtTargetsIsExactOnTheTargetsFaces) {
     std::vector<int> next;
     for (int v : ring)
       for (int f : top.vertex_faces[v])
-        for (int u : mesh.faces[f]) next.push_back(u);
+        for (int u : mesh.faces()[f]) next.push_back(u);
     ring = next;
   }
   const int tv = ring.back();
   const int tf = top.vertex_faces[ring[ring.size() / 2]][0];
-  const Face& face = mesh.faces[tf];
+  const Face& face = mesh.faces()[tf];
   SolveOptions options;
   options.stop_at_targets = true;
   options.targets = {SurfacePoint::at_vertex(mesh, tv),
@@ -1006,7 +1026,7 @@ TEST(GeodesicSolveOptions, StopAtTargetsIsExactOnTheTargetsFaces) {
     std::vector<int> closed = {tf};
     for (int f : top.vertex_faces[tv]) closed.push_back(f);
     for (int f : closed)
-      for (int v : mesh.faces[f])
+      for (int v : mesh.faces()[f])
         EXPECT_EQ(field.vertex_distances()[v], full.vertex_distances()[v]) << v;
     if (!keep) continue;
     std::mt19937 rng(5);

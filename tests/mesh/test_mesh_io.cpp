@@ -33,17 +33,29 @@ using testing::write_text;
 constexpr int kGridSide = 3;
 
 TriangleMesh grid_mesh() {
-  TriangleMesh mesh;
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
   for (int y = 0; y < kGridSide; ++y)
-    for (int x = 0; x < kGridSide; ++x) mesh.vertices.push_back(Vec3(x, y, 0.125 * x * y));
+    for (int x = 0; x < kGridSide; ++x) vertices.push_back(Vec3(x, y, 0.125 * x * y));
   for (int y = 0; y + 1 < kGridSide; ++y)
     for (int x = 0; x + 1 < kGridSide; ++x) {
       const int a = y * kGridSide + x, b = a + 1, c = b + kGridSide, d = a + kGridSide;
-      mesh.faces.push_back({a, b, c});  // fan of the quad (a b c d)
-      mesh.faces.push_back({a, c, d});
+      faces.push_back({a, b, c});  // fan of the quad (a b c d)
+      faces.push_back({a, c, d});
     }
-  return mesh;
+  return TriangleMesh(std::move(vertices), std::move(faces));
 }
+
+/// Plain, editable arrays with TriangleMesh's accessors: the contents of files the loader must
+/// repair or reject (a TriangleMesh is always valid).
+struct Arrays {
+  std::vector<Vec3> v;
+  std::vector<Face> f;
+  explicit Arrays(const TriangleMesh& mesh) : v(mesh.vertices()), f(mesh.faces()) {}
+  const std::vector<Vec3>& vertices() const { return v; }
+  const std::vector<Face>& faces() const { return f; }
+  int vertex_count() const { return static_cast<int>(v.size()); }
+};
 
 /// The grid as quads, 0-based.
 std::vector<std::array<int, 4>> grid_quads() {
@@ -73,25 +85,27 @@ void put(std::string& out, T value, bool big_endian) {
   append_le(out, &value, sizeof value, big_endian);
 }
 
-std::string stl_binary(const TriangleMesh& mesh, const std::string& header_start = "") {
+template <class Mesh>
+std::string stl_binary(const Mesh& mesh, const std::string& header_start = "") {
   std::string s = header_start;
   s.resize(80, ' ');
-  put<std::uint32_t>(s, static_cast<std::uint32_t>(mesh.faces.size()), false);
-  for (const Face& f : mesh.faces) {
+  put<std::uint32_t>(s, static_cast<std::uint32_t>(mesh.faces().size()), false);
+  for (const Face& f : mesh.faces()) {
     for (int k = 0; k < 3; ++k) put<float>(s, 0.0f, false);  // normal: ignored by the reader
     for (int v : f)
-      for (int k = 0; k < 3; ++k) put<float>(s, static_cast<float>(mesh.vertices[v][k]), false);
+      for (int k = 0; k < 3; ++k) put<float>(s, static_cast<float>(mesh.vertices()[v][k]), false);
     put<std::uint16_t>(s, 0, false);
   }
   return s;
 }
 
-std::string stl_ascii(const TriangleMesh& mesh) {
+template <class Mesh>
+std::string stl_ascii(const Mesh& mesh) {
   std::string s = "solid grid\n";
-  for (const Face& f : mesh.faces) {
+  for (const Face& f : mesh.faces()) {
     s += "  facet normal 0 0 1\n    outer loop\n";
     for (int v : f) {
-      const Vec3& p = mesh.vertices[v];
+      const Vec3& p = mesh.vertices()[v];
       s += "      vertex " + num(p.x()) + " " + num(p.y()) + " " + num(p.z()) + "\n";
     }
     s += "    endloop\n  endfacet\n";
@@ -131,9 +145,9 @@ void expect_same_mesh(const TriangleMesh& expected, const TriangleMesh& actual) 
   ASSERT_EQ(actual.vertex_count(), expected.vertex_count());
   ASSERT_EQ(actual.face_count(), expected.face_count());
   for (int v = 0; v < expected.vertex_count(); ++v)
-    EXPECT_EQ(actual.vertices[v], expected.vertices[v]) << "vertex " << v;
+    EXPECT_EQ(actual.vertices()[v], expected.vertices()[v]) << "vertex " << v;
   for (int f = 0; f < expected.face_count(); ++f)
-    EXPECT_EQ(actual.faces[f], expected.faces[f]) << "face " << f;
+    EXPECT_EQ(actual.faces()[f], expected.faces()[f]) << "face " << f;
 }
 
 void expect_clean_report(const LoadReport& report, int vertices, int faces) {
@@ -163,18 +177,18 @@ TEST(MeshIo, ObjRoundTripThroughSaveObj) {
 
 TEST(MeshIo, SaveObjKeepsFullPrecision) {
   TriangleMesh mesh = grid_mesh();
-  mesh.vertices[4] = Vec3(1.0 / 3.0, 1 + 1e-15, -2.5e-7);
+  mesh.set_vertex(4, Vec3(1.0 / 3.0, 1 + 1e-15, -2.5e-7));
   const std::string path = temp_dir() + "/precise.obj";
   save_obj(mesh, path);
-  EXPECT_EQ(load_mesh(path).vertices[4], mesh.vertices[4]);
+  EXPECT_EQ(load_mesh(path).vertices()[4], mesh.vertices()[4]);
 }
 
 TEST(MeshIo, OffRoundTripWithCommentsColoursAndCountsOnHeaderLine) {
   const TriangleMesh mesh = grid_mesh();
   std::string off = "OFF 9 8 0\n# a comment line\n";
-  for (const Vec3& p : mesh.vertices)
+  for (const Vec3& p : mesh.vertices())
     off += num(p.x()) + " " + num(p.y()) + " " + num(p.z()) + "   # vertex\n";
-  for (const Face& f : mesh.faces)  // trailing face colour must be ignored
+  for (const Face& f : mesh.faces())  // trailing face colour must be ignored
     off += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
            " 255 0 0\n";
   LoadReport report;
@@ -186,7 +200,7 @@ TEST(MeshIo, OffRoundTripWithCommentsColoursAndCountsOnHeaderLine) {
 TEST(MeshIo, OffQuadsAndColouredVertices) {
   const TriangleMesh mesh = grid_mesh();
   std::string off = "COFF\n9 4 12\n";
-  for (const Vec3& p : mesh.vertices)
+  for (const Vec3& p : mesh.vertices())
     off += num(p.x()) + " " + num(p.y()) + " " + num(p.z()) + " 0.5 0.5 0.5 1\n";
   for (const auto& q : grid_quads())
     off += "4 " + std::to_string(q[0]) + " " + std::to_string(q[1]) + " " + std::to_string(q[2]) +
@@ -196,17 +210,18 @@ TEST(MeshIo, OffQuadsAndColouredVertices) {
   EXPECT_EQ(report.polygons_triangulated, 4);
 }
 
-std::string ply_ascii(const TriangleMesh& mesh, const std::string& list_name) {
+template <class Mesh>
+std::string ply_ascii(const Mesh& mesh, const std::string& list_name) {
   std::string s =
       "ply\nformat ascii 1.0\ncomment made by a test\nelement vertex 9\n"
       "property float x\nproperty float y\nproperty float z\nproperty uchar red\n"
       "property float nx\nelement material 1\nproperty list uchar float weights\n"
       "element face 8\nproperty uchar flags\nproperty list uchar int " +
       list_name + "\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n";
-  for (const Vec3& p : mesh.vertices)
+  for (const Vec3& p : mesh.vertices())
     s += num(p.x()) + " " + num(p.y()) + " " + num(p.z()) + " 255 0.5\n";
   s += "3 0.5 0.25 1\n";
-  for (const Face& f : mesh.faces)
+  for (const Face& f : mesh.faces())
     s += "7 3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
          "\n";
   return s + "0 1\n";
@@ -225,7 +240,8 @@ TEST(MeshIo, PlyAsciiRoundTripSkipsOtherPropertiesAndElements) {
 }
 
 /// Binary PLY with a mix of property types; the list count/index types vary.
-std::string ply_binary(const TriangleMesh& mesh, bool big, bool doubles, const char* count_type,
+template <class Mesh>
+std::string ply_binary(const Mesh& mesh, bool big, bool doubles, const char* count_type,
                        const char* index_type) {
   std::string s = std::string("ply\nformat ") +
                   (big ? "binary_big_endian" : "binary_little_endian") +
@@ -240,9 +256,9 @@ std::string ply_binary(const TriangleMesh& mesh, bool big, bool doubles, const c
     put<std::int16_t>(s, static_cast<std::int16_t>(v), big);
     for (int k = 0; k < 3; ++k) {
       if (doubles)
-        put<double>(s, mesh.vertices[v][k], big);
+        put<double>(s, mesh.vertices()[v][k], big);
       else
-        put<float>(s, static_cast<float>(mesh.vertices[v][k]), big);
+        put<float>(s, static_cast<float>(mesh.vertices()[v][k]), big);
     }
     put<std::uint8_t>(s, 200, big);
   }
@@ -252,7 +268,7 @@ std::string ply_binary(const TriangleMesh& mesh, bool big, bool doubles, const c
     put<double>(s, 0.5, big);
   }
   const std::string ct = count_type, it = index_type;
-  for (const Face& f : mesh.faces) {
+  for (const Face& f : mesh.faces()) {
     if (ct == "uchar") put<std::uint8_t>(s, 3, big);
     if (ct == "ushort") put<std::uint16_t>(s, 3, big);
     if (ct == "int") put<std::int32_t>(s, 3, big);
@@ -295,7 +311,8 @@ void expect_same_geometry(const TriangleMesh& expected, const TriangleMesh& actu
   ASSERT_EQ(actual.vertex_count(), expected.vertex_count());
   for (int f = 0; f < expected.face_count(); ++f)
     for (int k = 0; k < 3; ++k)
-      EXPECT_EQ(actual.vertices[actual.faces[f][k]], expected.vertices[expected.faces[f][k]])
+      EXPECT_EQ(actual.vertices()[actual.faces()[f][k]],
+                expected.vertices()[expected.faces()[f][k]])
           << "face " << f << " corner " << k;
 }
 
@@ -337,7 +354,7 @@ TEST(MeshIo, StlBinaryDetectedBySizeEvenWithSolidHeader) {
 TEST(MeshIo, QuadObjIsFanTriangulated) {
   const TriangleMesh mesh = grid_mesh();
   std::string obj;
-  for (const Vec3& p : mesh.vertices)
+  for (const Vec3& p : mesh.vertices())
     obj += "v " + num(p.x()) + " " + num(p.y()) + " " + num(p.z()) + "\n";
   for (const auto& q : grid_quads())
     obj += "f " + std::to_string(q[0] + 1) + " " + std::to_string(q[1] + 1) + " " +
@@ -355,9 +372,9 @@ TEST(MeshIo, PentagonGivesThreeTriangles) {
   LoadReport report;
   const TriangleMesh loaded = load_mesh(write_text(temp_dir(), "penta.obj", obj), &report);
   ASSERT_EQ(loaded.face_count(), 3);
-  EXPECT_EQ(loaded.faces[0], (Face{0, 1, 2}));
-  EXPECT_EQ(loaded.faces[1], (Face{0, 2, 3}));
-  EXPECT_EQ(loaded.faces[2], (Face{0, 3, 4}));
+  EXPECT_EQ(loaded.faces()[0], (Face{0, 1, 2}));
+  EXPECT_EQ(loaded.faces()[1], (Face{0, 2, 3}));
+  EXPECT_EQ(loaded.faces()[2], (Face{0, 3, 4}));
   EXPECT_EQ(report.polygons_triangulated, 1);
 }
 
@@ -382,9 +399,9 @@ TEST(MeshIo, ObjCornerSyntaxesNegativeIndicesAndIgnoredStatements) {
   const TriangleMesh loaded = load_mesh(write_text(temp_dir(), "syntax.obj", obj), &report);
   ASSERT_EQ(loaded.vertex_count(), 4);
   ASSERT_EQ(loaded.face_count(), 2);
-  EXPECT_EQ(loaded.faces[0], (Face{0, 1, 2}));
-  EXPECT_EQ(loaded.faces[1], (Face{0, 2, 3}));
-  EXPECT_EQ(loaded.vertices[2], Vec3(1, 1, 0));
+  EXPECT_EQ(loaded.faces()[0], (Face{0, 1, 2}));
+  EXPECT_EQ(loaded.faces()[1], (Face{0, 2, 3}));
+  EXPECT_EQ(loaded.vertices()[2], Vec3(1, 1, 0));
   expect_clean_report(report, 4, 2);
 }
 
@@ -396,10 +413,10 @@ TEST(MeshIo, VertexOrderIsFileOrder) {
   LoadReport report;
   const TriangleMesh loaded = load_mesh(write_text(temp_dir(), "order.obj", obj), &report);
   ASSERT_EQ(loaded.vertex_count(), 5);
-  EXPECT_EQ(loaded.vertices[0], Vec3(1, 1, 0));
-  EXPECT_EQ(loaded.vertices[3], Vec3(0, 2, 0));
-  EXPECT_EQ(loaded.faces[0], (Face{1, 2, 0}));
-  EXPECT_EQ(loaded.faces[3], (Face{3, 1, 0}));
+  EXPECT_EQ(loaded.vertices()[0], Vec3(1, 1, 0));
+  EXPECT_EQ(loaded.vertices()[3], Vec3(0, 2, 0));
+  EXPECT_EQ(loaded.faces()[0], (Face{1, 2, 0}));
+  EXPECT_EQ(loaded.faces()[3], (Face{3, 1, 0}));
   expect_clean_report(report, 5, 4);
 }
 
@@ -420,7 +437,7 @@ TEST(MeshIo, DuplicateVerticesMergedWithinTolerance) {
   EXPECT_EQ(loaded.face_count(), 2);
   EXPECT_EQ(report.duplicate_vertices_merged, 2);
   EXPECT_EQ(report.vertex_of_file_vertex, (std::vector<int>{0, 1, 2, 3, 0, 2}));
-  EXPECT_EQ(loaded.faces[1], (Face{0, 2, 3}));
+  EXPECT_EQ(loaded.faces()[1], (Face{0, 2, 3}));
   ASSERT_EQ(report.warnings.size(), 1u);
   expect_contains(report.warnings[0], {"warning: ", "dups.obj", "merged 2 duplicate vertices"});
 
@@ -492,8 +509,8 @@ TEST(MeshIo, IsolatedVerticesRemovedAndMapped) {
   LoadReport report;
   const TriangleMesh loaded = load_mesh(write_text(temp_dir(), "isolated.obj", obj), &report);
   EXPECT_EQ(loaded.vertex_count(), 3);
-  EXPECT_EQ(loaded.faces[0], (Face{0, 1, 2}));
-  EXPECT_EQ(loaded.vertices[2], Vec3(0, 1, 0));
+  EXPECT_EQ(loaded.faces()[0], (Face{0, 1, 2}));
+  EXPECT_EQ(loaded.vertices()[2], Vec3(0, 1, 0));
   EXPECT_EQ(report.isolated_vertices_removed, 2);
   EXPECT_EQ(report.vertex_of_file_vertex, (std::vector<int>{-1, 0, 1, -1, 2}));
   ASSERT_EQ(report.warnings.size(), 1u);
@@ -508,19 +525,20 @@ TEST(MeshIo, InconsistentOrientationFixedKeepingTheMajority) {
   std::string obj = std::string(kStripVertices) + "f 1 2 5\nf 1 4 5\nf 2 3 6\nf 2 6 5\n";
   LoadReport report;
   TriangleMesh loaded = load_mesh(write_text(temp_dir(), "flip.obj", obj), &report);
-  EXPECT_EQ(loaded.faces[0], (Face{0, 1, 4}));
-  EXPECT_EQ(loaded.faces[1], (Face{0, 4, 3}));
-  EXPECT_EQ(loaded.faces[2], (Face{1, 2, 5}));
+  EXPECT_EQ(loaded.faces()[0], (Face{0, 1, 4}));
+  EXPECT_EQ(loaded.faces()[1], (Face{0, 4, 3}));
+  EXPECT_EQ(loaded.faces()[2], (Face{1, 2, 5}));
   ASSERT_EQ(report.warnings.size(), 1u);
   expect_contains(report.warnings[0], {"warning: ", "flip.obj", "flipped 1 face", "orientation"});
-  EXPECT_TRUE(check_manifold(loaded).kind == TopologyProblem::Kind::None);
+  EXPECT_TRUE(check_manifold(loaded.vertex_count(), loaded.faces()).kind ==
+              TopologyProblem::Kind::None);
 
   // The first face is the odd one: it is flipped, not the three others.
   obj = std::string(kStripVertices) + "f 1 5 2\nf 1 5 4\nf 2 3 6\nf 2 6 5\n";
   loaded = load_mesh(write_text(temp_dir(), "flip.obj", obj), &report);
-  EXPECT_EQ(loaded.faces[0], (Face{0, 1, 4}));
-  EXPECT_EQ(loaded.faces[1], (Face{0, 4, 3}));
-  EXPECT_EQ(loaded.faces[3], (Face{1, 5, 4}));
+  EXPECT_EQ(loaded.faces()[0], (Face{0, 1, 4}));
+  EXPECT_EQ(loaded.faces()[1], (Face{0, 4, 3}));
+  EXPECT_EQ(loaded.faces()[3], (Face{1, 5, 4}));
 }
 
 TEST(MeshIo, ClockwiseFileOrientationIsKept) {
@@ -528,7 +546,7 @@ TEST(MeshIo, ClockwiseFileOrientationIsKept) {
   const std::string obj = std::string(kStripVertices) + "f 1 5 2\nf 1 4 5\nf 2 6 3\nf 2 5 6\n";
   LoadReport report;
   const TriangleMesh loaded = load_mesh(write_text(temp_dir(), "cw.obj", obj), &report);
-  EXPECT_EQ(loaded.faces[0], (Face{0, 4, 1}));
+  EXPECT_EQ(loaded.faces()[0], (Face{0, 4, 1}));
   EXPECT_TRUE(report.warnings.empty());
 }
 
@@ -549,7 +567,7 @@ TEST(MeshIo, SharedRealMeshesLoadAsDisks) {
     EXPECT_EQ(report.polygons_triangulated, expected_quads[i]);
     EXPECT_EQ(mesh.face_count(), 2 * expected_quads[i]);
     EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
-    EXPECT_EQ(build_topology(mesh).boundary_loops.size(), 1u);
+    EXPECT_EQ(mesh.topology().boundary_loops.size(), 1u);
   }
 }
 
@@ -606,44 +624,45 @@ TEST(MeshIoReject, OnlyDegenerateFaces) {
 
 TEST(MeshIoReject, ObjUnparseableCoordinate) {
   expect_contains(reject("mesh.obj", "v 0 0 0\nv 1 0 0\n# x\nv 0 abc 0\nf 1 2 3\n"),
-                  {"mesh.obj:4:", "cannot parse vertex coordinate 'abc'"});
+                  {"mesh.obj: line 4:", "cannot parse vertex coordinate 'abc'"});
 }
 
 TEST(MeshIoReject, ObjTooFewCoordinates) {
-  expect_contains(reject("mesh.obj", "v 0 0\n"), {"mesh.obj:1:", "vertex has 2 coordinates"});
+  expect_contains(reject("mesh.obj", "v 0 0\n"), {"mesh.obj: line 1:", "vertex has 2 coordinates"});
 }
 
 TEST(MeshIoReject, ObjUnparseableFaceIndex) {
   expect_contains(reject("mesh.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 two 3\n"),
-                  {"mesh.obj:4:", "cannot parse face vertex index 'two'"});
+                  {"mesh.obj: line 4:", "cannot parse face vertex index 'two'"});
 }
 
 TEST(MeshIoReject, ObjFaceWithTwoVertices) {
   expect_contains(reject("mesh.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n"),
-                  {"mesh.obj:3:", "face has 2 vertices", "at least 3"});
+                  {"mesh.obj: line 3:", "face has 2 vertices", "at least 3"});
 }
 
 TEST(MeshIoReject, OffAndPlyFaceWithTwoVertices) {
   expect_contains(reject("two.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"),
-                  {"two.off:6:", "face 0 has 2 vertices", "at least 3"});
+                  {"two.off: line 6:", "face 0 has 2 vertices", "at least 3"});
   expect_contains(reject("two.ply",
                          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                          "property float y\nproperty float z\nelement face 1\n"
                          "property list uchar int vertex_indices\nend_header\n"
                          "0 0 0\n1 0 0\n0 1 0\n2 0 1\n"),
-                  {"two.ply:13:", "face 0 has 2 vertices"});
+                  {"two.ply: line 13:", "face 0 has 2 vertices"});
 }
 
 TEST(MeshIoReject, ObjUnknownStatement) {
   expect_contains(reject("mesh.obj", "v 0 0 0\nbogus 1 2\n"),
-                  {"mesh.obj:2:", "unknown OBJ statement 'bogus'"});
+                  {"mesh.obj: line 2:", "unknown OBJ statement 'bogus'"});
 }
 
 TEST(MeshIoReject, OffWrongHeader) {
   expect_contains(reject("mesh.off", "PLY\n3 1 0\n"),
-                  {"mesh.off:1:", "expected the header 'OFF'", "'PLY'"});
-  expect_contains(reject("mesh.off", "OFF BINARY\n"), {"mesh.off:1:", "binary OFF"});
-  expect_contains(reject("mesh.off", "OFF\nthree 1 0\n"), {"mesh.off:2:", "vertex count 'three'"});
+                  {"mesh.off: line 1:", "expected the header 'OFF'", "'PLY'"});
+  expect_contains(reject("mesh.off", "OFF BINARY\n"), {"mesh.off: line 1:", "binary OFF"});
+  expect_contains(reject("mesh.off", "OFF\nthree 1 0\n"),
+                  {"mesh.off: line 2:", "vertex count 'three'"});
 }
 
 TEST(MeshIoReject, OffTruncated) {
@@ -652,36 +671,36 @@ TEST(MeshIoReject, OffTruncated) {
   expect_contains(reject("mesh.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
                   {"mesh.off:", "file ends after 1 of 2 faces"});
   expect_contains(reject("mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n"),
-                  {"mesh.off:6:", "face 0 lists 2 vertex indices, expected 3"});
+                  {"mesh.off: line 6:", "face 0 lists 2 vertex indices, expected 3"});
   expect_contains(reject("mesh.off", "OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n"),
-                  {"mesh.off:4:", "vertex 1 has 2 coordinates"});
+                  {"mesh.off: line 4:", "vertex 1 has 2 coordinates"});
 }
 
 TEST(MeshIoReject, OffUnparseableCoordinate) {
   expect_contains(reject("mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 x1\n0 1 0\n3 0 1 2\n"),
-                  {"mesh.off:4:", "cannot parse coordinate of vertex 1", "'x1'"});
+                  {"mesh.off: line 4:", "cannot parse coordinate of vertex 1", "'x1'"});
 }
 
 TEST(MeshIoReject, PlyWrongHeader) {
   expect_contains(reject("mesh.ply", "PLY file\nformat ascii 1.0\n"),
-                  {"mesh.ply:1:", "not a PLY file", "'ply'"});
+                  {"mesh.ply: line 1:", "not a PLY file", "'ply'"});
   expect_contains(reject("mesh.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n"),
-                  {"mesh.ply:2:", "unknown PLY format 'binary_middle_endian'"});
+                  {"mesh.ply: line 2:", "unknown PLY format 'binary_middle_endian'"});
   expect_contains(reject("mesh.ply",
                          "ply\nformat ascii 1.0\nelement vertex 3\nproperty quad x\n"
                          "end_header\n"),
-                  {"mesh.ply:4:", "cannot parse PLY property line", "'property quad x'"});
+                  {"mesh.ply: line 4:", "cannot parse PLY property line", "'property quad x'"});
   expect_contains(reject("mesh.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"),
                   {"mesh.ply", "no 'end_header'"});
   expect_contains(reject("mesh.ply",
                          "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                          "property float y\nend_header\n0 0\n"),
-                  {"mesh.ply:3:", "no scalar 'z' property"});
+                  {"mesh.ply: line 3:", "no scalar 'z' property"});
   expect_contains(reject("mesh.ply",
                          "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                          "property float y\nproperty float z\nelement face 1\n"
                          "property list uchar int corners\nend_header\n0 0 0\n"),
-                  {"mesh.ply:7:", "no 'vertex_indices'"});
+                  {"mesh.ply: line 7:", "no 'vertex_indices'"});
 }
 
 TEST(MeshIoReject, PlyBinaryTruncated) {
@@ -701,7 +720,7 @@ TEST(MeshIoReject, PlyAsciiUnparseableAndTruncated) {
   bad.replace(at, 1, "two");
   // The header has 18 lines, vertex 2 is on line 21.
   expect_contains(reject("bad.ply", bad),
-                  {"bad.ply:21:", "cannot parse property 'x' of vertex 2", "'two'"});
+                  {"bad.ply: line 21:", "cannot parse property 'x' of vertex 2", "'two'"});
   ply.resize(ply.size() - 12);
   expect_contains(reject("short.ply", ply), {"short.ply:", "file ends in", "truncated"});
 }
@@ -723,9 +742,9 @@ TEST(MeshIoReject, StlBinaryTruncated) {
 TEST(MeshIoReject, StlAsciiUnparseable) {
   std::string stl = stl_ascii(grid_mesh());
   stl.replace(stl.find("outer loop"), 10, "outer lop");
-  expect_contains(reject("bad.stl", stl), {"bad.stl:3:", "expected 'loop'", "'lop'"});
+  expect_contains(reject("bad.stl", stl), {"bad.stl: line 3:", "expected 'loop'", "'lop'"});
   expect_contains(reject("bad.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 q\n"),
-                  {"bad.stl:4:", "cannot parse vertex coordinate 'q'"});
+                  {"bad.stl: line 4:", "cannot parse vertex coordinate 'q'"});
   expect_contains(reject("cut.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"),
                   {"cut.stl:", "file ends inside facet 0", "truncated"});
 }
@@ -734,26 +753,26 @@ TEST(MeshIoReject, StlAsciiUnparseable) {
 
 TEST(MeshIoReject, NanCoordinateInObjNamesTheLine) {
   expect_contains(reject("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"),
-                  {"nan.obj:2:", "'nan'", "not a finite number"});
+                  {"nan.obj: line 2:", "'nan'", "not a finite number"});
 }
 
 TEST(MeshIoReject, InfCoordinateInOffNamesTheLine) {
   expect_contains(reject("inf.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 inf 0\n3 0 1 2\n"),
-                  {"inf.off:5:", "vertex 2", "'inf'", "not a finite number"});
+                  {"inf.off: line 5:", "vertex 2", "'inf'", "not a finite number"});
   // Overflowing literals are infinite too.
-  expect_contains(reject("big.obj", "v 0 0 1e999\n"), {"big.obj:1:", "not a finite number"});
+  expect_contains(reject("big.obj", "v 0 0 1e999\n"), {"big.obj: line 1:", "not a finite number"});
 }
 
 TEST(MeshIoReject, NanCoordinateInBinaryPlyNamesTheVertex) {
-  TriangleMesh mesh = grid_mesh();
-  mesh.vertices[5].y() = std::numeric_limits<double>::quiet_NaN();
+  Arrays mesh(grid_mesh());
+  mesh.v[5].y() = std::numeric_limits<double>::quiet_NaN();
   expect_contains(reject("nan.ply", ply_binary(mesh, true, true, "uchar", "int")),
                   {"nan.ply", "vertex 5", "non-finite coordinate y", "NaN"});
 }
 
 TEST(MeshIoReject, InfCoordinateInBinaryStlNamesTheFacet) {
-  TriangleMesh mesh = grid_mesh();
-  mesh.vertices[8].z() = std::numeric_limits<double>::infinity();  // used first by facet 6
+  Arrays mesh(grid_mesh());
+  mesh.v[8].z() = std::numeric_limits<double>::infinity();  // used first by facet 6
   expect_contains(reject("inf.stl", stl_binary(mesh)),
                   {"inf.stl", "facet 6", "corner 2", "non-finite"});
 }
@@ -786,22 +805,23 @@ TEST(MeshIoReject, FifoAndDevicesAreNotRead) {
 
 TEST(MeshIoReject, ObjIndexOutOfRange) {
   expect_contains(reject("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n"),
-                  {"range.obj:5:", "face vertex index 4 is out of range", "3 vertices"});
+                  {"range.obj: line 5:", "face vertex index 4 is out of range", "3 vertices"});
   expect_contains(reject("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
-                  {"zero.obj:4:", "index 0 is out of range"});
-  expect_contains(reject("rel.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n"),
-                  {"rel.obj:3:", "relative face vertex index -3 is out of range", "2 vertices"});
+                  {"zero.obj: line 4:", "index 0 is out of range"});
+  expect_contains(
+      reject("rel.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n"),
+      {"rel.obj: line 3:", "relative face vertex index -3 is out of range", "2 vertices"});
 }
 
 TEST(MeshIoReject, OffAndPlyIndexOutOfRange) {
   expect_contains(reject("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"),
-                  {"range.off:6:", "face vertex index 3 is out of range", "3 vertices"});
-  TriangleMesh mesh = grid_mesh();
-  mesh.faces[6][1] = 9;
+                  {"range.off: line 6:", "face vertex index 3 is out of range", "3 vertices"});
+  Arrays mesh(grid_mesh());
+  mesh.f[6][1] = 9;
   expect_contains(reject("range.ply", ply_binary(mesh, false, false, "uchar", "uint")),
                   {"range.ply: face 6:", "vertex index 9 is out of range", "9 vertices"});
   expect_contains(reject("neg.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n"),
-                  {"neg.off:6:", "-1 is out of range"});
+                  {"neg.off: line 6:", "-1 is out of range"});
 }
 
 // Rejections: topology. Vertex numbers are the file's (an isolated vertex comes first, so the

@@ -109,10 +109,10 @@ TEST(CliRemote, PatchOfAFileWithRepairsWritesTheSameFiles) {
   // An isolated vertex first: file order and mesh order differ, corners are file indices.
   const ExampleSurface plane = make_example("plane");
   std::string obj = "v 999 999 999\n";
-  for (const Vec3& v : plane.mesh.vertices)
+  for (const Vec3& v : plane.mesh.vertices())
     obj += "v " + std::to_string(v.x()) + " " + std::to_string(v.y()) + " " +
            std::to_string(v.z()) + "\n";
-  for (const Face& f : plane.mesh.faces)
+  for (const Face& f : plane.mesh.faces())
     obj += "f " + std::to_string(f[0] + 2) + " " + std::to_string(f[1] + 2) + " " +
            std::to_string(f[2] + 2) + "\n";
   const std::string mesh = testing::write_text(testing::temp_dir(), "shifted.obj", obj);

@@ -25,8 +25,15 @@ using testing::TestDaemon;
 
 const std::map<std::string, std::string> kJson = {{"Content-Type", "application/json"}};
 
+/// The error body's "field: message" (the field apart, as data, and the message without it).
 std::string error_message(const std::string& body) {
-  return nlohmann::json::parse(body)["error"]["message"].get<std::string>();
+  const auto error = nlohmann::json::parse(body)["error"];
+  const std::string field = error.at("field").get<std::string>();
+  const std::string message = error.at("message").get<std::string>();
+  if (!field.empty()) {
+    EXPECT_EQ(message.rfind(field + ":", 0), std::string::npos) << "field repeated: " << body;
+  }
+  return field.empty() ? message : field + ": " + message;
 }
 
 TEST(Gateway, DesignAsJsonMatchesTheInProcessFiles) {
@@ -39,7 +46,7 @@ TEST(Gateway, DesignAsJsonMatchesTheInProcessFiles) {
   EXPECT_TRUE(reply.headers.count("x-request-id"));
   v1::DesignResult result;
   ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
-  const FileBundle local = design_files(run_design(request, {}, {FieldNames::Request, 1}));
+  const FileBundle local = design_files(run_design(request, {}, {1}));
   const FileBundle remote = design_files(result);
   for (const char* name : {"design.json", "planar.svg", "spatial.obj", "maps.svg"})
     EXPECT_EQ(remote.at(name), local.at(name)) << name;
@@ -55,7 +62,7 @@ TEST(Gateway, SimulateAsJsonAndAsServerSentEvents) {
   ASSERT_EQ(reply.status, 200) << reply.body.substr(0, 500);
   v1::SimulateResult result;
   ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
-  const v1::SimulateResult local = run_simulate(request, {}, {FieldNames::Request, 1});
+  const v1::SimulateResult local = run_simulate(request, {}, {1});
   EXPECT_EQ(simulate_files(result).at("deployed.obj"), simulate_files(local).at("deployed.obj"));
   EXPECT_TRUE(result.deployment().converged());
   EXPECT_EQ(result.deployment().rms_with_notches(), local.deployment().rms_with_notches());

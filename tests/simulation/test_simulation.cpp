@@ -8,8 +8,8 @@
 #include <ostream>
 
 #include "gridshell/design/design.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/simulation/simulation.h"
 
@@ -18,11 +18,9 @@ namespace {
 
 /// A flat square plate (the target surface of the planar tests), normal +z.
 TriangleMesh plate(double size) {
-  TriangleMesh mesh;
-  mesh.vertices = {Vec3(-size, -size, 0), Vec3(size, -size, 0), Vec3(size, size, 0),
-                   Vec3(-size, size, 0)};
-  mesh.faces = {{0, 1, 2}, {0, 2, 3}};
-  return mesh;
+  return TriangleMesh(
+      {Vec3(-size, -size, 0), Vec3(size, -size, 0), Vec3(size, size, 0), Vec3(-size, size, 0)},
+      {{0, 1, 2}, {0, 2, 3}});
 }
 
 Member straight_member(Family family, int index, int count, const Vec3& a, const Vec3& b) {

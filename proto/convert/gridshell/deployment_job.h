@@ -18,7 +18,8 @@ namespace gridshell {
 double parse_length_unit(const std::string& unit, const std::string& field = "unit");
 
 /// Fills unset fields of `options` with their defaults (material lime-wood, notches both, the
-/// paper's notch terms ...) and validates every field, throwing InvalidInput that names it.
+/// paper's notch terms ...) and validates every field, throwing InvalidInput whose field names
+/// it as a field of SimulationOptions ("friction_mu"; callers put it where it came from).
 /// On return every field holds the effective value.
 v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions options);
 
@@ -35,7 +36,8 @@ struct DeploymentJob {
 };
 
 /// Simulates the design (runs without and/or with notches as options.notches says) with
-/// `threads` worker threads (0 = all cores; the result does not depend on it).
+/// `threads` worker threads (0 = all cores; the result does not depend on it). Errors name
+/// "design.<field>" or "options.<field>".
 DeploymentJob run_deployment_job(const v1::Design& design, const v1::SimulationOptions& options,
                                  const std::string& design_name, const Progress& progress = {},
                                  int threads = 0);

@@ -6,43 +6,41 @@
 // about gRPC or HTTP; a request is plain data and never names a file to open.
 //
 // Every field of a request is checked before the kernel runs: sizes, indices, NaN/Inf, counts,
-// option ranges. Problems throw InvalidInput with a message that starts with the field
-// ("mesh.positions[7]: ...", "options.eta_max: ..."); the kernel adds Infeasible and Cancelled.
+// option ranges. Problems throw InvalidInput whose field is the request's path
+// ("mesh.positions[7]", "options.eta_max"); the kernel adds Infeasible and Cancelled, with
+// fields in the same vocabulary. Clients render the fields in their own terms.
 #pragma once
 
 #include <optional>
 #include <string>
 
 #include "gridshell/design/design.h"
+#include "gridshell/design/target_patch.h"
 #include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/mesh/progress.h"
-#include "gridshell/design/target_patch.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell {
 
-/// How messages name a request's fields: by proto path ("options.eta_max", "corners.vertices[2]")
-/// for API callers, or by the CLI flag that filled it ("--eta-max", "--corners").
-enum class FieldNames { Request, CommandLine };
-
 struct RunSettings {
-  FieldNames names = FieldNames::Request;
   /// Kernel worker threads inside one request; 0 = all cores. Results do not depend on it.
   int threads = 0;
 };
 
 /// Packed arrays -> mesh, with the file loader's repairs and checks (mesh_from_arrays). `report`
 /// receives the repairs and the map from sent vertex index to mesh vertex.
-TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report,
-                     FieldNames names = FieldNames::Request);
+TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report);
 
 /// Mesh -> packed arrays.
 v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name);
 
 /// Corner spec of the loaded mesh (vertex indices translated through `load`).
-CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load,
-                          FieldNames names = FieldNames::Request);
+CornerSpec to_corner_spec(const v1::Corners& corners, const LoadReport& load);
+
+/// Parses a planar angle: "min", "max", or an angle in radians ("1.2") or degrees ("70deg").
+/// Throws InvalidInput (field "options.alpha").
+void parse_alpha(const std::string& text, DesignOptions& options);
 
 /// A Corners message for a spec on a mesh sent as is, with the label recorded in design.json.
 v1::Corners to_proto(const CornerSpec& spec, const std::string& label);
@@ -58,7 +56,7 @@ struct PatchInputs {
 };
 
 /// Checks every field; throws InvalidInput naming the first bad one.
-PatchInputs prepare_patch(const v1::PatchRequest& request, FieldNames names);
+PatchInputs prepare_patch(const v1::PatchRequest& request);
 
 /// The patch stage (make_target_patch) on a request: patch.json's report and the patch mesh.
 /// Corner `input_vertex` values are indices into the request's mesh.
@@ -77,7 +75,7 @@ struct DesignInputs {
 };
 
 /// Checks every field; throws InvalidInput naming the first bad one.
-DesignInputs prepare_design(const v1::DesignRequest& request, FieldNames names);
+DesignInputs prepare_design(const v1::DesignRequest& request);
 
 /// Patch stage and grid design (make_design) on a request: design.json, report.json and the
 /// SVG/OBJ views (planar.svg, spatial.obj, maps.svg).
@@ -87,15 +85,13 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
 // Simulate and Run ---------------------------------------------------------------------------
 
 /// Simulation options checked and completed with their defaults (material moduli, unit);
-/// throws InvalidInput naming `prefix` + field (or the CLI flag).
+/// throws InvalidInput naming `prefix`.field ("options.friction_mu").
 v1::SimulationOptions prepare_simulation_options(const v1::SimulationOptions& options,
-                                                 FieldNames names,
-                                                 const std::string& prefix = "options.");
+                                                 const std::string& prefix = "options");
 
 /// The deployment simulation (paper Section 5) of a design message: deployment.json and the
 /// views deployed.obj and deviation.ply (and their *_without_notches twins when both runs are
-/// asked for). Bad options name `options.<field>` (or the CLI flag), a bad design
-/// `design.<field>`.
+/// asked for). Bad options name `options.<field>`, a bad design `design.<field>`.
 v1::SimulateResult run_simulate(const v1::SimulateRequest& request, const Progress& progress = {},
                                 const RunSettings& settings = {});
 
@@ -110,7 +106,7 @@ struct GeodesicInputs {
   int repeat = 1;
 };
 /// Checks every field; throws InvalidInput naming the first bad one.
-GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request, FieldNames names);
+GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request);
 /// One exact single-source distance field (`gridshell geodesic`): timed (median of `repeat`
 /// solves), optionally compared with a reference engine; the distances of every vertex of the
 /// mesh as loaded (the sent order unless the loader removed or welded vertices) on request.

@@ -8,8 +8,8 @@
 
 #include <vector>
 
-#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/design/patch.h"
+#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/progress.h"
 
 namespace gridshell {
@@ -21,7 +21,6 @@ struct CoverabilityOptions {
   double smoothing_step = 0.5;
   /// Sources per side when searching the longest boundary-to-boundary distance.
   int member_distance_samples = 9;
-  GeodesicMethod method = GeodesicMethod::Fast;
   /// Worker threads for those sources' solves; 0 = hardware concurrency (the result does not
   /// depend on it).
   int threads = 0;
@@ -50,8 +49,10 @@ struct CoverabilityReport {
 GapFactor gap_factor(const Patch& patch, const GeodesicSolver& solver,
                      const std::vector<double>& gaussian_curvature, const Progress& progress = {});
 
-/// Curvature, injectivity bound, longest member distance and gap factor of the patch.
-CoverabilityReport analyze_coverability(const Patch& patch, const CoverabilityOptions& options = {},
+/// Curvature, injectivity bound, longest member distance and gap factor of the patch, with
+/// geodesics computed as `geodesic` says.
+CoverabilityReport analyze_coverability(const Patch& patch, const GeodesicOptions& geodesic = {},
+                                        const CoverabilityOptions& options = {},
                                         const Progress& progress = {});
 
 /// One implicit cotangent-Laplacian fairing step (Desbrun et al. 1999): solves
@@ -66,9 +67,10 @@ struct SmoothingResult {
   double max_displacement = 0;  ///< largest total vertex movement
 };
 
-/// Smooths the patch interior (boundary fixed) until eta <= eta_max. Throws Infeasible if the
-/// iteration cap is reached first.
-SmoothingResult smooth_until_coverable(Patch& patch, const CoverabilityOptions& options = {},
+/// Smooths the patch interior (boundary fixed) until eta <= eta_max. Throws Infeasible (field
+/// "corners": the patch they bound cannot be covered) if the iteration cap is reached first.
+SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic = {},
+                                       const CoverabilityOptions& options = {},
                                        const Progress& progress = {});
 
 }  // namespace gridshell

@@ -16,12 +16,11 @@
 namespace gridshell {
 
 struct DesignOptions {
-  DesignOptions() { members.lamella_width = members.lamella_thickness = 0; }  // automatic
-  TargetPatchOptions patch;
+  TargetPatchOptions patch;  // corners -> patch; its geodesic engine serves every stage
   DistanceMapOptions maps;
   CladdingOptions cladding;
-  /// Member placement; count is overridden by members_g / members_h when > 0. A lamella width of
-  /// 0 means 1% of the longest patch side, a thickness of 0 a tenth of the width (w:t = 10:1).
+  /// Member placement (lamella width and thickness 0 = automatic, see MemberPlacementOptions);
+  /// count is overridden by members_g / members_h when > 0.
   MemberPlacementOptions members;
   int members_g = 0;  // explicit inner g-member count (CLI --members-u), 0 = auto
   int members_h = 0;  // explicit inner h-member count (CLI --members-v), 0 = auto
@@ -45,10 +44,6 @@ struct Design {
   std::vector<Anchor> anchors;
   std::map<std::string, double> stage_seconds;  ///< timings; not part of the design's value
 };
-
-/// Parses --alpha: "min", "max", or an angle in radians ("1.2") or degrees ("70deg").
-/// Throws InvalidInput naming --alpha.
-void parse_alpha(const std::string& text, DesignOptions& options);
 
 /// The grid design on an already computed target patch.
 Design design_grid(TargetPatch target, const DesignOptions& options = {},

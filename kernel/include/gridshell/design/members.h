@@ -21,9 +21,11 @@
 namespace gridshell {
 
 struct MemberPlacementOptions {
-  double lamella_width = 1.0;      // w_m, mesh units (paper models are 100 wide)
-  double lamella_thickness = 0.1;  // t, mesh units (w:t = 10:1)
-  double clearance = 0.5;          // extra gap between neighbouring lamellas, in widths
+  /// w_m, mesh units; 0 = 1% of the longest patch side (the paper's models are 100 wide and
+  /// their lamellas about 1). Default 0.
+  double lamella_width = 0;
+  double lamella_thickness = 0;  // t, mesh units; 0 = a tenth of the width (w:t = 10:1)
+  double clearance = 0.5;        // extra gap between neighbouring lamellas, in widths
   /// Maximum spacing between neighbouring members along either boundary, as a fraction of that
   /// boundary's length; gaps wider than this are filled. Default 0.1 (about 9 inner members).
   double max_spacing = 0.1;
@@ -35,6 +37,13 @@ struct MemberPlacementOptions {
   /// Relative threshold below which extrema of C and of its curvature are ignored as noise.
   double feature_threshold = 0.02;
 };
+
+/// The lamella cross-section options ask for on `patch`: 0 resolved to its automatic value.
+struct LamellaSize {
+  double width = 0;
+  double thickness = 0;
+};
+LamellaSize lamella_size(const Patch& patch, const MemberPlacementOptions& options);
 
 /// One inner member of a family, given by its boundary parameters.
 struct MemberPosition {

@@ -14,12 +14,13 @@
 
 namespace gridshell {
 
-/// How the user named the four corners (CLI `--corners`).
+/// How the user named the four corners (the API's `corners`; the CLI's --corners text is parsed
+/// into one by the CLI).
 struct CornerSpec {
   enum class Kind {
-    Vertices,  ///< "i,j,k,l": vertex indices of the mesh
-    Points,    ///< "x,y,z;x,y,z;x,y,z;x,y,z": points, snapped to the closest surface point
-    Auto,      ///< "auto": the four boundary vertices with the sharpest turning angle
+    Vertices,  ///< vertex indices of the mesh
+    Points,    ///< points, snapped to the closest surface point
+    Auto,      ///< the four boundary vertices with the sharpest turning angle
   };
   Kind kind = Kind::Auto;
   std::array<int, 4> vertices{};
@@ -33,22 +34,15 @@ struct CornerSpec {
   }
 };
 
-/// Parses the `--corners` syntax above. Throws InvalidInput naming `--corners` and the problem.
-CornerSpec parse_corners(const std::string& text);
-
 /// Four boundary vertices with the largest turning angle (pi minus the interior angle sum), in
 /// boundary order. Throws InvalidInput if the mesh has no boundary or fewer than 4 boundary
-/// vertices.
+/// vertices (field "corners").
 std::array<int, 4> auto_corners(const TriangleMesh& mesh);
-
-/// The closest point on the surface to `point` (brute force over faces).
-SurfacePoint closest_surface_point(const TriangleMesh& mesh, const Vec3& point);
 
 struct PatchCutOptions {
   /// Path points closer than this fraction of their edge's length to an edge end snap to that
   /// vertex instead of creating a sliver triangle. Default 1e-6.
   double snap_fraction = 1e-6;
-  GeodesicMethod method = GeodesicMethod::Fast;  // engine for the boundary geodesics
 };
 
 /// A patch cut out of a mesh: its own mesh, its four corners and four sides.
@@ -65,18 +59,21 @@ struct Patch {
   bool corners_reversed = false;
 };
 
-/// Cuts the patch bounded by the exact shortest geodesics c0->c1->c2->c3->c0 out of `mesh`.
-/// Faces crossed by a boundary geodesic are split so the patch boundary consists of mesh edges.
-/// Throws Infeasible when the boundary geodesics touch or cross each other (criterion (iv)) and
-/// InvalidInput when corners coincide.
+/// Cuts the patch bounded by the exact shortest geodesics c0->c1->c2->c3->c0 out of `mesh`
+/// (computed with `geodesic`). Faces crossed by a boundary geodesic are split so the patch
+/// boundary consists of mesh edges. Throws Infeasible (field "corners") when the boundary
+/// geodesics touch or cross each other (criterion (iv)) and InvalidInput ("corners[i]") when
+/// corners coincide or name no face.
 Patch cut_patch(const TriangleMesh& mesh, const std::array<SurfacePoint, 4>& corners,
-                const PatchCutOptions& options = {}, const Progress& progress = {});
+                const GeodesicOptions& geodesic = {}, const PatchCutOptions& options = {},
+                const Progress& progress = {});
 
 /// Inner angle of the patch at each corner (sum of incident face angles), radians.
 std::array<double, 4> corner_angles(const Patch& patch);
 /// Length of each side (polyline length of sides[i]).
 std::array<double, 4> side_lengths(const Patch& patch);
-/// Criterion (iv): throws Infeasible naming the corner if an inner corner angle is >= pi.
+/// Criterion (iv): throws Infeasible naming the corner ("corners[i]") if an inner corner angle is
+/// >= pi.
 void check_convex_corners(const Patch& patch);
 
 }  // namespace gridshell

@@ -12,6 +12,9 @@
 namespace gridshell {
 
 struct TargetPatchOptions {
+  /// The geodesic engine of every stage (boundary geodesics, coverability, distance maps and
+  /// members): chosen here once and passed down. Default: the fast exact engine.
+  GeodesicOptions geodesic;
   PatchCutOptions cut;               // boundary geodesics and cutting
   CoverabilityOptions coverability;  // eta_max, smoothing cap and step
   bool smooth = true;                // run smoothing when eta > eta_max

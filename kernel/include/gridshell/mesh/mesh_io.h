@@ -1,7 +1,9 @@
 // gridshell — reading target meshes (OBJ, OFF, PLY, STL) and writing OBJ, with a load report.
 #pragma once
 
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "gridshell/mesh/mesh.h"
@@ -32,31 +34,50 @@ struct LoadReport {
   std::vector<int> vertex_of_file_vertex;
 };
 
+/// The mesh file formats gridshell reads.
+enum class MeshFormat { Obj, Off, Ply, Stl };
+
+/// The format named by a file name's extension or by the format's own name ("cube.STL",
+/// ".ply", "off"), case-insensitive; nullopt for anything else.
+std::optional<MeshFormat> mesh_format_from_name(const std::string& name);
+/// "obj" | "off" | "ply" | "stl".
+const char* to_string(MeshFormat format);
+
+/// Reads a mesh from the bytes of a file of the given format: the same parser, repairs, checks
+/// and report as `load_mesh`. Errors name `name` as their field (the file name, or the field of
+/// a request that carried the bytes) and the line or element in the message. Never reads
+/// outside `data`.
+TriangleMesh read_mesh(std::string_view data, MeshFormat format, const std::string& name,
+                       LoadReport* report = nullptr, const MeshLoadOptions& options = {});
+
 /// Reads a mesh; the format is chosen by the extension (case-insensitive): .obj .off .ply (ASCII
 /// and binary little/big endian) .stl (ASCII and binary). Polygons are triangulated.
-/// Throws InvalidInput with a message that starts with the file name and names the line or
-/// element for: missing or unreadable file, unknown extension, empty file or no faces,
-/// unparseable line/header/element, NaN/Inf coordinate, out-of-range index, non-manifold
-/// edge or vertex, no boundary (closed surface), more than one boundary loop.
+/// Throws InvalidInput whose field is the path and whose message names the line or element for:
+/// missing or unreadable file, unknown extension, empty file or no faces, unparseable
+/// line/header/element, NaN/Inf coordinate, out-of-range index, non-manifold edge or vertex, no
+/// boundary (closed surface), more than one boundary loop.
 TriangleMesh load_mesh(const std::string& path, LoadReport* report = nullptr,
                        const MeshLoadOptions& options = {});
 
 /// A mesh given as arrays in memory (the daemon's packed arrays): the same repairs, checks and
-/// report as `load_mesh`, with messages starting with `name` ("mesh: face 7: ...") and vertices
-/// and faces numbered from 0 in the given order. Throws InvalidInput for no vertices, a
-/// non-finite coordinate, no faces, an out-of-range index and every topology problem.
+/// report as `load_mesh`; errors name the element as a field under `name` ("mesh.faces[7]",
+/// "mesh.vertices[3]"), vertices and faces numbered from 0 in the given order. Throws InvalidInput
+/// for no vertices, a non-finite coordinate, no faces, an out-of-range index and every topology
+/// problem.
 TriangleMesh mesh_from_arrays(const std::string& name, const std::vector<Vec3>& vertices,
                               const std::vector<Face>& faces, LoadReport* report = nullptr,
                               const MeshLoadOptions& options = {});
 
 /// The mesh as Wavefront OBJ text (shortest round-trip decimal coordinates, 1-based faces).
 std::string obj_text(const TriangleMesh& mesh);
+/// The same for plain arrays (written as they are, unchecked).
+std::string obj_text(const std::vector<Vec3>& vertices, const std::vector<Face>& faces);
 
 /// Writes a Wavefront OBJ atomically (temporary file in the same folder, then rename).
 void save_obj(const TriangleMesh& mesh, const std::string& path);
 
-/// Writes `contents` to `path` atomically (temporary file + rename). Throws InvalidInput naming
-/// the path if it cannot be written.
+/// Writes `contents` to `path` atomically (temporary file + rename). Throws InvalidInput with the
+/// path as its field if it cannot be written.
 void write_file_atomically(const std::string& path, const std::string& contents);
 
 }  // namespace gridshell

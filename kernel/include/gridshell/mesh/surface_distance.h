@@ -1,5 +1,5 @@
-// gridshell — distances from points to a triangle mesh (CGAL AABB tree), for the deviation of a
-// deployed grid from its target surface.
+// gridshell — closest points and distances from points to a triangle mesh (one CGAL AABB tree):
+// corners given as points, the deviation of a deployed grid from its target surface.
 #pragma once
 
 #include <memory>
@@ -21,7 +21,7 @@ class SurfaceDistance {
 
   /// Euclidean distance from `point` to the closest point of the surface.
   double distance(const Vec3& point) const;
-  /// The closest surface point (face and barycentric weights).
+  /// The closest surface point (face and barycentric weights, up to rounding).
   SurfacePoint closest(const Vec3& point) const;
   /// Unit surface normal at the closest point: area-weighted vertex normals interpolated with
   /// the barycentric weights.
@@ -31,5 +31,9 @@ class SurfaceDistance {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// One-off closest surface point (builds a SurfaceDistance; keep one for many queries). Throws
+/// InvalidInput for a mesh without faces.
+SurfacePoint closest_surface_point(const TriangleMesh& mesh, const Vec3& point);
 
 }  // namespace gridshell

@@ -1,0 +1,124 @@
+// Requests -> kernel inputs (proto/convert/requests.cpp): option parsing, field paths of errors.
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+#include "gridshell/example_surfaces.h"
+#include "gridshell/mesh/errors.h"
+#include "gridshell/requests.h"
+
+namespace gridshell {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+TEST(ParseAlpha, AcceptsMinMaxRadiansAndDegrees) {
+  DesignOptions options;
+  parse_alpha("max", options);
+  EXPECT_EQ(options.alpha, DesignOptions::Alpha::Max);
+  parse_alpha("min", options);
+  EXPECT_EQ(options.alpha, DesignOptions::Alpha::Min);
+  parse_alpha("90deg", options);
+  EXPECT_EQ(options.alpha, DesignOptions::Alpha::Value);
+  EXPECT_NEAR(options.alpha_value, kPi / 2, 1e-15);
+  parse_alpha("1.25", options);
+  EXPECT_DOUBLE_EQ(options.alpha_value, 1.25);
+}
+
+TEST(ParseAlpha, RejectsEverythingElseNamingTheField) {
+  DesignOptions options;
+  for (const char* bad : {"", "abc", "4", "-1", "0", "200deg", "nan", "inf", "1.2.3", "deg"}) {
+    try {
+      parse_alpha(bad, options);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.field(), "options.alpha") << bad;
+      EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+      EXPECT_EQ(std::string(e.message()).find("--"), std::string::npos) << e.message();
+    }
+  }
+}
+
+v1::DesignRequest example_request() {
+  const ExampleSurface example = make_example("double-vault");
+  v1::DesignRequest request;
+  *request.mutable_mesh() = to_proto(example.mesh, "example:double-vault");
+  for (int v : example.corners) request.mutable_corners()->add_vertices(v);
+  return request;
+}
+
+/// The field of the InvalidInput that prepare_design throws for `request`.
+std::string rejected_field(const v1::DesignRequest& request) {
+  try {
+    prepare_design(request);
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.what(), e.field() + ": " + e.message());
+    EXPECT_EQ(e.message().find("--"), std::string::npos) << "CLI syntax in " << e.message();
+    return e.field();
+  }
+  ADD_FAILURE() << "request accepted";
+  return "";
+}
+
+TEST(PrepareDesign, ErrorsNameTheRequestField) {
+  EXPECT_NO_THROW(prepare_design(example_request()));
+  {
+    v1::DesignRequest r = example_request();
+    r.mutable_corners()->set_vertices(2, 1 << 30);
+    EXPECT_EQ(rejected_field(r), "corners.vertices[2]");
+  }
+  {
+    v1::DesignRequest r = example_request();
+    r.mutable_options()->set_lamella_width(-1);
+    EXPECT_EQ(rejected_field(r), "options.lamella_width");
+  }
+  {
+    v1::DesignRequest r = example_request();
+    r.mutable_options()->set_alpha("sideways");
+    EXPECT_EQ(rejected_field(r), "options.alpha");
+  }
+  {
+    v1::DesignRequest r = example_request();
+    r.mutable_options()->set_members_v(-3);
+    EXPECT_EQ(rejected_field(r), "options.members_v");
+  }
+  {
+    v1::DesignRequest r = example_request();
+    r.mutable_mesh()->set_indices(31, -1);
+    EXPECT_EQ(rejected_field(r), "mesh.indices[31]");
+  }
+  {
+    // A topology problem found by the loader names the face as packed indices.
+    v1::DesignRequest r = example_request();
+    const int a = r.mesh().indices(0), b = r.mesh().indices(1);
+    const int far = r.mesh().positions_size() / 3 - 1;  // on no face with a or b
+    r.mutable_mesh()->add_indices(a);                   // a third face on edge (a, b): non-manifold
+    r.mutable_mesh()->add_indices(b);
+    r.mutable_mesh()->add_indices(far);
+    const std::string field = rejected_field(r);
+    EXPECT_EQ(field.rfind("mesh.", 0), 0u) << field;
+  }
+}
+
+TEST(PrepareSimulation, ErrorsNameTheFieldUnderThePrefix) {
+  v1::SimulationOptions options;
+  options.set_friction_mu(-1);
+  try {
+    prepare_simulation_options(options, "simulation");
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "simulation.friction_mu");
+  }
+  options.set_friction_mu(0);
+  options.set_material("unobtainium");
+  try {
+    prepare_simulation_options(options);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "options.material");
+    EXPECT_NE(e.message().find("lime-wood"), std::string::npos) << e.message();
+  }
+}
+
+}  // namespace
+}  // namespace gridshell
