@@ -107,6 +107,27 @@ struct Stretch {
   }
 };
 
+/// Second-order correction r Hess(r) of a Stretch residual (the geometric stiffness of the edge,
+/// the term Gauss-Newton drops; NewtonSolver::Term::curvature). With e = x_b - x_a, t = e / |e|
+/// and Hess_e |e| = (I - t t^T) / |e|:
+///   r Hess(r) = (T / |e|) (I - t t^T) on e,  T = sqrt(EA / l̄) r the axial force
+/// (T > 0 stretched, T < 0 compressed: then the block is negative semidefinite). Adds it to the
+/// 6 x 6 local Hessian `H` of the parameters (x_a, x_b) (both free): +S on the diagonal blocks,
+/// -S off them. `r`: the term's one residual at (x_a, x_b). Uses term.sqrt_stiffness only.
+inline void add_stretch_curvature(const Stretch& term, const double* xa, const double* xb,
+                                  const double* r, Eigen::MatrixXd& H) {
+  using Vec3d = Eigen::Vector3d;
+  const Vec3d e = Eigen::Map<const Vec3d>(xb) - Eigen::Map<const Vec3d>(xa);
+  const double length = e.norm();
+  const Vec3d t = e / length;
+  const Eigen::Matrix3d S =
+      (term.sqrt_stiffness * r[0] / length) * (Eigen::Matrix3d::Identity() - t * t.transpose());
+  H.block<3, 3>(0, 0) += S;
+  H.block<3, 3>(3, 3) += S;
+  H.block<3, 3>(0, 3) -= S;
+  H.block<3, 3>(3, 0) -= S;
+}
+
 /// Bending and twisting at the interior vertex between edges e0 = x1 - x0 and e1 = x2 - x1.
 ///   curvature binormal  kb = 2 e0 x e1 / (|e0| |e1| + e0.e1)   (|kb| = 2 tan(phi/2))
 ///   material curvatures k1 = (m2_0 + m2_1)/2 . kb   (weak axis: curvature vector along m1)
@@ -272,6 +293,20 @@ struct Friction {
   }
 };
 
+/// Second-order correction sum_i r_i Hess(r_i) of a Friction residual (the curvature of the log
+/// barriers, the term Gauss-Newton drops). With c = sqrt(2) mu, u = eps + b, v = eps + 1 - b:
+/// r_0 = c log u, r_0'' = -c / u^2; r_1 = c log v, r_1'' = -c / v^2, so
+///   r_0 r_0'' + r_1 r_1'' = -r_0 c / u^2 - r_1 c / v^2
+/// (positive where u, v < 1, the logs being negative there). Adds it to the 1 x 1
+/// local Hessian `H` of the parameter b (free). `r`: the term's two residuals at b. Uses
+/// term.mu and term.epsilon.
+inline void add_friction_curvature(const Friction& term, const double* beta, const double* r,
+                                   Eigen::MatrixXd& H) {
+  const double c = std::sqrt(2.0) * term.mu, epsilon = term.epsilon;
+  const double u = epsilon + *beta, v = epsilon + 1 - *beta;
+  H(0, 0) += -r[0] * c / (u * u) - r[1] * c / (v * v);
+}
+
 /// Notch limit E_n = (w log(b - b_lo))^2 or (w log(b_hi - b))^2 (paper: w = 1/10), active while
 /// the connection lies on the edge of that notch bound. One residual, sqrt(2) w log(...).
 /// Undefined (the step is rejected) beyond the bound.
@@ -288,5 +323,16 @@ struct NotchLimit {
     return true;
   }
 };
+
+/// Second-order correction r Hess(r) of a NotchLimit residual (the curvature of the log
+/// barrier). With c = sqrt(2) w and gap = b_hi - b or b - b_lo: r = c log(gap) and r'' = -c /
+/// gap^2 on either side, so r r'' = -r c / gap^2. Adds it to the 1 x 1 local Hessian `H` of the
+/// parameter b (free). `r`: the term's residual at b. Uses term.bound, term.upper, term.weight.
+inline void add_notch_limit_curvature(const NotchLimit& term, const double* beta, const double* r,
+                                      Eigen::MatrixXd& H) {
+  const double cw = std::sqrt(2.0) * term.weight;
+  const double gap = term.upper ? term.bound - *beta : *beta - term.bound;
+  H(0, 0) += -r[0] * cw / (gap * gap);
+}
 
 }  // namespace gridshell::rod_terms

@@ -507,21 +507,13 @@ Deployment::Terms Deployment::build_terms() {
     for (int k = 0; k < rod.n; ++k) {
       double* xa = rod.x[k].data();
       double* xb = rod.x[k + 1].data();
+      const rod_terms::Stretch term{stretch, rod.h};
       // Geometric stiffness of the edge: r Hess(r) = (T / |e|) (I - t t^T) on (x_a, x_b), with
       // the axial force T = sqrt(EA / l̄) r.
-      auto curvature = [xa, xb, stretch](const double* r, Eigen::MatrixXd& H) {
-        const Vec3 e = Eigen::Map<const Vec3>(xb) - Eigen::Map<const Vec3>(xa);
-        const double length = e.norm();
-        const Vec3 t = e / length;
-        const Eigen::Matrix3d S =
-            (stretch * r[0] / length) * (Eigen::Matrix3d::Identity() - t * t.transpose());
-        H.block<3, 3>(0, 0) += S;
-        H.block<3, 3>(3, 3) += S;
-        H.block<3, 3>(0, 3) -= S;
-        H.block<3, 3>(3, 0) -= S;
+      auto curvature = [xa, xb, term](const double* r, Eigen::MatrixXd& H) {
+        rod_terms::add_stretch_curvature(term, xa, xb, r, H);
       };
-      add(new AutoDiffCostFunction<rod_terms::Stretch, 1, 3, 3>(
-              new rod_terms::Stretch{stretch, rod.h}),
+      add(new AutoDiffCostFunction<rod_terms::Stretch, 1, 3, 3>(new rod_terms::Stretch(term)),
           {xa, xb}, curvature);
     }
     // Uniform edges: the Voronoi length of every interior vertex is h.
@@ -546,29 +538,27 @@ Deployment::Terms Deployment::build_terms() {
       out.blocks.emplace_back(&s->beta, 1);
       double* beta = &s->beta;
       // r Hess(r) of sqrt(2) mu log(eps + b) and sqrt(2) mu log(eps + 1 - b).
-      const double c = std::sqrt(2.0) * mu;
+      const rod_terms::Friction friction{mu, epsilon};
       add(
-          new AutoDiffCostFunction<rod_terms::Friction, 2, 1>(new rod_terms::Friction{mu, epsilon}),
+          new AutoDiffCostFunction<rod_terms::Friction, 2, 1>(new rod_terms::Friction(friction)),
           {beta},
-          [beta, c, epsilon](const double* r, Eigen::MatrixXd& H) {
-            const double u = epsilon + *beta, v = epsilon + 1 - *beta;
-            H(0, 0) += -r[0] * c / (u * u) - r[1] * c / (v * v);
+          [beta, friction](const double* r, Eigen::MatrixXd& H) {
+            rod_terms::add_friction_curvature(friction, beta, r, H);
           },
           -epsilon, 1 + epsilon);
       int lo_edge, hi_edge;
       double lo_beta, hi_beta;
       notch_edges(*s, &lo_edge, &lo_beta, &hi_edge, &hi_beta);
-      const double w = options_.notch_limit_weight, cw = std::sqrt(2.0) * w;
+      const double w = options_.notch_limit_weight;
       for (const auto& [on_edge, bound, upper] : {std::tuple{s->edge == lo_edge, lo_beta, false},
                                                   std::tuple{s->edge == hi_edge, hi_beta, true}}) {
         if (!on_edge) continue;
+        const rod_terms::NotchLimit limit{bound, upper, w};
         add(
-            new AutoDiffCostFunction<rod_terms::NotchLimit, 1, 1>(
-                new rod_terms::NotchLimit{bound, upper, w}),
+            new AutoDiffCostFunction<rod_terms::NotchLimit, 1, 1>(new rod_terms::NotchLimit(limit)),
             {beta},
-            [beta, bound = bound, upper = upper, cw](const double* r, Eigen::MatrixXd& H) {
-              const double gap = upper ? bound - *beta : *beta - bound;
-              H(0, 0) += -r[0] * cw / (gap * gap);
+            [beta, limit](const double* r, Eigen::MatrixXd& H) {
+              rod_terms::add_notch_limit_curvature(limit, beta, r, H);
             },
             upper ? -kInf : bound, upper ? bound : kInf);
       }
