@@ -96,13 +96,17 @@ CoverabilityReport analyze_coverability(const Patch& patch, const GeodesicOption
   progress.report("coverability: member lengths", 0.1);
   // The sources' solves in parallel, each into its own slot (deterministic for any thread count).
   std::vector<double> longest(jobs.size(), 0.0);
-  const Progress checker = progress.checker();
-  detail::parallel_for(jobs.size(), options.threads, [&](size_t job) {
-    progress.check();
-    const auto [v, side] = jobs[job];
-    const std::vector<double> d = solver.distances(SurfacePoint::at_vertex(patch.mesh, v), checker);
-    for (int q : patch.sides[side + 2]) longest[job] = std::max(longest[job], d[q]);
-  });
+  ParallelOptions parallel;
+  parallel.threads = options.threads;
+  parallel_for(
+      jobs.size(),
+      [&](std::size_t job, const Progress& inner) {
+        const auto [v, side] = jobs[job];
+        const std::vector<double> d =
+            solver.distances(SurfacePoint::at_vertex(patch.mesh, v), inner);
+        for (int q : patch.sides[side + 2]) longest[job] = std::max(longest[job], d[q]);
+      },
+      progress, parallel);
   for (double d : longest)
     report.longest_member_distance = std::max(report.longest_member_distance, d);
   report.injectivity_ok = report.longest_member_distance < report.injectivity_bound;

@@ -20,17 +20,12 @@
 #include "gridshell/design/distance_map.h"
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
-#include <condition_variable>
-#include <exception>
-#include <mutex>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/parallel.h"
 
 namespace gridshell {
 namespace {
@@ -44,9 +39,6 @@ void check_patch(const Patch& patch) {
     }
   }
 }
-
-/// Thrown inside a worker's solve to abandon it once another worker has failed.
-struct Abandoned {};
 
 }  // namespace
 
@@ -152,108 +144,20 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
   maps.h.distances.resize(R, R);
   std::array<Eigen::MatrixXd*, 2> out{&maps.g.distances, &maps.h.distances};
 
-  const int total = 2 * R;
-  std::atomic<int> next{0};
-  std::atomic<bool> stop{false};
-  std::mutex mutex;
-  std::condition_variable changed;
-  int done = 0;                    // guarded by mutex
-  int running = 0;                 // live workers, guarded by mutex
-  std::exception_ptr first_error;  // guarded by mutex
-
-  // What the solver sees: cancellation of the caller plus "another worker failed"; its own
-  // progress reports are not forwarded (they would interleave with ours from many threads).
-  // The caller's flag is passed on too: the solver polls it far more often than it reports,
-  // so a cancelled solve stops within milliseconds instead of at its end.
-  const Progress inner(
-      [&progress, &stop](std::string_view, double) {
-        progress.check();
-        if (stop.load(std::memory_order_relaxed)) throw Abandoned{};
-      },
-      progress.cancel_flag());
-
-  const auto worker = [&] {
-    try {
-      for (;;) {
-        if (stop.load(std::memory_order_relaxed)) break;
-        const int task = next.fetch_add(1);
-        if (task >= total) break;
-        progress.check();
-        const int f = task / R, i = task % R;
+  // The 2R single-source solves in parallel, each into its own row (deterministic for any thread
+  // count); the solver polls the caller's cancellation flag, so a cancel stops within ms.
+  ParallelOptions parallel;
+  parallel.threads = options.threads;
+  parallel.stage = kStage;
+  parallel_for(
+      2 * static_cast<std::size_t>(R),
+      [&](std::size_t task, const Progress& inner) {
+        const int f = static_cast<int>(task) / R, i = static_cast<int>(task) % R;
         const DistanceField field = solver.solve(sources[f][i], targets[f], inner);
-        Eigen::MatrixXd& matrix = *out[f];
         const std::vector<double>& row = field.target_distances();
-        for (int j = 0; j < R; ++j) matrix(i, j) = row[j];
-        {
-          std::lock_guard lock(mutex);
-          ++done;
-        }
-        changed.notify_all();
-      }
-    } catch (const Abandoned&) {
-      // Another worker's error is the one reported.
-    } catch (...) {
-      std::lock_guard lock(mutex);
-      if (!first_error) first_error = std::current_exception();
-      stop = true;
-    }
-    {
-      std::lock_guard lock(mutex);
-      --running;
-    }
-    changed.notify_all();
-  };
-
-  int threads =
-      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, total);
-
-  std::vector<std::thread> pool;
-  pool.reserve(threads);
-  const auto stop_and_join = [&] {
-    stop = true;
-    for (std::thread& thread : pool)
-      if (thread.joinable()) thread.join();
-  };
-
-  try {
-    for (int k = 0; k < threads; ++k) {
-      {
-        std::lock_guard lock(mutex);
-        ++running;
-      }
-      try {
-        pool.emplace_back(worker);
-      } catch (...) {
-        std::lock_guard lock(mutex);
-        --running;
-        throw;
-      }
-    }
-    // Report progress from this thread until every worker has finished.
-    int reported = 0;
-    std::unique_lock lock(mutex);
-    while (running > 0) {
-      changed.wait_for(lock, std::chrono::milliseconds(100),
-                       [&] { return running == 0 || (!first_error && done != reported); });
-      if (running == 0 || first_error) continue;  // nothing to report; wait for the workers
-      const bool advanced = done != reported;
-      reported = done;
-      lock.unlock();
-      if (advanced) {
-        progress.report(kStage, static_cast<double>(reported) / total);
-      } else {
-        progress.check();  // notice cancellation even while long solves run
-      }
-      lock.lock();
-    }
-  } catch (...) {
-    stop_and_join();
-    throw;
-  }
-  stop_and_join();
-  if (first_error) std::rethrow_exception(first_error);
-  progress.report(kStage, 1.0);
+        for (int j = 0; j < R; ++j) (*out[f])(i, j) = row[j];
+      },
+      progress, parallel);
   return maps;
 }
 

@@ -213,27 +213,31 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
                                               family_boundary(patch, Family::H, 0)};
   const std::array<std::vector<int>, 2> second{family_boundary(patch, Family::G, 1),
                                                family_boundary(patch, Family::H, 1)};
-  detail::parallel_for(jobs.size(), options.threads, [&](size_t job) {
-    progress.check();
-    const auto [f, k] = jobs[job];
-    const Family family = static_cast<Family>(f);
-    const MemberPosition& pos = (*positions[f])[k];
-    Member m;
-    m.family = family;
-    m.index = k + 1;
-    m.u_start = pos.u1;
-    const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
-    const DistanceField field = solver.solve(start);
-    m.u_end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
-                         options.length_tolerance, m.index);
-    m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
-    for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
-    m.length = path_length(mesh, m.surface_path);
-    m.planar = {planar_boundary_point(planar, family, 0, m.u_start),
-                planar_boundary_point(planar, family, 1, m.u_end)};
-    m.planar_length = (m.planar[1] - m.planar[0]).norm();
-    (*families[f])[k + 1] = std::move(m);
-  });
+  ParallelOptions parallel;
+  parallel.threads = options.threads;
+  parallel_for(
+      jobs.size(),
+      [&](std::size_t job, const Progress& inner) {
+        const auto [f, k] = jobs[job];
+        const Family family = static_cast<Family>(f);
+        const MemberPosition& pos = (*positions[f])[k];
+        Member m;
+        m.family = family;
+        m.index = k + 1;
+        m.u_start = pos.u1;
+        const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
+        const DistanceField field = solver.solve(start, inner);
+        m.u_end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
+                             options.length_tolerance, m.index);
+        m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
+        for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
+        m.length = path_length(mesh, m.surface_path);
+        m.planar = {planar_boundary_point(planar, family, 0, m.u_start),
+                    planar_boundary_point(planar, family, 1, m.u_end)};
+        m.planar_length = (m.planar[1] - m.planar[0]).norm();
+        (*families[f])[k + 1] = std::move(m);
+      },
+      progress, parallel);
   progress.report("grid: members", 1.0);
 
   // Crossings. Boundary crossings lie at member ends and follow from the parameters.

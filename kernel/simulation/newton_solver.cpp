@@ -3,13 +3,12 @@
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <string>
-#include <thread>
 #include <unordered_map>
 
+#include "gridshell/mesh/parallel.h"
 #include "sparse_cholesky.h"
 
 namespace gridshell {
@@ -317,20 +316,17 @@ bool NewtonSolver::evaluate() {
   }
   std::vector<double> costs(kChunks, 0.0);
   std::vector<char> oks(kChunks, 1);
-  std::atomic<int> next{0};
-  auto work = [&] {
-    for (int c = next++; c < kChunks; c = next++) {
-      const size_t begin = count * c / kChunks, end = count * (c + 1) / kChunks;
-      bool ok = true;
-      m.accumulate(begin, end, values[c].data(), gradients[c].data(), &costs[c], &ok);
-      oks[c] = ok;
-    }
-  };
-  const int threads = std::clamp(m.threads, 1, kChunks);
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
+  ParallelOptions parallel;
+  parallel.threads = std::max(1, m.threads);
+  parallel_for(
+      kChunks,
+      [&](std::size_t c, const Progress&) {
+        const size_t begin = count * c / kChunks, end = count * (c + 1) / kChunks;
+        bool ok = true;
+        m.accumulate(begin, end, values[c].data(), gradients[c].data(), &costs[c], &ok);
+        oks[c] = ok;
+      },
+      {}, parallel);
   for (char ok : oks)
     if (!ok) return false;
   double* out = m.hessian.valuePtr();

@@ -29,6 +29,7 @@
 #include <tuple>
 
 #include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/parallel.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "newton_solver.h"
 #include "rod_terms.h"
@@ -742,15 +743,10 @@ bool Deployment::move_sliders() {
   return moved;
 }
 
-int solver_threads(int requested) {
-  return requested > 0 ? requested
-                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
-
 void Deployment::solve_newton(const Progress& progress, const std::string& stage,
                               DeploymentRun& run) {
   NewtonSolver::Options newton_options;
-  newton_options.threads = solver_threads(options_.threads);
+  newton_options.threads = resolve_threads(options_.threads);
 
   double lambda = newton_options.initial_lambda;
   std::unique_ptr<NewtonSolver> newton;
@@ -856,7 +852,7 @@ void Deployment::solve_ceres(const Progress& progress, const std::string& stage,
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
-  solver.num_threads = solver_threads(options_.threads);
+  solver.num_threads = resolve_threads(options_.threads);
   const double tolerance = options_.gradient_tolerance * force_reference_;
   solver.gradient_tolerance = tolerance;
   solver.function_tolerance = 1e-15;

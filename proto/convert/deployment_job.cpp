@@ -3,10 +3,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
-#include <thread>
 
 #include "gridshell/convert_deployment.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/parallel.h"
 #include "gridshell/simulation/deployment_export.h"
 
 namespace gridshell {
@@ -151,10 +151,9 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   SimulationOptions without_options = kernel_simulation_options(options, false),
                     with_options = kernel_simulation_options(options, true);
   without_options.threads = with_options.threads = threads;
-  // Both runs are independent: with two or more threads they run side by side, one thread
+  // Both runs are independent: with two or more threads they run side by side, half the threads
   // each (results do not depend on the thread count).
-  const int available =
-      threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int available = resolve_threads(threads);
   auto simulate = [&](const SimulationOptions& o) {
     try {
       return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
@@ -168,22 +167,18 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   };
   if (without && with && available >= 2) {
     without_options.threads = with_options.threads = std::max(1, available / 2);
-    std::exception_ptr failure;
-    std::thread second([&] {
-      try {
-        job.with_notches = simulate(with_options);
-      } catch (...) {
-        failure = std::current_exception();
-      }
-    });
-    try {
-      job.without_notches = simulate(without_options);
-    } catch (...) {
-      second.join();
-      throw;
-    }
-    second.join();
-    if (failure) std::rethrow_exception(failure);
+    ParallelOptions parallel;
+    parallel.threads = 2;
+    // Each run reports its own stages through `progress` (thread-safe) and polls its flag.
+    parallel_for(
+        2,
+        [&](std::size_t run, const Progress&) {
+          if (run == 0)
+            job.without_notches = simulate(without_options);
+          else
+            job.with_notches = simulate(with_options);
+        },
+        progress, parallel);
   } else {
     if (without) job.without_notches = simulate(without_options);
     if (with) job.with_notches = simulate(with_options);
