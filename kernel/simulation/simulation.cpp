@@ -177,6 +177,49 @@ class ProgressCallback : public ceres::IterationCallback {
   bool cancelled_ = false;
 };
 
+/// The inputs simulate_deployment documents as invalid (before any work is done).
+void check_inputs(const Grid& grid, double width, double thickness,
+                  const SimulationOptions& options) {
+  if (!(width > 0) || !std::isfinite(width))
+    throw InvalidInput("lamella_width", "must be a positive number");
+  if (!(thickness > 0) || !std::isfinite(thickness))
+    throw InvalidInput("lamella_thickness", "must be a positive number");
+  if (grid.g.size() < 2 || grid.h.size() < 2)
+    throw InvalidInput("design.members", "each family needs at least its two boundary members");
+  const Material& mat = options.material;
+  if (!(mat.young_modulus > 0) || !(mat.shear_modulus > 0) || !std::isfinite(mat.young_modulus) ||
+      !std::isfinite(mat.shear_modulus))
+    throw InvalidInput("options.young_modulus",
+                       "Young's and shear moduli must be positive numbers");
+  if (!(options.friction_mu >= 0) || !(options.friction_epsilon > 0))
+    throw InvalidInput("options.friction_mu", "mu must be >= 0 and epsilon > 0");
+  if (!(options.edges_per_interval >= 1) || options.edges_per_interval > 64)
+    throw InvalidInput("options.edges_per_interval", "must be between 1 and 64");
+  if (options.max_iterations < 1)
+    throw InvalidInput("options.max_iterations", "must be at least 1");
+  int list_index = 0;  // design.members lists g then h
+  for (const auto* family : {&grid.g, &grid.h})
+    for (const Member& m : *family) {
+      const std::string field = "design.members[" + std::to_string(list_index++) + "]";
+      const std::string name =
+          std::string(m.family == Family::G ? "g" : "h") + std::to_string(m.index);
+      if (m.surface.size() < 2)
+        throw InvalidInput(field, "member " + name + " has fewer than 2 surface points");
+      for (const Vec3& p : m.surface)
+        if (!finite(p)) throw InvalidInput(field, "member " + name + " has a non-finite point");
+      if (!(m.planar_length > 0) || !std::isfinite(m.planar_length))
+        throw InvalidInput(field, "member " + name + " has no positive planar length");
+    }
+  const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
+  for (size_t k = 0; k < grid.crossings.size(); ++k) {
+    const Crossing& c = grid.crossings[k];
+    if (c.g < 0 || c.g >= ng || c.h < 0 || c.h >= nh)
+      throw InvalidInput("design.crossings[" + std::to_string(k) + "]",
+                         "crossing (" + std::to_string(c.g) + ", " + std::to_string(c.h) +
+                             ") names a member that does not exist");
+  }
+}
+
 class Deployment {
  public:
   Deployment(const Grid& grid, const std::vector<Anchor>& anchors, const TriangleMesh& target,
@@ -184,6 +227,16 @@ class Deployment {
   DeploymentRun solve(const Progress& progress);
 
  private:
+  // The steps of the constructor, in order.
+  /// The model's scale (largest extent -> options.reference_extent) and the stiffnesses.
+  void set_scale(const TriangleMesh& target, double width, double thickness);
+  /// One discrete elastic rod per member, on its geodesic offset by half the thickness.
+  void build_rods(const Grid& grid, double thickness);
+  /// A joint per crossing: two sliders (fixed, or sliding within the notch).
+  void build_connections(const Grid& grid);
+  /// Pins the anchored joints to the target.
+  void bind_anchors(const std::vector<Anchor>& anchors);
+
   struct Terms {
     std::vector<std::unique_ptr<ceres::CostFunction>> owned;
     std::vector<NewtonSolver::Term> terms;
@@ -241,47 +294,14 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
                        const TriangleMesh& target, double width, double thickness,
                        const SimulationOptions& options)
     : options_(options), target_(target), distance_(target) {
-  // --- validation -------------------------------------------------------------------------
-  if (!(width > 0) || !std::isfinite(width))
-    throw InvalidInput("lamella_width", "must be a positive number");
-  if (!(thickness > 0) || !std::isfinite(thickness))
-    throw InvalidInput("lamella_thickness", "must be a positive number");
-  if (grid.g.size() < 2 || grid.h.size() < 2)
-    throw InvalidInput("design.members", "each family needs at least its two boundary members");
-  const Material& mat = options.material;
-  if (!(mat.young_modulus > 0) || !(mat.shear_modulus > 0) || !std::isfinite(mat.young_modulus) ||
-      !std::isfinite(mat.shear_modulus))
-    throw InvalidInput("options.young_modulus",
-                       "Young's and shear moduli must be positive numbers");
-  if (!(options.friction_mu >= 0) || !(options.friction_epsilon > 0))
-    throw InvalidInput("options.friction_mu", "mu must be >= 0 and epsilon > 0");
-  if (!(options.edges_per_interval >= 1) || options.edges_per_interval > 64)
-    throw InvalidInput("options.edges_per_interval", "must be between 1 and 64");
-  if (options.max_iterations < 1)
-    throw InvalidInput("options.max_iterations", "must be at least 1");
-  int list_index = 0;  // design.members lists g then h
-  for (const auto* family : {&grid.g, &grid.h})
-    for (const Member& m : *family) {
-      const std::string field = "design.members[" + std::to_string(list_index++) + "]";
-      const std::string name =
-          std::string(m.family == Family::G ? "g" : "h") + std::to_string(m.index);
-      if (m.surface.size() < 2)
-        throw InvalidInput(field, "member " + name + " has fewer than 2 surface points");
-      for (const Vec3& p : m.surface)
-        if (!finite(p)) throw InvalidInput(field, "member " + name + " has a non-finite point");
-      if (!(m.planar_length > 0) || !std::isfinite(m.planar_length))
-        throw InvalidInput(field, "member " + name + " has no positive planar length");
-    }
-  const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
-  for (size_t k = 0; k < grid.crossings.size(); ++k) {
-    const Crossing& c = grid.crossings[k];
-    if (c.g < 0 || c.g >= ng || c.h < 0 || c.h >= nh)
-      throw InvalidInput("design.crossings[" + std::to_string(k) + "]",
-                         "crossing (" + std::to_string(c.g) + ", " + std::to_string(c.h) +
-                             ") names a member that does not exist");
-  }
+  check_inputs(grid, width, thickness, options);
+  set_scale(target, width, thickness);
+  build_rods(grid, thickness);
+  build_connections(grid);
+  bind_anchors(anchors);
+}
 
-  // --- scale ------------------------------------------------------------------------------
+void Deployment::set_scale(const TriangleMesh& target, double width, double thickness) {
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const Vec3& v : target.vertices()) {
     lo = lo.cwiseMin(v);
@@ -298,17 +318,19 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
                     value, extent);
       throw InvalidInput(name, message);
     }
-  scale_ = options.reference_extent / extent;
+  scale_ = options_.reference_extent / extent;
   width_ = width * scale_;
   thickness_ = thickness * scale_;
-  const double E = mat.young_modulus, G = mat.shear_modulus;
+  const double E = options_.material.young_modulus, G = options_.material.shear_modulus;
   k_.EA = E * width_ * thickness_;
   k_.EI_weak = E * width_ * std::pow(thickness_, 3) / 12;
   k_.EI_strong = E * thickness_ * std::pow(width_, 3) / 12;
   k_.GJ = G * torsion_constant(width_, thickness_);
   force_reference_ = k_.EI_weak;  // EI_weak / (1 scaled unit)^2
+}
 
-  // --- rods -------------------------------------------------------------------------------
+void Deployment::build_rods(const Grid& grid, double thickness) {
+  const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
   ng_ = ng;
   std::vector<int> crossings_per_rod(ng + nh, 0);
   for (const Crossing& c : grid.crossings) {
@@ -326,7 +348,7 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
       const int count = crossings_per_rod[rods_.size()];
       rod.n = std::max(
           4,
-          static_cast<int>(std::ceil(options.edges_per_interval * std::max(1, count - 1) - 1e-9)));
+          static_cast<int>(std::ceil(options_.edges_per_interval * std::max(1, count - 1) - 1e-9)));
       rod.h = rod.rest_length / rod.n;
       h_sum += rod.h;
       std::vector<double> cumulative{0.0};
@@ -364,12 +386,13 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
     }
   const double h_mean = h_sum / rods_.size();
   h_mean_ = h_mean;
-  w_position_ = options.connection_position_weight * k_.EA / h_mean;
-  w_direction_ = options.connection_direction_weight * k_.EI_strong / h_mean;
-  w_anchor_position_ = options.anchor_position_weight * k_.EA / h_mean;
-  w_anchor_direction_ = options.anchor_direction_weight * k_.EI_strong / h_mean;
+  w_position_ = options_.connection_position_weight * k_.EA / h_mean;
+  w_direction_ = options_.connection_direction_weight * k_.EI_strong / h_mean;
+  w_anchor_position_ = options_.anchor_position_weight * k_.EA / h_mean;
+  w_anchor_direction_ = options_.anchor_direction_weight * k_.EI_strong / h_mean;
+}
 
-  // --- connections --------------------------------------------------------------------------
+void Deployment::build_connections(const Grid& grid) {
   auto make_slider = [&](int rod_index, double s, double s_bar, bool may_slide) {
     const Rod& rod = rods_[rod_index];
     const double surface_to_rest = 1.0;  // criterion (i): surface length == planar length
@@ -389,7 +412,7 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
       // barriers.
       const double inset = std::min(1e-3 * rod.h, 0.1 * std::abs(slider.notch));
       const double direction = slider.notch > 0 ? 1.0 : -1.0;
-      sigma = options.notch_start == SimulationOptions::NotchStart::Planar
+      sigma = options_.notch_start == SimulationOptions::NotchStart::Planar
                   ? slider.s_bar + direction * inset
                   : s_rest - direction * inset;
     }
@@ -401,11 +424,14 @@ Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
     Joint joint;
     joint.g = c.g;
     joint.h = c.h;
-    const bool may_slide = options.notches && !c.on_boundary;
+    const bool may_slide = options_.notches && !c.on_boundary;
     joint.end[0] = make_slider(c.g, c.s_g, c.s_bar_g, may_slide);
-    joint.end[1] = make_slider(ng + c.h, c.s_h, c.s_bar_h, may_slide);
+    joint.end[1] = make_slider(ng_ + c.h, c.s_h, c.s_bar_h, may_slide);
     joints_.push_back(joint);
   }
+}
+
+void Deployment::bind_anchors(const std::vector<Anchor>& anchors) {
   for (size_t k = 0; k < anchors.size(); ++k) {
     const Anchor& a = anchors[k];
     const std::string field = "design.anchors[" + std::to_string(k) + "]";

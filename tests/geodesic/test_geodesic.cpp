@@ -1,4 +1,4 @@
-// Tests for the geodesic engines (kernel/src/geodesic*.cpp).
+// Tests for the geodesic engines (kernel/geodesic/geodesic*.cpp).
 //
 // The fast exact engine is checked against CGAL's Surface_mesh_shortest_path (an independent
 // exact implementation) on generated meshes, the example surfaces and the three shared freeform

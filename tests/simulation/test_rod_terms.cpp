@@ -1,4 +1,4 @@
-// The residual blocks of the deployment simulation (kernel/src/rod_terms.h): Jacobians against
+// The residual blocks of the deployment simulation (kernel/simulation/rod_terms.h): Jacobians against
 // central finite differences, and the discrete elastic rod against closed forms.
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/dynamic_autodiff_cost_function.h>

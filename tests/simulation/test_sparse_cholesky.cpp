@@ -1,4 +1,4 @@
-// The Newton solver's block sparse Cholesky (kernel/src/sparse_cholesky.h) against Eigen's
+// The Newton solver's block sparse Cholesky (kernel/simulation/sparse_cholesky.h) against Eigen's
 // SimplicialLLT, the oracle: same solutions for any block partition, the same factor with scalar
 // blocks, refactorization on the same pattern, and indefinite matrices rejected.
 #include <gtest/gtest.h>

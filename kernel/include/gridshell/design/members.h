@@ -56,7 +56,7 @@ struct MemberPosition {
 /// Inner members of one family, sorted by u1 (and u2: the cladding function is monotone).
 /// `surface_map` is the family's D; side_lengths(`patch`) gives the boundary lengths and
 /// `planar` the angles between members and boundaries for the spacing rule (algorithm and
-/// choices: kernel/src/members.cpp). Throws InvalidInput for inconsistent options (e.g.
+/// choices: kernel/design/members.cpp). Throws InvalidInput for inconsistent options (e.g.
 /// min_members > max_members) or a cladding polyline not joining (0,0) to (1,1), and Infeasible
 /// for an invalid cladding function or if even min_members (or count) cannot be placed.
 std::vector<MemberPosition> place_members(const CladdingFunction& cladding,

@@ -2,7 +2,7 @@
 //
 // Paper Sections 3.3 and 4.2 need many single-source exact distance fields per design. The
 // default engine (`GeodesicMethod::Fast`) is our own exact window-propagation algorithm
-// (kernel/src/geodesic_fast.cpp); CGAL's Surface_mesh_shortest_path (Xin-Wang) is kept as the
+// (kernel/geodesic/geodesic_fast.cpp); CGAL's Surface_mesh_shortest_path (Xin-Wang) is kept as the
 // oracle (`Cgal`) and CGAL's heat method (`Heat`, approximate) for comparison.
 //
 // Usage: build one GeodesicSolver per mesh (precomputes connectivity and per-face geometry),

@@ -1,7 +1,10 @@
 // gridshell — deployment simulation (paper Section 5): every lamella a discrete elastic rod
 // (Bergou et al. 2008/2010) with anisotropic rectangular cross-section, rotating and sliding
 // connections with the lamellas' thickness offset, anchors pinned to the target, notch limits
-// and pseudo-friction; the equilibrium found by Levenberg-Marquardt (Gauss-Newton) in Ceres.
+// and pseudo-friction. The equilibrium is found by a damped Newton method (Gauss-Newton Hessian
+// plus the hand-derived geometric stiffness and barrier curvature, block sparse Cholesky;
+// kernel/simulation/newton_solver.h) on the terms' Ceres cost functions; Ceres' own
+// Levenberg-Marquardt is kept as the reference (SimulationSolver::Ceres).
 //
 // Units. Lengths are in the design's (mesh) units. Internally the model is scaled so that its
 // largest extent is `SimulationOptions::reference_extent` (100, the size of the paper's models)
@@ -41,7 +44,7 @@ Material material_by_name(const std::string& name);
 enum class SimulationSolver {
   /// Damped Newton: the Gauss-Newton Hessian plus the geometric stiffness of the rod edges and
   /// the exact curvature of the notch terms, Levenberg-Marquardt damping, sparse Cholesky
-  /// (kernel/src/newton_solver.h explains why). Default.
+  /// (kernel/simulation/newton_solver.h explains why). Default.
   Newton,
   /// Ceres' Levenberg-Marquardt with sparse normal Cholesky (SuiteSparse): the reference.
   Ceres,
