@@ -1,0 +1,4 @@
+// Back-edge probe: the mesh layer reaching for the geodesic layer must not compile.
+#include "gridshell/geodesic/geodesic.h"
+
+int main() { return 0; }
