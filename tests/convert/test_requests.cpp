@@ -1,9 +1,11 @@
 // Requests -> kernel inputs (proto/convert/requests.cpp): option parsing, field paths of errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numbers>
 
 #include "gridshell/example_surfaces.h"
+#include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/requests.h"
 
@@ -117,6 +119,32 @@ TEST(PrepareSimulation, ErrorsNameTheFieldUnderThePrefix) {
   } catch (const InvalidInput& e) {
     EXPECT_EQ(e.field(), "options.material");
     EXPECT_NE(e.message().find("lime-wood"), std::string::npos) << e.message();
+  }
+}
+
+TEST(ToJson, MapsComeOutSortedWhateverTheirInsertionOrder) {
+  // protobuf's maps iterate in a per-process hash order; files must not depend on it.
+  const std::vector<std::string> keys{"patch",   "grid",    "cladding", "distance_maps",
+                                      "members", "anchors", "zeta",     "alpha",
+                                      "m1",      "m2",      "m10"};
+  std::string first;
+  for (int permutation = 0; permutation < 8; ++permutation) {
+    v1::DesignReport report;
+    std::vector<std::string> order = keys;
+    std::rotate(order.begin(), order.begin() + permutation % order.size(), order.end());
+    if (permutation % 2) std::reverse(order.begin(), order.end());
+    for (const std::string& key : order) (*report.mutable_stage_seconds())[key] = key.size();
+    const std::string json = to_json(report, false);
+    if (permutation == 0) first = json;
+    EXPECT_EQ(json, first);
+  }
+  size_t previous = 0;
+  for (const char* key : {"alpha", "anchors", "cladding", "distance_maps", "grid", "m1", "m10",
+                          "m2", "members", "patch", "zeta"}) {
+    const size_t at = first.find(std::string("\"") + key + "\"");
+    ASSERT_NE(at, std::string::npos) << key;
+    EXPECT_GT(at, previous) << key << " out of order in " << first;
+    previous = at;
   }
 }
 
