@@ -265,6 +265,38 @@ TEST(ParallelFor, RunningJobsAreAbandonedThroughInnerReport) {
   EXPECT_EQ(started.load(), threads);
 }
 
+// BUG (parallel.h vs parallel.cpp): the header promises that after the first exception "running
+// jobs stop at their next check of `inner`", and that `inner` "stops the job when another job
+// has failed". But inner.check() only looks at the caller's cancellation flag; the "another job
+// failed" flag is seen only by inner.report(). Long kernel computations poll check() far more
+// often than they report (the fast geodesic engine: check() every 4096 events, report() every
+// 262144), so a job that only checks runs to its end. Measured: the three jobs below, looping on
+// inner.check() only, were not stopped at all and ran until the test's 10 s deadline (the run
+// took 10.0 s instead of a few ms). Enable once inner.check() sees the failure.
+TEST(ParallelFor, DISABLED_RunningJobsAreAbandonedThroughInnerCheck) {
+  const int threads = 4;
+  std::atomic<int> started{0}, abandoned{0}, timed_out{0};
+  const auto begin = Clock::now();
+  EXPECT_THROW(parallel_for(
+                   threads,
+                   [&](std::size_t, const Progress& inner) {
+                     const int k = started.fetch_add(1);
+                     wait_until([&] { return started.load() >= threads; });
+                     if (k == 0) throw std::runtime_error("job failed");
+                     if (run_until_stopped([&] { inner.check(); }))
+                       abandoned.fetch_add(1);
+                     else
+                       timed_out.fetch_add(1);
+                   },
+                   {}, with_threads(threads)),
+               std::runtime_error);
+  const double seconds = std::chrono::duration<double>(Clock::now() - begin).count();
+  std::printf("  inner.check(): %d abandoned, %d ran to the deadline; %.3f s\n", abandoned.load(),
+              timed_out.load(), seconds);
+  EXPECT_EQ(timed_out.load(), 0);
+  EXPECT_EQ(abandoned.load(), threads - 1);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Cancellation through the caller's flag
 
