@@ -452,6 +452,23 @@ TEST(ParallelFor, ProgressFromTheCallingThreadMonotoneUpToTo) {
     }
 }
 
+// BUG (parallel.cpp, report()): the last fraction is computed as from + (to - from) x 1, which is
+// not always `to` in floating point: [0.3, 0.9] ends at 0.9000000000000001, one ulp above `to`
+// and so outside [from, to], and [0.2, 0.9] at 0.8999999999999999 (of the 55 ranges with ends in
+// tenths these two are off). The header promises "to = fraction reported when every job has
+// finished". No kernel caller sets from/to yet (all use [0, 1], where it is exact), so nothing
+// reports a fraction above 1 today. Enable once the last report is `to` itself.
+TEST(ParallelFor, DISABLED_LastProgressFractionIsExactlyTo) {
+  for (int threads : {1, 2})
+    for (const auto& [from, to] : {std::pair{0.3, 0.9}, std::pair{0.2, 0.9}}) {
+      const std::vector<Report> reports = progress_reports(threads, from, to);
+      ASSERT_FALSE(reports.empty());
+      for (const Report& report : reports) EXPECT_LE(report.fraction, to);
+      EXPECT_EQ(reports.back().fraction, to) << std::setprecision(17) << "[" << from << ", " << to
+                                             << "] ended at " << reports.back().fraction;
+    }
+}
+
 TEST(ParallelFor, EmptyStageReportsNothing) {
   int calls = 0;
   const Progress progress([&](std::string_view, double) { ++calls; });
