@@ -125,6 +125,47 @@ TEST(SurfacePoint, PositionIsTheBarycentricCombination) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Moved from tests/geodesic/test_geodesic.cpp (Geodesic.SurfacePointHelpers), unchanged but for
+// the suite name; its mesh is the same height field on the support grid (alternating instead of
+// random diagonals).
+
+/// Height field over a 10 x 8 rectangle with a Gaussian bump and a hyperbolic-paraboloid term.
+TriangleMesh bump_saddle_mesh() {
+  return testing::grid_mesh(18, 15, [](double u, double v) {
+    const double x = 10 * u, y = 8 * v;
+    const double z = 2.5 * std::exp(-((x - 3.5) * (x - 3.5) + (y - 4) * (y - 4)) / 3.0) +
+                     0.12 * (x - 5) * (y - 4);
+    return Vec3(x, y, z);
+  });
+}
+
+TEST(SurfacePoint, SurfacePointHelpers) {
+  const TriangleMesh mesh = bump_saddle_mesh();
+  const Face& f = mesh.faces()[10];
+  const SurfacePoint v = SurfacePoint::at_vertex(mesh, f[1]);
+  EXPECT_EQ(v.vertex(mesh), f[1]);
+  EXPECT_EQ((v.position(mesh) - mesh.vertices()[f[1]]).norm(), 0.0);
+  const SurfacePoint e = SurfacePoint::on_edge(mesh, f[2], f[0], 0.25);
+  EXPECT_EQ(e.vertex(mesh), -1);
+  EXPECT_LT(
+      (e.position(mesh) - (0.75 * mesh.vertices()[f[2]] + 0.25 * mesh.vertices()[f[0]])).norm(),
+      1e-15);
+  int zeros = 0;
+  for (int i = 0; i < 3; ++i) zeros += e.barycentric[i] == 0.0;
+  EXPECT_EQ(zeros, 1);
+  EXPECT_EQ(SurfacePoint::on_edge(mesh, f[2], f[0], 0.0).vertex(mesh), f[2]);
+  EXPECT_EQ(SurfacePoint::on_edge(mesh, f[2], f[0], 1.0).vertex(mesh), f[0]);
+  EXPECT_THROW(SurfacePoint::at_vertex(mesh, -1), InvalidInput);
+  EXPECT_THROW(SurfacePoint::at_vertex(mesh, mesh.vertex_count()), InvalidInput);
+  EXPECT_THROW(SurfacePoint::on_edge(mesh, f[0], f[1], 1.5), InvalidInput);
+  EXPECT_THROW(SurfacePoint::on_edge(mesh, 0, mesh.vertex_count() - 1, 0.5), InvalidInput);
+  std::vector<Vec3> more = mesh.vertices();
+  more.push_back(Vec3(100, 100, 100));
+  const TriangleMesh with_isolated(std::move(more), mesh.faces());
+  EXPECT_THROW(SurfacePoint::at_vertex(with_isolated, mesh.vertex_count()), InvalidInput);
+}
+
+// ---------------------------------------------------------------------------------------------
 // closest_point_on_triangle
 
 /// Closest point of segment ab to p.
