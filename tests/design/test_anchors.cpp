@@ -317,5 +317,70 @@ TEST(PlaceAnchors, InteriorAnchorsAreStrictHeightExtrema) {
   EXPECT_EQ(inner, 2);  // the two crowns
 }
 
+// Moved from tests/design/test_design.cpp (Design.InteriorAnchorsAtCrownsAndNoneOnASaddle),
+// unchanged but for the suite name.
+//
+// Inner anchors (AnchorOptions::interior): strict local extrema of the height over the
+// boundary's plane. A spherical cap has one (its crown, where the normal is the plane's normal),
+// the double vault two (its crowns, the higher first), a hyperbolic paraboloid none (a saddle
+// has no extremum); the boundary anchors stay as they were.
+TEST(PlaceAnchors, InteriorAnchorsAtCrownsAndNoneOnASaddle) {
+  auto design = [](const std::string& name) {
+    const ExampleSurface example = make_example(name);
+    const CornerSpec corners = CornerSpec::at_vertices(example.corners);
+    DesignOptions options;
+    options.maps.resolution = 48;
+    return make_design(example.mesh, corners, options);
+  };
+  auto inner = [](const std::vector<Anchor>& anchors) {
+    std::vector<Anchor> out;
+    for (const Anchor& a : anchors)
+      if (a.side < 0) out.push_back(a);
+    return out;
+  };
+  auto crossing = [](const Grid& grid, const Anchor& a) {
+    return grid.crossings[static_cast<size_t>(a.g) * grid.h.size() + a.h];
+  };
+  AnchorOptions options;
+  options.interior = 10;
+  {
+    const Design d = design("sphere");
+    EXPECT_TRUE(inner(d.anchors).empty());  // the default is the paper's: boundary only
+    const std::vector<Anchor> all = place_anchors(d.target.patch, d.grid, options);
+    ASSERT_EQ(all.size(), d.anchors.size() + 1);
+    for (size_t k = 0; k < d.anchors.size(); ++k) {
+      EXPECT_EQ(all[k].g, d.anchors[k].g);
+      EXPECT_EQ(all[k].h, d.anchors[k].h);
+    }
+    const Anchor crown = all.back();
+    EXPECT_EQ(crown.side, -1);
+    EXPECT_FALSE(crown.corner);
+    const Crossing& x = crossing(d.grid, crown);
+    EXPECT_FALSE(x.on_boundary);
+    EXPECT_EQ(crown.position, x.surface_point);
+    for (const Crossing& other : d.grid.crossings)  // the highest crossing of the cap
+      EXPECT_LE(other.surface_point.z(), x.surface_point.z() + 1e-12);
+    EXPECT_NEAR(crown.normal.norm(), 1.0, 1e-9);
+    EXPECT_GT(crown.normal.z(), 0.99);
+  }
+  {
+    const Design d = design("double-vault");
+    const std::vector<Anchor> two = inner(place_anchors(d.target.patch, d.grid, options));
+    ASSERT_EQ(two.size(), 2u);
+    EXPECT_GE(crossing(d.grid, two[0]).surface_point.z(),
+              crossing(d.grid, two[1]).surface_point.z());
+    options.interior = 1;  // the limit is respected, the most prominent kept
+    const std::vector<Anchor> one = inner(place_anchors(d.target.patch, d.grid, options));
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_EQ(one[0].g, two[0].g);
+    EXPECT_EQ(one[0].h, two[0].h);
+    options.interior = 10;
+  }
+  {
+    const Design d = design("hypar");
+    EXPECT_TRUE(inner(place_anchors(d.target.patch, d.grid, options)).empty());
+  }
+}
+
 }  // namespace
 }  // namespace gridshell
