@@ -366,6 +366,41 @@ TEST(PlanarSvg, ADotPerCrossingAndASquarePerAnchor) {
   }
 }
 
+// SUSPICIOUS (design_export.cpp, fmt = "%.6g"): planar_svg prints every coordinate with 6
+// significant digits, so on the double vault's 166 x 46 drawing coordinates are good to 1e-3
+// units only: member endpoints were off by up to 4.3e-4 (asked: 1e-6), and the notch slots,
+// down to 1.4e-3 long, by up to 7.6e-4 in length (2.7 % of a 2.4e-3 notch). The lamellas are
+// 1 unit wide, so the drawing looks right, but the slot lengths it carries are not the
+// design's. Enable once planar_svg prints enough digits (e.g. %.17g or 1e-9 of the size).
+TEST(PlanarSvg, DISABLED_EndpointsAndNotchSlotsAccurateTo1e6) {
+  const Design& d = double_vault();
+  const PlanarSvg svg = read_planar(d);
+  // The translation, exactly: the code's lo = min(planar corners) - margin, hi = max + margin.
+  Vec2 lo = d.planar.corners[0], hi = lo;
+  for (const Vec2& c : d.planar.corners) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+  const double margin = 0.05 * (hi - lo).maxCoeff() + 2 * d.lamella_width;
+  const auto to_svg = [&](const Vec2& p) {
+    return Vec2(p.x() - (lo.x() - margin), (hi.y() + margin) - p.y());
+  };
+  std::size_t k = 0;
+  for (const auto* family : {&d.grid.g, &d.grid.h})
+    for (const Member& m : *family) {
+      const Element& line = *svg.member_lines.at(k++);
+      EXPECT_LT((Vec2(line.number("x1"), line.number("y1")) - to_svg(m.planar[0])).norm(), 1e-6)
+          << member_name(m);
+      EXPECT_LT((Vec2(line.number("x2"), line.number("y2")) - to_svg(m.planar[1])).norm(), 1e-6)
+          << member_name(m);
+    }
+  k = 0;
+  for (const Crossing& x : d.grid.crossings)
+    for (double notch : {x.notch_g(), x.notch_h()}) {
+      if (notch == 0.0) continue;
+      const Element& line = *svg.notch_lines.at(k++);
+      const Vec2 a(line.number("x1"), line.number("y1")), b(line.number("x2"), line.number("y2"));
+      EXPECT_NEAR((b - a).norm(), std::abs(notch), 1e-6) << "crossing g" << x.g << " h" << x.h;
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // spatial_obj
 
