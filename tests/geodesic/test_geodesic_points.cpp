@@ -11,6 +11,8 @@
 // CGAL is used for a few interior points on the flat mesh only. CGAL 5.5's
 // Surface_mesh_shortest_path was seen asymmetric by up to 0.7 % for boundary points of a
 // trimmed patch (d(a, b) != d(b, a)), so it is not used as the oracle for boundary points.
+// (When this file was written it was symmetric to 1e-15 on this file's meshes and on the cut
+// patches of three example surfaces; the asymmetric case was not reproduced.)
 #include <gtest/gtest.h>
 
 #include <algorithm>
