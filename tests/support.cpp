@@ -3,11 +3,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <sstream>
 
@@ -95,6 +97,59 @@ TriangleMesh bump(int n) {
     const double x = 10 * u, y = 10 * v;
     return Vec3(x, y, 2.5 * std::exp(-((x - 5) * (x - 5) + (y - 5) * (y - 5)) / 8));
   });
+}
+
+TriangleMesh icosphere(int subdivisions, double radius) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  std::vector<Vec3> vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Face> faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                             {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                             {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                             {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (Vec3& v : vertices) v = radius * v.normalized();
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<int, int>, int> midpoint;
+    auto middle = [&](int a, int b) {
+      const std::pair<int, int> key{std::min(a, b), std::max(a, b)};
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      vertices.push_back(radius * (vertices[a] + vertices[b]).normalized());
+      const int index = static_cast<int>(vertices.size()) - 1;
+      midpoint[key] = index;
+      return index;
+    };
+    std::vector<Face> finer;
+    for (const Face& f : faces) {
+      const int ab = middle(f[0], f[1]), bc = middle(f[1], f[2]), ca = middle(f[2], f[0]);
+      finer.push_back({f[0], ab, ca});
+      finer.push_back({f[1], bc, ab});
+      finer.push_back({f[2], ca, bc});
+      finer.push_back({ab, bc, ca});
+    }
+    faces = std::move(finer);
+  }
+  return TriangleMesh(std::move(vertices), std::move(faces));
+}
+
+TriangleMesh annulus(double r0, double r1, int rings, int sectors) {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < sectors; ++j) {
+      const double r = r0 + (r1 - r0) * i / rings, angle = 2 * M_PI * j / sectors;
+      vertices.push_back(Vec3(r * std::cos(angle), r * std::sin(angle), 0));
+    }
+  auto id = [sectors](int i, int j) { return i * sectors + (j % sectors); };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < sectors; ++j) {
+      // (radius, angle) is counter-clockwise seen from +z.
+      const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      faces.push_back({a, b, c});
+      faces.push_back({a, c, d});
+    }
+  return TriangleMesh(std::move(vertices), std::move(faces));
 }
 
 CommandResult run_cli(const std::string& arguments) {

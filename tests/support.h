@@ -39,6 +39,16 @@ TriangleMesh flat_square(int n);
 /// A smooth Gaussian bump of height 2.5 over [0,10]^2 on an n x n grid_mesh.
 TriangleMesh bump(int n);
 
+/// A closed sphere of radius `radius` about the origin: the regular icosahedron with every
+/// triangle split into 4 `subdivisions` times, vertices projected to the sphere; faces
+/// counter-clockwise seen from outside. 12 vertices and 20 faces at 0 subdivisions.
+TriangleMesh icosphere(int subdivisions, double radius);
+
+/// A flat annulus in the plane z = 0 between radii r0 < r1: `rings` + 1 circles of `sectors`
+/// vertices each, faces counter-clockwise seen from +z. Vertex (ring i, sector j) has index
+/// i * sectors + j. Two boundary loops.
+TriangleMesh annulus(double r0, double r1, int rings, int sectors);
+
 /// Reads a whole file.
 std::string read_text(const std::string& path);
 

@@ -1,4 +1,5 @@
-// Discrete Gaussian curvature, injectivity bound, gap factor eta and smoothing (paper 3.3).
+// Injectivity bound, gap factor eta and smoothing (paper 3.3). The discrete Gaussian curvature
+// itself is tested in tests/mesh/test_curvature.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,43 +30,6 @@ TriangleMesh sharp_bump(int n, double height) {
     const double x = 10 * u, y = 10 * v;
     return Vec3(x, y, height * std::exp(-((x - 5) * (x - 5) + (y - 5) * (y - 5)) / 1.5));
   });
-}
-
-TEST(GaussianCurvature, SphereIsOneOverRSquared) {
-  const double R = 7;
-  const TriangleMesh mesh = grid_mesh(40, 40, [R](double u, double v) {
-    const double theta = (u - 0.5) * 1.2, phi = (v - 0.5) * 1.2;
-    return Vec3(R * std::sin(theta) * std::cos(phi), R * std::sin(phi),
-                R * std::cos(theta) * std::cos(phi));
-  });
-  const std::vector<double> k = gaussian_curvature(mesh);
-  const MeshTopology& topology = mesh.topology();
-  for (int v = 0; v < mesh.vertex_count(); ++v)
-    if (!topology.is_boundary_vertex[v]) {
-      EXPECT_NEAR(k[v] * R * R, 1.0, 0.05) << v;
-    }
-}
-
-TEST(GaussianCurvature, DevelopableSurfacesAreFlat) {
-  const TriangleMesh plane =
-      grid_mesh(12, 9, [](double u, double v) { return Vec3(5 * u, 3 * v + u * u, 0); });
-  const TriangleMesh cylinder = grid_mesh(16, 8, [](double u, double v) {
-    return Vec3(3 * std::cos(2 * u), 3 * std::sin(2 * u), 4 * v);
-  });
-  for (const TriangleMesh* mesh : {&plane, &cylinder})
-    for (double k : gaussian_curvature(*mesh)) EXPECT_NEAR(k, 0.0, 1e-9);
-}
-
-TEST(GaussianCurvature, SaddleIsNegative) {
-  const TriangleMesh hypar = grid_mesh(16, 16, [](double u, double v) {
-    return Vec3(u - 0.5, v - 0.5, (u - 0.5) * (u - 0.5) - (v - 0.5) * (v - 0.5));
-  });
-  const MeshTopology& topology = hypar.topology();
-  const std::vector<double> k = gaussian_curvature(hypar);
-  for (int v = 0; v < hypar.vertex_count(); ++v)
-    if (!topology.is_boundary_vertex[v]) {
-      EXPECT_LT(k[v], 0.0);
-    }
 }
 
 TEST(Coverability, FlatPatchHasNoGapAndInfiniteInjectivityBound) {

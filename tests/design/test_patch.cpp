@@ -201,33 +201,5 @@ TEST(CutPatch, ConsistentOnTheSharedMeshesWithAutoCorners) {
   }
 }
 
-TEST(TargetPatch, PointCornersInsideFacesBecomeVertices) {
-  const ExampleSurface sphere = make_example("sphere");
-  CornerSpec spec;
-  spec.kind = CornerSpec::Kind::Points;
-  // Points above the surface near the middle of four faces: snapped to the closest surface point.
-  for (int i = 0; i < 4; ++i) {
-    const Face& f = sphere.mesh.faces()[(i + 1) * sphere.mesh.face_count() / 5];
-    spec.points[i] = (sphere.mesh.vertices()[f[0]] + sphere.mesh.vertices()[f[1]] +
-                      sphere.mesh.vertices()[f[2]]) /
-                     3;
-  }
-  // Order them counter-clockwise around their centroid (seen from above).
-  Vec3 center = Vec3::Zero();
-  for (const Vec3& p : spec.points) center += p / 4;
-  std::sort(spec.points.begin(), spec.points.end(), [&](const Vec3& a, const Vec3& b) {
-    return std::atan2(a.y() - center.y(), a.x() - center.x()) <
-           std::atan2(b.y() - center.y(), b.x() - center.x());
-  });
-  const TargetPatch result = make_target_patch(sphere.mesh, spec);
-  for (int i = 0; i < 4; ++i) {
-    const Vec3& corner = result.patch.mesh.vertices()[result.patch.corners[i]];
-    EXPECT_LT((corner - result.input_corners[i].position(sphere.mesh)).norm(), 1e-9);
-    EXPECT_EQ(result.patch.input_vertex[result.patch.corners[i]], -1);  // a new vertex
-    EXPECT_LT(result.corner_angles[i], std::numbers::pi);
-  }
-  EXPECT_EQ(result.smoothing.iterations, 0);
-}
-
 }  // namespace
 }  // namespace gridshell

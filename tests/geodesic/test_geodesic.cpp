@@ -709,32 +709,6 @@ TEST(GeodesicHeat, WithinAFewPercentOfExactOnSmoothSurface) {
 // ---------------------------------------------------------------------------------------------
 // API
 
-TEST(Geodesic, SurfacePointHelpers) {
-  const TriangleMesh mesh = bump_saddle_mesh();
-  const Face& f = mesh.faces()[10];
-  const SurfacePoint v = SurfacePoint::at_vertex(mesh, f[1]);
-  EXPECT_EQ(v.vertex(mesh), f[1]);
-  EXPECT_EQ((v.position(mesh) - mesh.vertices()[f[1]]).norm(), 0.0);
-  const SurfacePoint e = SurfacePoint::on_edge(mesh, f[2], f[0], 0.25);
-  EXPECT_EQ(e.vertex(mesh), -1);
-  EXPECT_LT(
-      (e.position(mesh) - (0.75 * mesh.vertices()[f[2]] + 0.25 * mesh.vertices()[f[0]])).norm(),
-      1e-15);
-  int zeros = 0;
-  for (int i = 0; i < 3; ++i) zeros += e.barycentric[i] == 0.0;
-  EXPECT_EQ(zeros, 1);
-  EXPECT_EQ(SurfacePoint::on_edge(mesh, f[2], f[0], 0.0).vertex(mesh), f[2]);
-  EXPECT_EQ(SurfacePoint::on_edge(mesh, f[2], f[0], 1.0).vertex(mesh), f[0]);
-  EXPECT_THROW(SurfacePoint::at_vertex(mesh, -1), InvalidInput);
-  EXPECT_THROW(SurfacePoint::at_vertex(mesh, mesh.vertex_count()), InvalidInput);
-  EXPECT_THROW(SurfacePoint::on_edge(mesh, f[0], f[1], 1.5), InvalidInput);
-  EXPECT_THROW(SurfacePoint::on_edge(mesh, 0, mesh.vertex_count() - 1, 0.5), InvalidInput);
-  std::vector<Vec3> more = mesh.vertices();
-  more.push_back(Vec3(100, 100, 100));
-  const TriangleMesh with_isolated(std::move(more), mesh.faces());
-  EXPECT_THROW(SurfacePoint::at_vertex(with_isolated, mesh.vertex_count()), InvalidInput);
-}
-
 TEST(Geodesic, MethodNames) {
   for (GeodesicMethod m : {GeodesicMethod::Fast, GeodesicMethod::Cgal, GeodesicMethod::Heat})
     EXPECT_EQ(parse_geodesic_method(to_string(m)), m);
