@@ -1,6 +1,7 @@
 #include "gridshell/design/design_export.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -8,10 +9,19 @@
 namespace gridshell {
 namespace {
 
+// Six significant digits: enough for a picture (the distance maps).
 std::string fmt(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.6g", value);
   return buffer;
+}
+
+// The shortest text that reads back as the same double: the flat grid is a drawing to scale,
+// and its smallest notch slots are a thousandth of the model (six digits were off by 3 %).
+std::string exact(double value) {
+  char buffer[32];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, end);
 }
 
 // Diverging colour for x in [-1,1]: blue - white - red.
@@ -35,12 +45,12 @@ std::string planar_svg(const Design& design, double lamella_width) {
   hi.array() += margin;
   const Vec2 size = hi - lo;
   // SVG y points down: flip y so the drawing matches the usual orientation.
-  auto X = [&](const Vec2& p) { return fmt(p.x() - lo.x()); };
-  auto Y = [&](const Vec2& p) { return fmt(hi.y() - p.y()); };
+  auto X = [&](const Vec2& p) { return exact(p.x() - lo.x()); };
+  auto Y = [&](const Vec2& p) { return exact(hi.y() - p.y()); };
   std::ostringstream svg;
-  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << fmt(size.x()) << "mm\" height=\""
-      << fmt(size.y()) << "mm\" viewBox=\"0 0 " << fmt(size.x()) << " " << fmt(size.y())
-      << "\">\n<title>gridshell planar grid: alpha_bar = " << fmt(design.alpha_bar)
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << exact(size.x()) << "mm\" height=\""
+      << exact(size.y()) << "mm\" viewBox=\"0 0 " << exact(size.x()) << " " << exact(size.y())
+      << "\">\n<title>gridshell planar grid: alpha_bar = " << exact(design.alpha_bar)
       << " rad; 1 unit = 1 mesh unit</title>\n<rect width=\"100%\" height=\"100%\" "
          "fill=\"white\"/>\n";
   const double label = std::max(lamella_width * 1.5, 0.012 * size.maxCoeff());
@@ -49,9 +59,9 @@ std::string planar_svg(const Design& design, double lamella_width) {
       const char* colour = m.family == Family::G ? "#c8813a" : "#3a7fc8";
       svg << "<line x1=\"" << X(m.planar[0]) << "\" y1=\"" << Y(m.planar[0]) << "\" x2=\""
           << X(m.planar[1]) << "\" y2=\"" << Y(m.planar[1]) << "\" stroke=\"" << colour
-          << "\" stroke-opacity=\"0.55\" stroke-width=\"" << fmt(lamella_width) << "\"/>\n";
+          << "\" stroke-opacity=\"0.55\" stroke-width=\"" << exact(lamella_width) << "\"/>\n";
       const Vec2 at = m.planar[0] - (m.planar[1] - m.planar[0]).normalized() * label;
-      svg << "<text x=\"" << X(at) << "\" y=\"" << Y(at) << "\" font-size=\"" << fmt(label)
+      svg << "<text x=\"" << X(at) << "\" y=\"" << Y(at) << "\" font-size=\"" << exact(label)
           << "\" text-anchor=\"middle\" dominant-baseline=\"middle\" font-family=\"sans-serif\">"
           << (m.family == Family::G ? "g" : "h") << m.index << "</text>\n";
     }
@@ -65,10 +75,10 @@ std::string planar_svg(const Design& design, double lamella_width) {
       svg << "<line x1=\"" << X(x.planar_point) << "\" y1=\"" << Y(x.planar_point) << "\" x2=\""
           << X(end) << "\" y2=\"" << Y(end)
           << "\" stroke=\"#d62728\" stroke-linecap=\"round\" stroke-width=\""
-          << fmt(0.4 * lamella_width) << "\"/>\n";
+          << exact(0.4 * lamella_width) << "\"/>\n";
     }
     svg << "<circle cx=\"" << X(x.planar_point) << "\" cy=\"" << Y(x.planar_point) << "\" r=\""
-        << fmt(0.25 * lamella_width) << "\" fill=\"black\"/>\n";
+        << exact(0.25 * lamella_width) << "\" fill=\"black\"/>\n";
   }
   for (const Anchor& a : design.anchors) {
     const Vec2 p = design.grid.crossings.empty() ? Vec2::Zero() : [&] {
@@ -77,9 +87,9 @@ std::string planar_svg(const Design& design, double lamella_width) {
       return Vec2(Vec2::Zero());
     }();
     const double s = 1.2 * lamella_width;
-    svg << "<rect x=\"" << fmt(p.x() - lo.x() - s / 2) << "\" y=\"" << fmt(hi.y() - p.y() - s / 2)
-        << "\" width=\"" << fmt(s) << "\" height=\"" << fmt(s)
-        << "\" fill=\"none\" stroke=\"#2ca02c\" stroke-width=\"" << fmt(0.3 * lamella_width)
+    svg << "<rect x=\"" << exact(p.x() - lo.x() - s / 2) << "\" y=\""
+        << exact(hi.y() - p.y() - s / 2) << "\" width=\"" << exact(s) << "\" height=\"" << exact(s)
+        << "\" fill=\"none\" stroke=\"#2ca02c\" stroke-width=\"" << exact(0.3 * lamella_width)
         << "\"/>\n";
   }
   svg << "</svg>\n";

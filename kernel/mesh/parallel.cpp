@@ -10,12 +10,6 @@
 #include <vector>
 
 namespace gridshell {
-namespace {
-
-/// Thrown through a job whose work is no longer wanted because another job failed.
-struct Abandoned {};
-
-}  // namespace
 
 int resolve_threads(int requested) {
   if (requested > 0) return requested;
@@ -30,7 +24,9 @@ void parallel_for(std::size_t count, const std::function<void(std::size_t, const
       return;
     }
     const double fraction = static_cast<double>(finished) / static_cast<double>(count);
-    progress.report(options.stage, options.from + (options.to - options.from) * fraction);
+    progress.report(options.stage, finished == count
+                                       ? options.to
+                                       : options.from + (options.to - options.from) * fraction);
   };
   if (count == 0) {
     progress.check();
@@ -56,14 +52,10 @@ void parallel_for(std::size_t count, const std::function<void(std::size_t, const
   int running = 0;                 // live workers, guarded by mutex
   std::exception_ptr first_error;  // guarded by mutex
 
-  // What a job sees: the caller's cancellation flag (polled by long computations far more often
-  // than they report) plus "another job failed", checked whenever the job reports.
-  const Progress inner(
-      [&progress, &stop](std::string_view, double) {
-        progress.check();
-        if (stop.load(std::memory_order_relaxed)) throw Abandoned{};
-      },
-      progress.cancel_flag());
+  // What a job sees: the caller's cancellation flag and "another job failed", both polled by
+  // every check() of the long computations (far more often than they report). A job stopped
+  // because another failed throws Cancelled, which is ignored: the failure came first.
+  const Progress inner = progress.checker_stopped_by(&stop);
 
   const auto worker = [&] {
     try {
@@ -79,10 +71,9 @@ void parallel_for(std::size_t count, const std::function<void(std::size_t, const
         }
         changed.notify_all();
       }
-    } catch (const Abandoned&) {
-      // Another job's error is the one reported.
     } catch (...) {
       std::lock_guard lock(mutex);
+      // A job abandoned after another's failure (stop was set then) is not the first error.
       if (!first_error) first_error = std::current_exception();
       stop = true;
     }

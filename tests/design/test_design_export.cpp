@@ -5,8 +5,8 @@
 // maps_svg (well-formed, both cladding curves with all their points, a dot per member).
 //
 // The SVGs are read with a small XML reader below (elements, attributes, text; no new
-// dependency). Their numbers are printed with 6 significant digits ("%.6g"), so they are
-// compared to half a unit in the 6th digit of the printed value.
+// dependency). maps_svg prints 6 significant digits ("%.6g"), so its numbers are compared to half
+// a unit in the 6th digit of the printed value; planar_svg prints exact decimals.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -366,13 +366,10 @@ TEST(PlanarSvg, ADotPerCrossingAndASquarePerAnchor) {
   }
 }
 
-// SUSPICIOUS (design_export.cpp, fmt = "%.6g"): planar_svg prints every coordinate with 6
-// significant digits, so on the double vault's 166 x 46 drawing coordinates are good to 1e-3
-// units only: member endpoints were off by up to 4.3e-4 (asked: 1e-6), and the notch slots,
-// down to 1.4e-3 long, by up to 7.6e-4 in length (2.7 % of a 2.4e-3 notch). The lamellas are
-// 1 unit wide, so the drawing looks right, but the slot lengths it carries are not the
-// design's. Enable once planar_svg prints enough digits (e.g. %.17g or 1e-9 of the size).
-TEST(PlanarSvg, DISABLED_EndpointsAndNotchSlotsAccurateTo1e6) {
+// planar_svg is a drawing to scale whose notch slots go down to a thousandth of the model:
+// printed with 6 significant digits they were off by up to 7.6e-4 in length (2.7 % of a
+// 2.4e-3 notch); it now prints the shortest round-trip decimal of every number.
+TEST(PlanarSvg, EndpointsAndNotchSlotsAccurateTo1e6) {
   const Design& d = double_vault();
   const PlanarSvg svg = read_planar(d);
   // The translation, exactly: the code's lo = min(planar corners) - margin, hi = max + margin.

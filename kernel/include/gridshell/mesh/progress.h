@@ -18,14 +18,23 @@ class Progress {
   using Callback = std::function<void(std::string_view stage, double fraction)>;
 
   Progress() = default;
-  explicit Progress(Callback callback, const std::atomic<bool>* cancel = nullptr)
-      : callback_(std::move(callback)), cancel_(cancel) {}
+  /// `also` is a second flag that stops the computation too (e.g. "another job failed").
+  explicit Progress(Callback callback, const std::atomic<bool>* cancel = nullptr,
+                    const std::atomic<bool>* also = nullptr)
+      : callback_(std::move(callback)), cancel_(cancel), also_(also) {}
 
   /// A copy that keeps the cancellation flag but reports nowhere: for work split across threads
   /// or nested inside a stage that reports its own progress.
-  Progress checker() const { return Progress(nullptr, cancel_); }
+  Progress checker() const { return Progress(nullptr, cancel_, also_); }
+  /// A copy that reports nowhere and stops when this one is cancelled or `stop` is set.
+  Progress checker_stopped_by(const std::atomic<bool>* stop) const {
+    return Progress(nullptr, cancel_, stop);
+  }
 
-  bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
+  bool cancelled() const {
+    return (cancel_ && cancel_->load(std::memory_order_relaxed)) ||
+           (also_ && also_->load(std::memory_order_relaxed));
+  }
   /// The cancellation flag itself (may be null), for a Progress that reports elsewhere but
   /// must stop with this one.
   const std::atomic<bool>* cancel_flag() const { return cancel_; }
@@ -40,6 +49,7 @@ class Progress {
  private:
   Callback callback_;
   const std::atomic<bool>* cancel_ = nullptr;
+  const std::atomic<bool>* also_ = nullptr;
 };
 
 }  // namespace gridshell

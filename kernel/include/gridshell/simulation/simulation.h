@@ -99,7 +99,7 @@ struct SimulatedLamella {
   double rest_length = 0;
   std::vector<Vec3> centerline;          ///< deployed vertices, start first
   std::vector<Vec3> normals;             ///< unit material normal (thickness direction) per vertex
-  std::vector<Vec3> widths;              ///< unit width direction per vertex (normal x tangent)
+  std::vector<Vec3> widths;              ///< unit width direction per vertex (tangent x normal)
   std::vector<double> deviation;         ///< distance of each vertex to the target patch
   double max_weak_curvature = 0;         ///< 1/length, bending out of the lamella's plane
   double max_strong_curvature = 0;       ///< 1/length, bending in the lamella's plane
