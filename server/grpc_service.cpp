@@ -249,6 +249,16 @@ grpc::ServerWriteReactor<v1::GeodesicEvent>* GridshellService::Geodesic(
   return serve<v1::GeodesicEvent>(context, request, methods_.geodesic);
 }
 
+grpc::ServerWriteReactor<v1::LoadEvent>* GridshellService::Load(
+    grpc::CallbackServerContext* context, const v1::LoadRequest* request) {
+  return serve<v1::LoadEvent>(context, request, methods_.load);
+}
+
+grpc::ServerWriteReactor<v1::ExamplesEvent>* GridshellService::Examples(
+    grpc::CallbackServerContext* context, const v1::ExamplesRequest* request) {
+  return serve<v1::ExamplesEvent>(context, request, methods_.examples);
+}
+
 std::shared_ptr<grpc::AuthMetadataProcessor> make_token_processor(
     std::string token, std::function<void(const std::string&)> on_refused) {
   return std::make_shared<TokenProcessor>(std::move(token), std::move(on_refused));

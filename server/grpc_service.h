@@ -31,6 +31,10 @@ class GridshellService final : public v1::Gridshell::CallbackService {
                                               const v1::RunRequest* request) override;
   grpc::ServerWriteReactor<v1::GeodesicEvent>* Geodesic(
       grpc::CallbackServerContext* context, const v1::GeodesicRequest* request) override;
+  grpc::ServerWriteReactor<v1::LoadEvent>* Load(grpc::CallbackServerContext* context,
+                                                const v1::LoadRequest* request) override;
+  grpc::ServerWriteReactor<v1::ExamplesEvent>* Examples(
+      grpc::CallbackServerContext* context, const v1::ExamplesRequest* request) override;
 
  private:
   template <class Event, class M>

@@ -146,6 +146,8 @@ struct HttpGateway::Impl {
     routes["/v1/simulate"] = route(methods.simulate);
     routes["/v1/run"] = route(methods.run);
     routes["/v1/geodesic"] = route(methods.geodesic);
+    routes["/v1/load"] = route(methods.load);
+    routes["/v1/examples"] = route(methods.examples);
   }
 
   template <class Stream>

@@ -32,6 +32,16 @@ Methods make_methods(const RunSettings& settings) {
                         return run_geodesic(request, progress, settings);
                       },
                       {}};
+  methods.load = {"Load",
+                  [settings](const v1::LoadRequest& request, const Progress& progress) {
+                    return run_load(request, progress, settings);
+                  },
+                  {}};
+  methods.examples = {"Examples",
+                      [settings](const v1::ExamplesRequest& request, const Progress& progress) {
+                        return run_examples(request, progress, settings);
+                      },
+                      {}};
   return methods;
 }
 

@@ -39,6 +39,8 @@ struct Methods {
   Method<v1::SimulateRequest, v1::SimulateResult> simulate;
   Method<v1::RunRequest, v1::RunResult> run;
   Method<v1::GeodesicRequest, v1::GeodesicResult> geodesic;
+  Method<v1::LoadRequest, v1::LoadResult> load;
+  Method<v1::ExamplesRequest, v1::ExamplesResult> examples;
 };
 
 /// The table; `settings` (kernel threads per request) applies to every method.

@@ -9,7 +9,10 @@
 
 #include "gridshell/convert.h"
 #include "gridshell/design/design_export.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/files.h"
 #include "gridshell/geodesic/geodesic.h"
+#include "gridshell/mesh/curvature.h"
 #include "gridshell/mesh/errors.h"
 
 namespace gridshell {
@@ -108,7 +111,49 @@ int sent_vertex(const LoadReport& load, int v) {
 
 }  // namespace
 
-TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report) {
+namespace {
+
+/// An example surface by name, with an identity load report (nothing was repaired).
+TriangleMesh example_mesh(const std::string& name, LoadReport* report,
+                          std::array<int, 4>* corners) {
+  ExampleSurface example;
+  try {
+    example = make_example(name);
+  } catch (const Error& e) {
+    throw InvalidInput("mesh.example", e.message());
+  }
+  if (report) {
+    *report = LoadReport{};
+    report->format = "example";
+    report->file_vertices = example.mesh.vertex_count();
+    report->file_faces = example.mesh.face_count();
+    report->vertex_of_file_vertex.resize(example.mesh.vertex_count());
+    for (int v = 0; v < example.mesh.vertex_count(); ++v) report->vertex_of_file_vertex[v] = v;
+  }
+  if (corners) *corners = example.corners;
+  return std::move(example.mesh);
+}
+
+}  // namespace
+
+TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report,
+                     std::array<int, 4>* example_corners) {
+  const bool arrays = mesh.positions_size() > 0 || mesh.indices_size() > 0;
+  const bool file = !mesh.file().empty() || !mesh.format().empty();
+  const bool example = !mesh.example().empty();
+  if (arrays + file + example > 1)
+    throw InvalidInput("mesh", "give one of positions and indices, file (with format) or example");
+  if (example) return example_mesh(mesh.example(), report, example_corners);
+  if (file) {
+    const std::optional<MeshFormat> format = mesh_format_from_name(mesh.format());
+    if (!format)
+      throw InvalidInput("mesh.format",
+                         "expected obj, off, ply, stl or a file name with one of "
+                         "those extensions, got '" +
+                             mesh.format() + "'");
+    if (mesh.file().empty()) throw InvalidInput("mesh.file", "empty: no file bytes");
+    return read_mesh(mesh.file(), *format, "mesh.file", report);
+  }
   const int positions = mesh.positions_size(), indices = mesh.indices_size();
   if (positions == 0) throw InvalidInput("mesh.positions", "empty: the mesh has no vertices");
   if (positions % 3 != 0)
@@ -228,6 +273,62 @@ void parse_alpha(const std::string& text, DesignOptions& options) {
   options.alpha_value = value;
 }
 
+// Load and Examples ----------------------------------------------------------------------------
+
+v1::LoadResult run_load(const v1::LoadRequest& request, const Progress& progress,
+                        const RunSettings&) {
+  progress.check();
+  LoadReport load;
+  std::array<int, 4> corners{-1, -1, -1, -1};
+  const TriangleMesh mesh = to_mesh(request.mesh(), &load, &corners);
+  v1::LoadResult out;
+  *out.mutable_mesh() = to_proto(
+      mesh, request.mesh().name().empty() ? request.mesh().example() : request.mesh().name());
+  v1::MeshReport& report = *out.mutable_report();
+  report.set_format(load.format);
+  report.set_file_vertices(load.file_vertices);
+  report.set_file_faces(load.file_faces);
+  report.set_polygons_triangulated(load.polygons_triangulated);
+  report.set_degenerate_faces_removed(load.degenerate_faces_removed);
+  report.set_duplicate_vertices_merged(load.duplicate_vertices_merged);
+  report.set_isolated_vertices_removed(load.isolated_vertices_removed);
+  for (const std::string& warning : load.warnings) report.add_warnings(warning);
+  report.set_vertices(mesh.vertex_count());
+  report.set_faces(mesh.face_count());
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  if (mesh.vertex_count() > 0) {
+    lo = hi = mesh.vertices().front();
+    for (const Vec3& p : mesh.vertices()) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  }
+  for (int k = 0; k < 3; ++k) report.add_bounding_box(lo[k]);
+  for (int k = 0; k < 3; ++k) report.add_bounding_box(hi[k]);
+  if (corners[0] >= 0)
+    for (int v : corners) out.mutable_example_corners()->add_vertices(v);
+  return out;
+}
+
+v1::ExamplesResult run_examples(const v1::ExamplesRequest&, const Progress& progress,
+                                const RunSettings&) {
+  progress.check();
+  // Generating all examples takes ~50 ms; they never change, so once per process.
+  static const v1::ExamplesResult all = [] {
+    v1::ExamplesResult out;
+    for (const std::string& name : example_names()) {
+      const ExampleSurface example = make_example(name);
+      v1::ExamplesResult::Example* entry = out.add_examples();
+      entry->set_name(example.name);
+      entry->set_description(example.description);
+      entry->set_vertices(example.mesh.vertex_count());
+      for (int v : example.corners) entry->add_corners(v);
+    }
+    return out;
+  }();
+  return all;
+}
+
 // Patch ------------------------------------------------------------------------------------------
 
 PatchInputs prepare_patch(const v1::PatchRequest& request) {
@@ -302,6 +403,7 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
     for (const auto& [stage, s] : result.stage_seconds)
       (*report.mutable_stage_seconds())[stage] = s;
     *out.mutable_patch() = to_proto(result.patch.mesh, "patch");
+    for (double k : gaussian_curvature(result.patch.mesh)) out.add_gaussian_curvature(k);
     report.set_seconds(seconds_since(start));
     return out;
   }
@@ -389,6 +491,9 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     add_view("spatial.obj", spatial_obj(design));
     add_view("maps.svg", maps_svg(design));
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
+    if (request.files())  // the files the CLI writes, for clients that offer downloads
+      for (auto& [file, content] : design_files(out))
+        if (file == "design.json" || file == "report.json") add_view(file.c_str(), content);
     return out;
   }
 }

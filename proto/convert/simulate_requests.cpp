@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "gridshell/deployment_job.h"
+#include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/requests.h"
 
@@ -10,7 +11,8 @@ namespace gridshell {
 namespace {
 
 v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOptions& options,
-                            const std::string& name, const Progress& progress, int threads) {
+                            const std::string& name, const Progress& progress, int threads,
+                            bool files = false) {
   DeploymentJob job = run_deployment_job(design, options, name, progress, threads);
   v1::SimulateResult out;
   *out.mutable_deployment() = std::move(job.deployment);
@@ -24,6 +26,7 @@ v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOption
   add_view("deviation.ply", std::move(job.deviation_ply));
   add_view("deployed_without_notches.obj", std::move(job.deployed_without_notches_obj));
   add_view("deviation_without_notches.ply", std::move(job.deviation_without_notches_ply));
+  if (files) add_view("deployment.json", simulate_files(out).at("deployment.json"));
   return out;
 }
 
@@ -42,7 +45,7 @@ v1::SimulateResult run_simulate(const v1::SimulateRequest& request, const Progre
                                 const RunSettings& settings) {
   const v1::SimulationOptions options = prepare_simulation_options(request.options(), "options");
   const std::string name = request.design_name().empty() ? "design.json" : request.design_name();
-  return simulate(request.design(), options, name, progress, settings.threads);
+  return simulate(request.design(), options, name, progress, settings.threads, request.files());
 }
 
 v1::RunResult run_run(const v1::RunRequest& request, const Progress& progress,

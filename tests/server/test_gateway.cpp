@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "gridshell/files.h"
+#include "gridshell/mesh/curvature.h"
 #include "gridshell/requests.h"
 #include "server_support.h"
 #include "support.h"
@@ -50,6 +51,129 @@ TEST(Gateway, DesignAsJsonMatchesTheInProcessFiles) {
   const FileBundle remote = design_files(result);
   for (const char* name : {"design.json", "planar.svg", "spatial.obj", "maps.svg"})
     EXPECT_EQ(remote.at(name), local.at(name)) << name;
+}
+
+TEST(Gateway, DesignWithFilesReturnsTheCliFilesByteForByte) {
+  TestDaemon daemon;
+  v1::DesignRequest request = testing::design_request("double-vault", 48);
+  request.set_files(true);
+  const auto reply =
+      http_request(daemon.http_port(), "POST", "/v1/design", to_json(request, false), kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  v1::DesignResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  std::map<std::string, std::string> views;
+  for (const v1::File& view : result.views()) views[view.name()] = view.content();
+  ASSERT_TRUE(views.count("design.json") && views.count("report.json"));
+  // design.json is deterministic: the bytes a local run writes.
+  EXPECT_EQ(views.at("design.json"), design_files(run_design(request, {}, {1})).at("design.json"));
+  EXPECT_EQ(views.at("report.json"), to_json(result.report()) + "\n");
+}
+
+/// A mesh file's bytes in a Load request, as the web page sends them (base64 in the JSON).
+std::string load_body(const std::string& file, const std::string& format) {
+  v1::LoadRequest request;
+  request.mutable_mesh()->set_name("upload." + format);
+  request.mutable_mesh()->set_file(file);
+  request.mutable_mesh()->set_format(format);
+  return to_json(request, false);
+}
+
+TEST(Gateway, LoadReadsFileBytesWithTheCliLoader) {
+  TestDaemon daemon;
+  // A quad OBJ with a duplicate vertex: triangulated and welded, with the loader's warnings.
+  const std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 0\nf 5 2 3 4\n";
+  const auto reply =
+      http_request(daemon.http_port(), "POST", "/v1/load", load_body(obj, "obj"), kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  v1::LoadResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  LoadReport local;
+  const TriangleMesh mesh = read_mesh(obj, MeshFormat::Obj, "upload.obj", &local);
+  EXPECT_EQ(result.mesh().positions_size(), 3 * mesh.vertex_count());
+  EXPECT_EQ(result.mesh().indices_size(), 3 * mesh.face_count());
+  EXPECT_EQ(result.report().format(), "obj");
+  EXPECT_EQ(result.report().polygons_triangulated(), 1);
+  EXPECT_EQ(result.report().duplicate_vertices_merged(), local.duplicate_vertices_merged);
+  ASSERT_EQ(result.report().warnings_size(), static_cast<int>(local.warnings.size()));
+  EXPECT_EQ(result.report().bounding_box_size(), 6);
+  EXPECT_EQ(result.report().bounding_box(3), 1.0);
+  // The loaded arrays come back as a mesh to send as it is.
+  v1::PatchRequest patch;
+  *patch.mutable_mesh() = result.mesh();
+  LoadReport again;
+  EXPECT_EQ(to_mesh(patch.mesh(), &again).face_count(), mesh.face_count());
+}
+
+TEST(Gateway, LoadErrorsNameTheFileFieldAndTheLine) {
+  TestDaemon daemon;
+  const struct {
+    std::string body, field, message;
+  } cases[] = {
+      {load_body("v 0 0 0\nv 1 0 x\n", "obj"), "mesh.file",
+       "line 2: cannot parse vertex coordinate"},
+      {load_body("solid x\nendsolid x\n", "stl"), "mesh.file", "no faces"},
+      {load_body("ply\nformat ascii 1.0\n", "PLY"), "mesh.file", "end_header"},
+      {load_body("v 0 0 0\n", "3ds"), "mesh.format", "expected obj, off, ply, stl"},
+      {load_body("", "obj"), "mesh.file", "empty"},
+      {R"({"mesh": {"example": "moebius"}})", "mesh.example", "unknown example 'moebius'"},
+      {R"({"mesh": {"example": "sphere", "positions": [0, 0, 0]}})", "mesh", "give one of"},
+  };
+  for (const auto& c : cases) {
+    const auto reply = http_request(daemon.http_port(), "POST", "/v1/load", c.body, kJson);
+    EXPECT_EQ(reply.status, 400) << reply.body;
+    const auto error = nlohmann::json::parse(reply.body)["error"];
+    EXPECT_EQ(error["field"], c.field) << reply.body;
+    EXPECT_NE(error["message"].get<std::string>().find(c.message), std::string::npos) << reply.body;
+  }
+}
+
+TEST(Gateway, ExamplesAndExampleMeshes) {
+  TestDaemon daemon;
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/examples", "{}", kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  v1::ExamplesResult examples;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &examples).ok());
+  ASSERT_GE(examples.examples_size(), 7);
+  EXPECT_EQ(examples.examples(0).name(), "torus-wide");
+  for (const auto& example : examples.examples()) {
+    EXPECT_EQ(example.corners_size(), 4) << example.name();
+    v1::LoadRequest load;
+    load.mutable_mesh()->set_example(example.name());
+    const auto mesh =
+        http_request(daemon.http_port(), "POST", "/v1/load", to_json(load, false), kJson);
+    ASSERT_EQ(mesh.status, 200) << mesh.body;
+    v1::LoadResult loaded;
+    ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(mesh.body, &loaded).ok());
+    EXPECT_EQ(loaded.mesh().positions_size(), 3 * example.vertices()) << example.name();
+    ASSERT_EQ(loaded.example_corners().vertices_size(), 4);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(loaded.example_corners().vertices(k), example.corners(k));
+  }
+}
+
+TEST(Gateway, PatchReturnsTheCurvatureOfEveryPatchVertex) {
+  TestDaemon daemon;
+  const v1::PatchRequest request = testing::patch_request("sphere");
+  const auto reply =
+      http_request(daemon.http_port(), "POST", "/v1/patch", to_json(request, false), kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  v1::PatchResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  ASSERT_EQ(result.gaussian_curvature_size(), result.patch().positions_size() / 3);
+  // The kernel's discrete curvature of the returned patch, vertex by vertex.
+  LoadReport load;
+  const std::vector<double> k = gaussian_curvature(to_mesh(result.patch(), &load));
+  ASSERT_EQ(k.size(), static_cast<size_t>(result.gaussian_curvature_size()));
+  for (size_t v = 0; v < k.size(); ++v) EXPECT_EQ(result.gaussian_curvature(v), k[v]) << v;
+  // A spherical cap of radius 98.6: K = 1/R^2 inside (the median, to the discretisation; cut
+  // vertices scatter by 20 %), 0 on the boundary.
+  std::vector<double> inside;
+  for (double value : k)
+    if (value != 0) inside.push_back(value);
+  ASSERT_GT(inside.size(), k.size() / 2);
+  std::nth_element(inside.begin(), inside.begin() + inside.size() / 2, inside.end());
+  const double expected = 1.0 / (98.6 * 98.6);
+  EXPECT_NEAR(inside[inside.size() / 2], expected, 0.02 * expected);
 }
 
 TEST(Gateway, SimulateAsJsonAndAsServerSentEvents) {

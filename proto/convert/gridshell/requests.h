@@ -11,6 +11,7 @@
 // fields in the same vocabulary. Clients render the fields in their own terms.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 
@@ -28,9 +29,21 @@ struct RunSettings {
   int threads = 0;
 };
 
-/// Packed arrays -> mesh, with the file loader's repairs and checks (mesh_from_arrays). `report`
-/// receives the repairs and the map from sent vertex index to mesh vertex.
-TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report);
+/// The request's mesh, however it was given: packed arrays (mesh_from_arrays), the bytes of a
+/// file (read_mesh, the CLI's parser; errors name `mesh.file` and the line) or an example's name
+/// (its suggested corners into `example_corners`). `report` receives the repairs and the map
+/// from sent vertex index to mesh vertex.
+TriangleMesh to_mesh(const v1::Mesh& mesh, LoadReport* report,
+                     std::array<int, 4>* example_corners = nullptr);
+
+/// Load: the mesh as loaded (packed arrays to send back), what the loader did, and an example's
+/// corners.
+v1::LoadResult run_load(const v1::LoadRequest& request, const Progress& progress = {},
+                        const RunSettings& settings = {});
+
+/// Examples: the built-in example surfaces.
+v1::ExamplesResult run_examples(const v1::ExamplesRequest& request, const Progress& progress = {},
+                                const RunSettings& settings = {});
 
 /// Mesh -> packed arrays.
 v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name);
