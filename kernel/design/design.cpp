@@ -15,30 +15,47 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 }  // namespace
 
-Design design_grid(TargetPatch target, const DesignOptions& options, const Progress& progress) {
-  Design design;
-  design.target = std::move(target);
-  const Patch& patch = design.target.patch;
-  {
-    // Lamella dimensions against the patch, before the expensive maps: a section wider than
-    // half the patch, or a millionth of it, is no gridshell (and its simulation has no meaning).
-    const std::array<double, 4> sides = side_lengths(patch);
-    const double longest = *std::max_element(sides.begin(), sides.end());
-    for (const auto& [value, field] :
-         {std::pair{options.members.lamella_width, "options.lamella_width"},
-          std::pair{options.members.lamella_thickness, "options.lamella_thickness"}})
-      if (value != 0 && !(value >= 1e-6 * longest && value <= 0.5 * longest)) {
-        std::ostringstream msg;
-        msg << value << " is outside [1e-6, 0.5] x the longest patch side (" << longest << ")";
-        throw InvalidInput(field, msg.str());
-      }
-  }
-  auto start = std::chrono::steady_clock::now();
-  const GeodesicSolver solver(patch.mesh, options.patch.geodesic);
-  design.maps = compute_distance_maps(patch, solver, options.maps, progress);
-  design.stage_seconds["distance_maps"] = seconds_since(start);
+namespace {
 
-  start = std::chrono::steady_clock::now();
+// Lamella dimensions against the patch, before the expensive maps: a section wider than half
+// the patch, or a millionth of it, is no gridshell (and its simulation has no meaning).
+void check_lamella_size(const Patch& patch, const DesignOptions& options) {
+  const std::array<double, 4> sides = side_lengths(patch);
+  const double longest = *std::max_element(sides.begin(), sides.end());
+  for (const auto& [value, field] :
+       {std::pair{options.members.lamella_width, "options.lamella_width"},
+        std::pair{options.members.lamella_thickness, "options.lamella_thickness"}})
+    if (value != 0 && !(value >= 1e-6 * longest && value <= 0.5 * longest)) {
+      std::ostringstream msg;
+      msg << value << " is outside [1e-6, 0.5] x the longest patch side (" << longest << ")";
+      throw InvalidInput(field, msg.str());
+    }
+}
+
+}  // namespace
+
+PatchWork prepare_patch_work(TargetPatch target, const DesignOptions& options,
+                             const Progress& progress) {
+  check_lamella_size(target.patch, options);
+  PatchWork work;
+  work.target = std::move(target);
+  const auto start = std::chrono::steady_clock::now();
+  const GeodesicSolver solver(work.target.patch.mesh, options.patch.geodesic);
+  work.maps = compute_distance_maps(work.target.patch, solver, options.maps, progress);
+  work.maps_seconds = seconds_since(start);
+  return work;
+}
+
+Design design_on_patch(const PatchWork& work, const DesignOptions& options,
+                       const Progress& progress) {
+  check_lamella_size(work.target.patch, options);
+  Design design;
+  design.target = work.target;
+  design.maps = work.maps;
+  const Patch& patch = design.target.patch;
+  // The grid's member solves need a solver on the patch; building one is O(F), milliseconds.
+  const GeodesicSolver solver(patch.mesh, options.patch.geodesic);
+  auto start = std::chrono::steady_clock::now();
   const std::array<double, 4> lengths = side_lengths(patch);
   design.alpha_range = feasible_alpha_range(design.maps, lengths, options.cladding, progress);
   switch (options.alpha) {
@@ -95,6 +112,13 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
       build_grid(patch, solver, design.planar, g_members, h_members, options.grid, progress);
   design.anchors = place_anchors(patch, design.grid, options.anchors);
   design.stage_seconds["grid"] = seconds_since(start);
+  return design;
+}
+
+Design design_grid(TargetPatch target, const DesignOptions& options, const Progress& progress) {
+  const PatchWork work = prepare_patch_work(std::move(target), options, progress);
+  Design design = design_on_patch(work, options, progress);
+  design.stage_seconds["distance_maps"] = work.maps_seconds;
   return design;
 }
 

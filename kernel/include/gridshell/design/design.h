@@ -45,7 +45,26 @@ struct Design {
   std::map<std::string, double> stage_seconds;  ///< timings; not part of the design's value
 };
 
-/// The grid design on an already computed target patch.
+/// What every design on one target patch shares, whatever ᾱ, the member counts, the lamella
+/// size and the anchors are: the patch itself and its distance maps (the bulk of a design's
+/// time). A daemon keeps one per patch so that changing ᾱ or the counts redesigns quickly.
+struct PatchWork {
+  TargetPatch target;
+  DistanceMaps maps;
+  double maps_seconds = 0;  ///< time the maps took
+};
+
+/// The distance maps of `target` (options.maps, with options.patch.geodesic).
+PatchWork prepare_patch_work(TargetPatch target, const DesignOptions& options = {},
+                             const Progress& progress = {});
+
+/// The grid design on prepared patch work: feasible ᾱ, cladding functions, members, grid,
+/// anchors. Gives the same design as design_grid on the same patch and options.
+/// stage_seconds holds "cladding", "members" and "grid" (the caller adds the rest).
+Design design_on_patch(const PatchWork& work, const DesignOptions& options = {},
+                       const Progress& progress = {});
+
+/// The grid design on an already computed target patch: prepare_patch_work + design_on_patch.
 Design design_grid(TargetPatch target, const DesignOptions& options = {},
                    const Progress& progress = {});
 
