@@ -52,4 +52,9 @@ TriangleMesh annulus(double r0, double r1, int rings, int sectors);
 /// Reads a whole file.
 std::string read_text(const std::string& path);
 
+/// Factor for the time bounds that the tests check (cancellation latencies): the environment's
+/// GRIDSHELL_TEST_TIME_SCALE, for slow builds (the sanitizer build sets 5), else 1. Values below 1
+/// or not numbers count as 1.
+double time_scale();
+
 }  // namespace gridshell::testing
