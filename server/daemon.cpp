@@ -19,6 +19,7 @@
 
 #include "auth.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/patch_cache.h"
 #include "grpc_service.h"
 #include "http_gateway.h"
 #include "methods.h"
@@ -132,6 +133,7 @@ struct Daemon::Impl {
   std::unique_ptr<GridshellService> service;
   std::unique_ptr<grpc::Server> server;
   std::unique_ptr<HttpGateway> gateway;
+  std::unique_ptr<PatchCache> patch_cache;
   int grpc_port = 0;
   std::atomic<bool> serving{false};
   std::mutex shutdown_mutex;
@@ -174,6 +176,12 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
     throw InvalidInput("--progress-interval-ms", "must be 0..60000");
   if (o.max_message_mib < 1 || o.max_message_mib > 2047)
     throw InvalidInput("--max-message-mib", "must be 1..2047");
+  if (o.cache_mib < 0 || o.cache_mib > 1 << 20)
+    throw InvalidInput("--cache-mib", "must be 0 (no cache) to 1048576");
+  for (const std::string& origin : o.cors_origins)
+    if (origin.rfind("http://", 0) != 0 && origin.rfind("https://", 0) != 0)
+      throw InvalidInput("--cors-origin",
+                         "expected an origin like https://example.org:8443, got '" + origin + "'");
   if (o.http_body_limit_mib < 1 || o.http_body_limit_mib > 4096)
     throw InvalidInput("--http-body-limit-mib", "must be 1..4096");
   if (!(o.shutdown_grace_seconds >= 0)) throw InvalidInput("--shutdown-grace", "must be >= 0");
@@ -193,7 +201,11 @@ void Daemon::start() {
   d.started = true;
   d.queue = std::make_unique<JobQueue>(
       JobQueue::Options{o.workers, o.queue, o.log, o.progress_interval_ms});
-  d.methods = make_methods({o.request_threads});
+  d.patch_cache = std::make_unique<PatchCache>(static_cast<std::size_t>(o.cache_mib) << 20);
+  RunSettings settings;
+  settings.patch_cache = o.cache_mib > 0 ? d.patch_cache.get() : nullptr;
+  settings.threads = o.request_threads;
+  d.methods = make_methods(settings);
   d.service = std::make_unique<GridshellService>(*d.queue, d.methods, d.token);
 
   static std::once_flag plugins;
@@ -244,6 +256,7 @@ void Daemon::start() {
     http.address = o.http;
     http.body_limit = static_cast<std::size_t>(o.http_body_limit_mib) << 20;
     http.static_dir = o.static_dir;
+    http.cors_origins = o.cors_origins;
     http.token = d.token;
     http.tls_cert_pem = d.cert_pem;
     http.tls_key_pem = d.key_pem;

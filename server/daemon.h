@@ -6,6 +6,7 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "job_queue.h"
 
@@ -19,15 +20,19 @@ struct DaemonOptions {
   /// Kernel threads inside one request. 1: the pool already keeps every core busy with
   /// concurrent requests, and more would oversubscribe them. Results do not depend on it.
   int request_threads = 1;
-  int progress_interval_ms = 100;      ///< progress events per request and stage at most this often
-  int max_message_mib = 256;           ///< largest gRPC message, either direction
-  int http_body_limit_mib = 256;       ///< largest HTTP request body
-  std::string static_dir;              ///< served by the gateway for GET; empty = none
-  std::string tls_cert, tls_key;       ///< PEM files: TLS on both ports
-  std::string token_file;              ///< bearer token required on every call
-  bool insecure = false;               ///< allow a non-loopback address without TLS and token
-  double shutdown_grace_seconds = 10;  ///< running work may finish for this long on shutdown
-  std::ostream* log = nullptr;         ///< JSON lines; null = none
+  int progress_interval_ms = 100;  ///< progress events per request and stage at most this often
+  int max_message_mib = 256;       ///< largest gRPC message, either direction
+  /// Largest HTTP request body. 32 MiB holds a 250k-triangle mesh as an ASCII OBJ sent as file
+  /// bytes (about 13 MB, 17 MB in base64) or as packed arrays in JSON (about 13 MB), with room.
+  int http_body_limit_mib = 32;
+  int cache_mib = 512;                    ///< per-patch design work kept for redesigns; 0 = none
+  std::vector<std::string> cors_origins;  ///< origins allowed to call /v1/* from their pages
+  std::string static_dir;                 ///< served by the gateway for GET; empty = none
+  std::string tls_cert, tls_key;          ///< PEM files: TLS on both ports
+  std::string token_file;                 ///< bearer token required on every call
+  bool insecure = false;                  ///< allow a non-loopback address without TLS and token
+  double shutdown_grace_seconds = 10;     ///< running work may finish for this long on shutdown
+  std::ostream* log = nullptr;            ///< JSON lines; null = none
 };
 
 /// True for 127.0.0.0/8, ::1 and "localhost" (the host part of HOST:PORT).

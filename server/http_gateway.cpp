@@ -52,6 +52,14 @@ Route route(const M& method) {
 
 std::string_view view(beast::string_view text) { return {text.data(), text.size()}; }
 
+// Every response: the page and its scripts come only from this gateway, no inline script or
+// style, no plugins, no framing; the API's JSON is never sniffed as something else.
+constexpr const char* kSecurityHeaders =
+    "Content-Security-Policy: default-src 'self'; script-src 'self'; style-src 'self'; "
+    "img-src 'self' data: blob:; connect-src 'self'; worker-src 'self' blob:; object-src 'none'; "
+    "base-uri 'none'; form-action 'none'; frame-ancestors 'none'\r\n"
+    "X-Content-Type-Options: nosniff\r\nReferrer-Policy: no-referrer\r\n";
+
 std::string error_json(const Status& status) {
   nlohmann::json body;
   body["error"] = {{"code", static_cast<int>(status.code)},
@@ -343,6 +351,11 @@ class HttpGateway::Impl::Session final : public SessionBase,
 
   void handle(http::request<http::string_body> request) {
     keep_alive_ = request.keep_alive() && !gateway_.stopping;
+    cors_origin_.clear();
+    const std::string origin(view(request[http::field::origin]));
+    if (!origin.empty())
+      for (const std::string& allowed : gateway_.options.cors_origins)
+        if (origin == allowed) cors_origin_ = origin;
     const std::string_view target(request.target().data(), request.target().size());
     const std::string path(target.substr(0, target.find('?')));
     const auto verb = request.method();
@@ -359,11 +372,12 @@ class HttpGateway::Impl::Session final : public SessionBase,
     }
     if (path.rfind("/v1/", 0) == 0) {
       const auto it = gateway_.routes.find(path);
+      if (verb == http::verb::options && it != gateway_.routes.end()) return preflight();
       if (it == gateway_.routes.end())
-        return respond_error(
-            {StatusCode::NotFound,
-             "no such method: " + path + " (POST /v1/patch|design|simulate|run|geodesic)"},
-            keep_alive_);
+        return respond_error({StatusCode::NotFound,
+                              "no such method: " + path +
+                                  " (POST /v1/patch|design|simulate|run|geodesic|load|examples)"},
+                             keep_alive_);
       if (verb != http::verb::post)
         return respond_error({StatusCode::Unimplemented, "use POST " + path}, keep_alive_, 405);
       if (!authorized(request)) return unauthorized();
@@ -372,6 +386,17 @@ class HttpGateway::Impl::Session final : public SessionBase,
     if (verb == http::verb::get || verb == http::verb::head)
       return serve_static(path, verb == http::verb::head);
     respond_error({StatusCode::NotFound, "not found: " + path}, keep_alive_);
+  }
+
+  /// A CORS preflight: allowed for the configured origins only (the answer carries the
+  /// Access-Control headers then; without them the browser refuses the call).
+  void preflight() {
+    if (cors_origin_.empty())
+      return respond_error({StatusCode::PermissionDenied,
+                            "cross-origin calls are not allowed "
+                            "(gridshelld --cors-origin ORIGIN)"},
+                           keep_alive_, 403);
+    respond(http::status::no_content, "text/plain", "", keep_alive_);
   }
 
   void unauthorized() {
@@ -459,6 +484,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
     response.set(http::field::content_type, type);
     response.set(http::field::cache_control, "no-store");
     if (!request_id_.empty()) response.set("X-Request-Id", request_id_);
+    add_cors(response);
     if (status == http::status::unauthorized)
       response.set(http::field::www_authenticate, "Bearer realm=\"gridshelld\"");
     const std::size_t length = body.size();
@@ -467,7 +493,21 @@ class HttpGateway::Impl::Session final : public SessionBase,
     response.content_length(length);
     std::ostringstream text;
     text << response;
-    send(text.str(), !keep_alive);
+    std::string bytes = text.str();
+    bytes.insert(bytes.find("\r\n") + 2, kSecurityHeaders);
+    send(std::move(bytes), !keep_alive);
+  }
+
+  template <class Response>
+  void add_cors(Response& response) const {
+    if (cors_origin_.empty()) return;
+    response.set(http::field::access_control_allow_origin, cors_origin_);
+    response.set(http::field::vary, "Origin");
+    response.set(http::field::access_control_allow_methods, "POST, OPTIONS");
+    response.set(http::field::access_control_allow_headers,
+                 "Content-Type, Authorization, Accept, X-Timeout-Ms");
+    response.set(http::field::access_control_expose_headers, "X-Request-Id");
+    response.set(http::field::access_control_max_age, "600");
   }
 
   void respond_error(const Status& status, bool keep_alive, int http_code = 0) {
@@ -480,7 +520,11 @@ class HttpGateway::Impl::Session final : public SessionBase,
     std::string header =
         "HTTP/1.1 200 OK\r\nServer: gridshelld\r\nContent-Type: text/event-stream\r\n"
         "Cache-Control: no-store\r\nTransfer-Encoding: chunked\r\nConnection: close\r\n";
+    header += kSecurityHeaders;
     if (!request_id_.empty()) header += "X-Request-Id: " + request_id_ + "\r\n";
+    if (!cors_origin_.empty())
+      header += "Access-Control-Allow-Origin: " + cors_origin_ +
+                "\r\nVary: Origin\r\nAccess-Control-Expose-Headers: X-Request-Id\r\n";
     send(header + "\r\n", false);
   }
 
@@ -555,6 +599,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
   std::array<char, 512> watch_buffer_{};
   std::shared_ptr<Job> job_;
   std::string request_id_;
+  std::string cors_origin_;  ///< the request's Origin when it is allowed (CORS), else empty
   bool reading_ = false, writing_ = false, watching_ = false, closed_ = false, keep_alive_ = false;
   bool close_after_write_ = false, stopping_ = false;
   bool job_active_ = false, finished_ = false, sse_ = false, headers_sent_ = false;

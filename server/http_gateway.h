@@ -16,6 +16,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "job_queue.h"
 #include "methods.h"
@@ -27,7 +28,10 @@ struct HttpOptions {
   std::size_t body_limit = 256u << 20;     ///< largest request body, bytes (413 beyond)
   std::string static_dir;                  ///< folder served for GET; empty = none
   std::string token;                       ///< bearer token for /v1/* and /healthz; empty = none
-  std::string tls_cert_pem, tls_key_pem;   ///< both set: HTTPS
+  /// Origins (scheme://host[:port]) whose pages may call /v1/* from another origin (CORS);
+  /// empty = none: browsers only let pages served by this gateway call it.
+  std::vector<std::string> cors_origins;
+  std::string tls_cert_pem, tls_key_pem;  ///< both set: HTTPS
 };
 
 class HttpGateway {

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 
 #include "daemon.h"
@@ -41,7 +42,19 @@ int main(int argc, char** argv) {
   app.add_option("--http-body-limit-mib", options.http_body_limit_mib,
                  "largest HTTP request body, MiB")
       ->capture_default_str();
-  app.add_option("--static", options.static_dir, "folder of static files served over HTTP");
+  // The web page, served at / when it is built (scripts/build.sh); --static elsewhere, or
+  // --no-static for none.
+  options.static_dir = GRIDSHELL_WEB_DIR;
+  bool no_static = false;
+  app.add_option("--static", options.static_dir,
+                 "folder of static files served over HTTP (default: the built web page)")
+      ->capture_default_str();
+  app.add_flag("--no-static", no_static, "serve no static files (the HTTP API only)");
+  app.add_option("--cache-mib", options.cache_mib,
+                 "memory for per-patch design work kept for redesigns, MiB (0 = none)")
+      ->capture_default_str();
+  app.add_option("--cors-origin", options.cors_origins,
+                 "an origin (https://host:port) whose pages may call the API; repeatable");
   app.add_option("--tls-cert", options.tls_cert, "PEM certificate chain (TLS on both ports)");
   app.add_option("--tls-key", options.tls_key, "PEM private key of the certificate");
   app.add_option("--token-file", options.token_file,
@@ -58,6 +71,10 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n(run 'gridshelld --help' for usage)\n";
     return 2;
   }
+  // The default folder only when the page was built; an explicit --static must exist.
+  if (no_static ||
+      (app.count("--static") == 0 && !std::filesystem::is_directory(GRIDSHELL_WEB_DIR)))
+    options.static_dir.clear();
   if (no_http) options.http.clear();
 
   // Signals are taken by sigwait below only: block them before any thread starts.

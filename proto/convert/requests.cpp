@@ -14,6 +14,7 @@
 #include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/curvature.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/patch_cache.h"
 
 namespace gridshell {
 namespace {
@@ -411,6 +412,32 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
 
 // Design -----------------------------------------------------------------------------------------
 
+namespace {
+
+/// make_design with the patch work from (or into) the cache: the same design, without the
+/// patch stage and the maps when another design on this patch computed them.
+Design design_with_cache(PatchCache& cache, const DesignInputs& in, const Progress& progress,
+                         bool* cached) {
+  double patch_seconds = 0;
+  const std::shared_ptr<const PatchWork> work = cache.get(
+      patch_key(in.mesh, in.corners, in.options),
+      [&] {
+        const auto start = std::chrono::steady_clock::now();
+        TargetPatch target = make_target_patch(in.mesh, in.corners, in.options.patch, progress);
+        patch_seconds = seconds_since(start);
+        return prepare_patch_work(std::move(target), in.options, progress);
+      },
+      cached);
+  Design design = design_on_patch(*work, in.options, progress);
+  design.stage_seconds["patch"] = patch_seconds;
+  design.stage_seconds["distance_maps"] = *cached ? 0.0 : work->maps_seconds;
+  if (*cached)
+    for (auto& [stage, seconds] : design.target.stage_seconds) seconds = 0;  // not spent now
+  return design;
+}
+
+}  // namespace
+
 DesignInputs prepare_design(const v1::DesignRequest& request) {
   DesignInputs in;
   in.mesh = to_mesh(request.mesh(), &in.load);
@@ -474,7 +501,10 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     DesignInputs in = prepare_design(request);
     in.options.maps.threads = in.options.grid.threads = settings.threads;
     in.options.patch.coverability.threads = settings.threads;
-    const Design design = make_design(in.mesh, in.corners, in.options, progress);
+    bool cached = false;
+    const Design design = settings.patch_cache
+                              ? design_with_cache(*settings.patch_cache, in, progress, &cached)
+                              : make_design(in.mesh, in.corners, in.options, progress);
     in.record.set_lamella_width(design.lamella_width);
     in.record.set_lamella_thickness(design.lamella_thickness);
     in.record.set_map_resolution(design.maps.g.resolution());
@@ -491,6 +521,7 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     add_view("spatial.obj", spatial_obj(design));
     add_view("maps.svg", maps_svg(design));
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
+    out.mutable_report()->set_distance_maps_cached(cached);
     if (request.files())  // the files the CLI writes, for clients that offer downloads
       for (auto& [file, content] : design_files(out))
         if (file == "design.json" || file == "report.json") add_view(file.c_str(), content);

@@ -24,9 +24,13 @@
 
 namespace gridshell {
 
+class PatchCache;
+
 struct RunSettings {
   /// Kernel worker threads inside one request; 0 = all cores. Results do not depend on it.
   int threads = 0;
+  /// Per-patch work shared by the designs of one daemon (patch_cache.h); null = none.
+  PatchCache* patch_cache = nullptr;
 };
 
 /// The request's mesh, however it was given: packed arrays (mesh_from_arrays), the bytes of a

@@ -1,0 +1,71 @@
+// gridshell — the daemon's cache of per-patch design work: the target patch and its distance
+// maps (PatchWork), which do not depend on alpha, the member counts, the lamella size or the
+// anchors. With it, moving the alpha slider or changing member counts redesigns without the patch
+// stage and the maps (issue 16; docs/decisions.md).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "gridshell/design/design.h"
+
+namespace gridshell {
+
+/// What identifies a patch's work: a 128-bit hash of everything PatchWork depends on (the mesh
+/// as loaded, the corners, the patch and map options), plus the mesh's counts.
+struct PatchKey {
+  std::uint64_t hash[2] = {0, 0};
+  int vertices = 0;
+  int faces = 0;
+  auto operator<=>(const PatchKey&) const = default;
+};
+
+/// The key of a design on `mesh` with these corners and options (only the options PatchWork
+/// depends on are hashed: geodesic engine, patch cut, coverability and smoothing, map resolution).
+PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
+                   const DesignOptions& options);
+
+/// Bytes a PatchWork holds (the patch mesh with its topology, the maps, the reports): what the
+/// cache counts against its bound.
+std::size_t memory_bytes(const PatchWork& work);
+
+/// A bounded least-recently-used cache of PatchWork, safe to use from many threads. Two
+/// requests for a missing key at the same time both compute it (the work is deterministic, so
+/// either result is the same); the cache keeps one.
+class PatchCache {
+ public:
+  /// `max_bytes` 0 = the cache keeps nothing.
+  explicit PatchCache(std::size_t max_bytes);
+
+  /// The cached work for `key`, or the result of `make()` (then cached, evicting the least
+  /// recently used entries while the total exceeds the bound; an entry larger than the bound is
+  /// returned but not kept). `*hit` says which. Exceptions of `make` pass through.
+  std::shared_ptr<const PatchWork> get(const PatchKey& key, const std::function<PatchWork()>& make,
+                                       bool* hit);
+
+  struct Stats {
+    std::size_t entries = 0;
+    std::size_t bytes = 0;
+    std::size_t max_bytes = 0;
+    std::uint64_t hits = 0, misses = 0, evictions = 0;
+  };
+  Stats stats() const;
+
+ private:
+  struct Entry {
+    PatchKey key;
+    std::shared_ptr<const PatchWork> work;
+    std::size_t bytes = 0;
+  };
+  mutable std::mutex mutex_;
+  std::list<Entry> lru_;  // most recent first
+  std::map<PatchKey, std::list<Entry>::iterator> index_;
+  Stats stats_;
+};
+
+}  // namespace gridshell

@@ -1,0 +1,131 @@
+#include "gridshell/patch_cache.h"
+
+#include <cstring>
+#include <vector>
+
+namespace gridshell {
+namespace {
+
+/// Two independent 64-bit streams (splitmix64 finalizer over the words, different seeds): 128
+/// bits, so two different patches collide with probability ~2^-128 per pair.
+class Hasher {
+ public:
+  void word(std::uint64_t w) {
+    a_ = mix(a_ ^ w) + 0x9E3779B97F4A7C15ull;
+    b_ = mix(b_ + w * 0xC2B2AE3D27D4EB4Full) ^ 0x165667B19E3779F9ull;
+  }
+  void number(double x) {
+    std::uint64_t w;
+    std::memcpy(&w, &x, sizeof w);
+    word(w);
+  }
+  void integer(long long x) { word(static_cast<std::uint64_t>(x)); }
+  std::uint64_t a() const { return mix(a_); }
+  std::uint64_t b() const { return mix(b_); }
+
+ private:
+  static std::uint64_t mix(std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  std::uint64_t a_ = 0x243F6A8885A308D3ull, b_ = 0x13198A2E03707344ull;
+};
+
+}  // namespace
+
+PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
+                   const DesignOptions& options) {
+  Hasher h;
+  h.integer(mesh.vertex_count());
+  for (const Vec3& p : mesh.vertices())
+    for (int k = 0; k < 3; ++k) h.number(p[k]);
+  h.integer(mesh.face_count());
+  for (const Face& f : mesh.faces())
+    for (int v : f) h.integer(v);
+  h.integer(static_cast<int>(corners.kind));  // only the kind's own fields are set
+  if (corners.kind == CornerSpec::Kind::Vertices)
+    for (int v : corners.vertices) h.integer(v);
+  if (corners.kind == CornerSpec::Kind::Points)
+    for (const Vec3& p : corners.points)
+      for (int k = 0; k < 3; ++k) h.number(p[k]);
+  const TargetPatchOptions& patch = options.patch;
+  h.integer(static_cast<int>(patch.geodesic.method));
+  h.number(patch.cut.snap_fraction);
+  h.number(patch.coverability.eta_max);
+  h.integer(patch.coverability.max_smoothing_iterations);
+  h.number(patch.coverability.smoothing_step);
+  h.integer(patch.coverability.member_distance_samples);
+  h.integer(patch.smooth);
+  h.integer(options.maps.resolution);
+  PatchKey key;
+  key.hash[0] = h.a();
+  key.hash[1] = h.b();
+  key.vertices = mesh.vertex_count();
+  key.faces = mesh.face_count();
+  return key;
+}
+
+std::size_t memory_bytes(const PatchWork& work) {
+  const Patch& patch = work.target.patch;
+  const TriangleMesh& mesh = patch.mesh;
+  std::size_t bytes = sizeof(PatchWork);
+  bytes += mesh.vertices().capacity() * sizeof(Vec3) + mesh.faces().capacity() * sizeof(Face);
+  const MeshTopology& topology = mesh.topology();
+  bytes += topology.face_neighbors.capacity() * sizeof(topology.face_neighbors[0]);
+  bytes += topology.is_boundary_vertex.capacity();
+  for (const auto& faces : topology.vertex_faces)
+    bytes += sizeof(faces) + faces.capacity() * sizeof(int);
+  for (const auto& loop : topology.boundary_loops)
+    bytes += sizeof(loop) + loop.capacity() * sizeof(int);
+  for (const auto& side : patch.sides) bytes += side.capacity() * sizeof(int);
+  bytes += patch.input_vertex.capacity() * sizeof(int);
+  for (const DistanceMap* map : {&work.maps.g, &work.maps.h})
+    bytes += static_cast<std::size_t>(map->distances.size()) * sizeof(double);
+  bytes += 64 * work.target.stage_seconds.size();
+  return bytes;
+}
+
+PatchCache::PatchCache(std::size_t max_bytes) { stats_.max_bytes = max_bytes; }
+
+std::shared_ptr<const PatchWork> PatchCache::get(const PatchKey& key,
+                                                 const std::function<PatchWork()>& make,
+                                                 bool* hit) {
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = index_.find(key);
+    if (it != index_.end()) {
+      lru_.splice(lru_.begin(), lru_, it->second);  // now the most recent
+      ++stats_.hits;
+      if (hit) *hit = true;
+      return it->second->work;
+    }
+    ++stats_.misses;
+  }
+  if (hit) *hit = false;
+  auto work = std::make_shared<const PatchWork>(make());  // outside the lock: seconds of work
+  const std::size_t bytes = memory_bytes(*work);
+  std::lock_guard lock(mutex_);
+  if (bytes > stats_.max_bytes || index_.count(key)) return work;
+  lru_.push_front({key, work, bytes});
+  index_[key] = lru_.begin();
+  stats_.bytes += bytes;
+  while (stats_.bytes > stats_.max_bytes && !lru_.empty()) {
+    const Entry& last = lru_.back();
+    stats_.bytes -= last.bytes;
+    index_.erase(last.key);
+    lru_.pop_back();
+    ++stats_.evictions;
+  }
+  stats_.entries = lru_.size();
+  return work;
+}
+
+PatchCache::Stats PatchCache::stats() const {
+  std::lock_guard lock(mutex_);
+  Stats out = stats_;
+  out.entries = lru_.size();
+  return out;
+}
+
+}  // namespace gridshell
