@@ -5,7 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
-#include <ranges>
+#include <numeric>
 #include <tuple>
 
 #include "gridshell/mesh/normals.h"
@@ -133,13 +133,17 @@ void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vec
                                         : std::tie(a.g, a.h) < std::tie(b.g, b.h);
   });
   if (static_cast<int>(candidates.size()) > options.interior) candidates.resize(options.interior);
+  // Every vertex is a candidate (a vector, not std::views::iota: clang 14, which builds the fuzz
+  // targets, cannot compile libstdc++ 12's views).
+  std::vector<int> all_vertices(static_cast<size_t>(mesh.vertex_count()));
+  std::iota(all_vertices.begin(), all_vertices.end(), 0);
   for (const Candidate& c : candidates) {
     Anchor a;
     a.g = c.g, a.h = c.h;
     a.side = -1;
     a.position = grid.crossings[static_cast<size_t>(c.g) * nh + c.h].surface_point;
     // The nearest vertex carries the normal, as for the boundary anchors.
-    a.normal = normals[nearest_vertex(mesh, std::views::iota(0, mesh.vertex_count()), a.position)];
+    a.normal = normals[nearest_vertex(mesh, all_vertices, a.position)];
     anchors.push_back(a);
   }
 }

@@ -549,7 +549,10 @@ AlphaRange feasible_alpha_range(const DistanceMaps& maps, const std::array<doubl
                                 const CladdingOptions& options, const Progress& progress) {
   check_options(options);
   check_maps(maps);
-  const auto [lo, hi] = convex_alpha_interval(side_lengths);  // validates the lengths
+  // Named values, not a structured binding: the lambdas below capture them, which clang 14 (the
+  // fuzz build) rejects for bindings.
+  const std::array<double, 2> convex = convex_alpha_interval(side_lengths);  // validates them
+  const double lo = convex[0], hi = convex[1];
   if (!(hi > lo)) {
     std::ostringstream message;
     message << "no convex planar quadrilateral has the side lengths " << side_lengths[0] << ", "

@@ -301,7 +301,7 @@ RawMesh parse_obj(const std::string& path, std::string_view text) {
         if (index == 0)
           fail(path, where + "face vertex index 0 is out of range (OBJ indices start at 1)");
         if (index < 0) {
-          if (-index > defined)
+          if (index < -defined)  // not -index > defined: -INT64_MIN overflows (fuzz_mesh_obj)
             fail(path, where + "relative face vertex index " + std::to_string(index) +
                            " is out of range (only " +
                            count_of(defined, "vertex is", "vertices are") +

@@ -1,0 +1,6 @@
+// libFuzzer target: the STL reader (read_mesh), with the loader's repairs and checks.
+#include "fuzz_support.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const unsigned char* data, std::size_t size) {
+  return gridshell::fuzz::read_mesh_input(data, size, gridshell::MeshFormat::Stl);
+}
