@@ -171,6 +171,8 @@ export class Viewer {
     const rect = this.canvas.getBoundingClientRect();
     const ndc = new THREE.Vector2(((clientX - rect.left) / rect.width) * 2 - 1,
                                   -((clientY - rect.top) / rect.height) * 2 + 1);
+    // Markers just placed have not been rendered yet: bring every world matrix up to date.
+    this.scene.updateMatrixWorld();
     const raycaster = new THREE.Raycaster();
     raycaster.setFromCamera(ndc, this.camera);
     const markerHit = raycaster.intersectObjects(this.markers.children.filter((c) => c instanceof THREE.Mesh), false)[0];

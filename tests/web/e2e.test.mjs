@@ -1,0 +1,266 @@
+// End-to-end tests of the web page: a real gridshelld (started here on free loopback ports,
+// serving client/web/dist) and real headless Debian Chromium driven by playwright-core. One
+// browser page walks the whole flow in order, as a user would. Every wait is bounded; the
+// daemon and the browser are stopped at the end, also when a test fails.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import { createRequire } from 'node:module';
+import { fileURLToPath } from 'node:url';
+import { mkdirSync, readFileSync, existsSync } from 'node:fs';
+import path from 'node:path';
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+const web = path.join(root, 'client/web');
+const { chromium } = createRequire(path.join(web, 'package.json'))('playwright-core');
+const daemonPath = process.env.GRIDSHELLD ?? path.join(root, 'build/gridshelld');
+const cliPath = process.env.GRIDSHELL ?? path.join(root, 'build/gridshell');
+const outDir = path.join(root, 'tests/web/out'); // screenshot, kept out of git
+
+let daemon, daemonLog = '', base, browser, page;
+const consoleErrors = [];
+const foreignRequests = [];
+let allowHttpErrors = false; // while a test provokes a 4xx on purpose
+
+/** Waits until `predicate()` is truthy (polling), at most `ms`. */
+async function until(predicate, ms, what) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const v = await predicate();
+    if (v) return v;
+    if (Date.now() > end) throw new Error(`timed out after ${ms} ms waiting for ${what}`);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+}
+
+const byId = (id) => page.getByTestId(id);
+const text = (id) => byId(id).textContent();
+
+before(async () => {
+  assert.ok(existsSync(daemonPath), `no daemon at ${daemonPath} (build it: bash scripts/build.sh)`);
+  assert.ok(existsSync(path.join(web, 'dist/index.html')), 'no client/web/dist (bash scripts/build-web.sh)');
+  daemon = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', '127.0.0.1:0', '--static', path.join(web, 'dist'),
+                              '--workers', '2'], { stdio: ['ignore', 'ignore', 'pipe'] });
+  daemon.stderr.setEncoding('utf8');
+  daemon.stderr.on('data', (d) => { daemonLog += d; });
+  const address = await until(() => {
+    const m = daemonLog.match(/"event":\s*"listening"[^\n]*?"http":\s*"([^"]+)"/) ??
+              daemonLog.match(/"http":\s*"([^"]+)"[^\n]*"event":\s*"listening"/);
+    if (daemon.exitCode !== null) throw new Error(`gridshelld exited: ${daemonLog}`);
+    return m?.[1];
+  }, 20000, 'gridshelld to listen');
+  base = `http://${address}/`;
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
+    args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--no-sandbox', '--headless',
+           '--disable-background-networking', '--disable-component-update', '--disable-sync',
+           '--no-first-run', '--disable-quic'], // Playwright gives it a fresh temporary profile
+    timeout: 30000,
+  });
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true });
+  // Traffic only to the daemon on loopback: anything else is recorded and refused.
+  await context.route('**/*', (route) => {
+    const url = new URL(route.request().url());
+    if (url.protocol === 'blob:' || url.protocol === 'data:' || url.host === address) return route.continue();
+    foreignRequests.push(url.href);
+    return route.abort();
+  });
+  page = await context.newPage();
+  page.setDefaultTimeout(20000);
+  page.on('console', (m) => {
+    if (m.type() !== 'error') return;
+    if (allowHttpErrors && /Failed to load resource: the server responded with a status of 4\d\d/.test(m.text())) return;
+    consoleErrors.push(m.text());
+  });
+  page.on('pageerror', (e) => consoleErrors.push(`pageerror: ${e.message}`));
+});
+
+after(async () => {
+  await browser?.close().catch(() => {});
+  if (daemon && daemon.exitCode === null) {
+    daemon.kill('SIGTERM');
+    const exited = await Promise.race([new Promise((r) => daemon.once('exit', () => r(true))),
+                                       new Promise((r) => setTimeout(() => r(false), 5000))]);
+    if (!exited) daemon.kill('SIGKILL');
+  }
+});
+
+let exampleName;
+
+test('page loads, lists the examples, shows one (page-ready time)', async () => {
+  const t0 = Date.now();
+  await page.goto(base, { waitUntil: 'load' });
+  await until(() => page.evaluate(() => Number(document.querySelector('[data-testid=example-select]')?.dataset.loaded ?? 0)),
+              10000, 'the example list');
+  const options = await byId('example-select').locator('option').evaluateAll((os) => os.map((o) => o.value).filter(Boolean));
+  assert.ok(options.length >= 3, `examples: ${options}`);
+  // The daemon's own list, for comparison: the page shows all of them.
+  const listed = await (await fetch(base + 'v1/examples', { method: 'POST', body: '{}', headers: { 'Content-Type': 'application/json' } })).json();
+  assert.deepEqual(options, listed.examples.map((e) => e.name));
+  const smallest = listed.examples.reduce((a, b) => (b.vertices < a.vertices ? b : a));
+  exampleName = process.env.GRIDSHELL_WEB_EXAMPLE ?? (options.includes('double-vault') ? 'double-vault' : smallest.name);
+  await byId('example-select').selectOption(exampleName);
+  await page.waitForFunction(() => document.querySelector('[data-testid=mesh-info]')?.dataset.ready === '1', null, { timeout: 15000 });
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const ms = Date.now() - t0;
+  console.log(`# page ready (navigation -> example ${exampleName} shown): ${ms} ms`);
+  assert.match(await text('mesh-info'), new RegExp(`${exampleName}: \\d+ vertices, \\d+ faces`));
+});
+
+/** Fraction of canvas pixels that differ from the background colour. */
+async function canvasCoverage() {
+  return page.evaluate(() => {
+    const src = document.querySelector('[data-testid=viewer]');
+    const c = document.createElement('canvas');
+    c.width = 160; c.height = 100;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0, c.width, c.height);
+    const d = ctx.getImageData(0, 0, c.width, c.height).data;
+    const bg = [d[0], d[1], d[2]];
+    let differ = 0;
+    for (let i = 0; i < d.length; i += 4)
+      if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 30) ++differ;
+    return differ / (d.length / 4);
+  });
+}
+
+test('the mesh is drawn (canvas not blank)', async () => {
+  const coverage = await until(async () => { const v = await canvasCoverage(); return v > 0.05 ? v : 0; }, 5000, 'a drawn mesh');
+  assert.ok(coverage < 0.98, `coverage ${coverage}`);
+});
+
+test('Auto corners: the patch with η, corner angles, legend', async () => {
+  await byId('corners-auto').click();
+  await page.waitForFunction(() => document.querySelector('[data-testid=patch-info]')?.dataset.ready === '1', null, { timeout: 30000 });
+  const info = await text('patch-info');
+  assert.match(info, /η = \d\.\d{5}/);
+  assert.match(info, /corner angles: (\d+\.\d°(, )?){4}/);
+  assert.ok(await byId('legend').isVisible());
+  assert.match(await byId('legend').textContent(), /Gaussian curvature/);
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+  assert.match(await text('corners-info'), /\(auto\)/);
+});
+
+async function designCount() {
+  return Number(await byId('summary').getAttribute('data-designs') ?? 0);
+}
+
+let firstSummary;
+test('Design, then the ᾱ slider redesigns with the cached distance maps', async () => {
+  await byId('design').click();
+  await until(async () => (await designCount()) === 1, 60000, 'the first design');
+  firstSummary = await text('summary');
+  assert.match(firstSummary, /ᾱ = \d+\.\d°/);
+  const slider = byId('alpha-slider');
+  assert.ok(await slider.isEnabled());
+  const [min, max] = [Number(await slider.getAttribute('min')), Number(await slider.getAttribute('max'))];
+  assert.ok(min < max, `range ${min}..${max}`);
+  const target = Math.round((min + 0.5 * (max - min)) * 10) / 10;
+  await slider.fill(String(target));
+  await until(async () => (await designCount()) === 2, 60000, 'the redesign');
+  const summary = await text('summary');
+  assert.match(summary, new RegExp(`ᾱ = ${target.toFixed(1).replace('.', '\\.')}°`));
+  assert.match(summary, /distance maps cached: yes/);
+  assert.equal(await byId('summary').getAttribute('data-cached'), 'true');
+  assert.notEqual(summary, firstSummary);
+  assert.ok(await page.locator('#plan-img').getAttribute('src'), 'planar.svg shown');
+});
+
+async function downloadJson(testid) {
+  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 10000 }), byId(testid).click()]);
+  const file = await download.path();
+  return { name: download.suggestedFilename(), bytes: readFileSync(file) };
+}
+
+test('design.json downloads as the JSON the daemon returned', async () => {
+  const { name, bytes } = await downloadJson('download-design');
+  assert.equal(name, 'design.json');
+  const design = JSON.parse(bytes.toString('utf8'));
+  assert.ok(Array.isArray(design.members) && design.members.length > 4);
+  assert.ok(Math.abs(design.alpha_bar * 180 / Math.PI - Number(await byId('alpha-slider').inputValue())) < 0.06);
+});
+
+test('Simulate: deployment with RMS, deployment.json downloads', async () => {
+  await byId('simulate').click();
+  await until(async () => /RMS/.test(await text('summary')), 120000, 'the simulation');
+  const summary = await text('summary');
+  assert.match(summary, /with notches: RMS \d/);
+  assert.match(summary, /without notches: RMS \d/);
+  assert.ok(await byId('deviation-legend').isVisible());
+  const { name, bytes } = await downloadJson('download-deployment');
+  assert.equal(name, 'deployment.json');
+  const dep = JSON.parse(bytes.toString('utf8'));
+  assert.ok(dep.rods.length > 0 && Number.isFinite(dep.rms_with_notches));
+  mkdirSync(outDir, { recursive: true });
+  await page.screenshot({ path: path.join(outDir, 'deployment.png') });
+  assert.ok((await canvasCoverage()) > 0.05, 'deployment drawn');
+});
+
+test('Cancel stops a running simulation (the daemon cancels the job)', async () => {
+  const before = (daemonLog.match(/CANCELLED/g) ?? []).length;
+  await byId('simulate').click();
+  await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled');
+  await byId('cancel').click();
+  await until(async () => /simulate: cancelled/.test(await text('status')), 5000, 'the cancelled status');
+  assert.ok(await byId('cancel').isDisabled());
+  await until(() => (daemonLog.match(/CANCELLED/g) ?? []).length > before, 5000, 'the daemon to log the cancellation');
+  assert.ok(await byId('simulate').isEnabled(), 'the page stays usable');
+});
+
+/** A small curved height field as OBJ (n x n vertices). */
+function smallObj(n = 13) {
+  const lines = ['# bump'];
+  for (let j = 0; j < n; ++j)
+    for (let i = 0; i < n; ++i) {
+      const x = i / (n - 1) * 10 - 5, y = j / (n - 1) * 10 - 5;
+      lines.push(`v ${x} ${y} ${(1.5 * Math.exp(-(x * x + y * y) / 20)).toFixed(6)}`);
+    }
+  for (let j = 0; j + 1 < n; ++j)
+    for (let i = 0; i + 1 < n; ++i) {
+      const a = j * n + i + 1, b = a + 1, c = a + n, d = c + 1;
+      lines.push(`f ${a} ${b} ${d}`, `f ${a} ${d} ${c}`);
+    }
+  return Buffer.from(lines.join('\n') + '\n');
+}
+
+test('upload a small OBJ, click four corners on the canvas: the patch', async () => {
+  await byId('mesh-input').setInputFiles({ name: 'bump.obj', mimeType: 'text/plain', buffer: smallObj() });
+  await until(async () => /bump\.obj: 169 vertices, 288 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the uploaded mesh');
+  const box = await byId('viewer').boundingBox();
+  // Around the middle of the surface as the default camera shows it (seen from the front, above).
+  const cx = box.x + box.width / 2, cy = box.y + box.height * 0.6, r = Math.min(box.width, box.height) * 0.1;
+  for (const [dx, dy] of [[-1, 1], [1, 1], [1, -1], [-1, -1]]) {
+    await page.mouse.click(cx + dx * r, cy + dy * r);
+  }
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch of the clicked corners');
+  assert.match(await text('corners-info'), /1→v\d+, 2→v\d+, 3→v\d+, 4→v\d+/);
+});
+
+test('a broken mesh file shows the daemon\'s error with its field', async () => {
+  const broken = Buffer.from('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n');
+  const direct = await (await fetch(base + 'v1/load', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ mesh: { name: 'broken.obj', file: broken.toString('base64'), format: 'obj' } }),
+  })).json();
+  assert.ok(direct.error?.message, JSON.stringify(direct));
+  allowHttpErrors = true;
+  try {
+    await byId('mesh-input').setInputFiles({ name: 'broken.obj', mimeType: 'text/plain', buffer: broken });
+    await until(() => byId('error').isVisible(), 10000, 'the error message');
+  } finally {
+    allowHttpErrors = false;
+  }
+  const shown = await text('error');
+  assert.ok(shown.includes(direct.error.message), `page: ${shown}\ndaemon: ${direct.error.message}`);
+  if (direct.error.field) assert.ok(shown.includes(direct.error.field), shown);
+  const slot = await page.locator('.field-error[data-for=mesh]').textContent();
+  assert.ok(slot.includes(direct.error.message), `next to the file input: ${slot}`);
+  // The page stays usable: the previous mesh is still there.
+  assert.match(await text('mesh-info'), /bump\.obj/);
+});
+
+test('no console errors, no traffic off loopback', () => {
+  assert.deepEqual(consoleErrors, []);
+  assert.deepEqual(foreignRequests, []);
+});
