@@ -4,10 +4,11 @@
 // daemon and the browser are stopped at the end, also when a test fails.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
+import { spawn, spawnSync } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
-import { mkdirSync, readFileSync, existsSync } from 'node:fs';
+import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
 import path from 'node:path';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
@@ -172,12 +173,28 @@ async function downloadJson(testid) {
   return { name: download.suggestedFilename(), bytes: readFileSync(file) };
 }
 
-test('design.json downloads as the JSON the daemon returned', async () => {
+test('design.json downloads, the same bytes as the CLI writes for the same inputs', async () => {
   const { name, bytes } = await downloadJson('download-design');
   assert.equal(name, 'design.json');
   const design = JSON.parse(bytes.toString('utf8'));
   assert.ok(Array.isArray(design.members) && design.members.length > 4);
-  assert.ok(Math.abs(design.alpha_bar * 180 / Math.PI - Number(await byId('alpha-slider').inputValue())) < 0.06);
+  const alpha = await byId('alpha-slider').inputValue();
+  assert.ok(Math.abs(design.alpha_bar * 180 / Math.PI - Number(alpha)) < 0.06);
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-cli-'));
+  try {
+    const r = spawnSync(cliPath, ['design', `example:${exampleName}`, '--corners', 'auto', '--alpha', `${Number(alpha)}deg`,
+                                  '--out', dir, '--quiet'], { encoding: 'utf8', timeout: 60000 });
+    assert.equal(r.status, 0, r.stderr);
+    const cli = readFileSync(path.join(dir, 'design.json'));
+    if (!cli.equals(bytes)) { // kept for a look: tests/web/out/design.{page,cli}.json
+      mkdirSync(outDir, { recursive: true });
+      writeFileSync(path.join(outDir, 'design.page.json'), bytes);
+      writeFileSync(path.join(outDir, 'design.cli.json'), cli);
+    }
+    assert.ok(cli.equals(bytes), `design.json differs from the CLI's (${cli.length} vs ${bytes.length} bytes)`);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
 });
 
 test('Simulate: deployment with RMS, deployment.json downloads', async () => {

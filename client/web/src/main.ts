@@ -227,8 +227,9 @@ async function loadMesh(mesh: MeshJson, source: NonNullable<State['source']>): P
   if (!result) return false;
   state.loaded = result;
   state.source = source;
-  // An example is sent by name (the CLI's --example); a file as the arrays the loader returned.
-  state.mesh = source.kind === 'example' ? { example: source.name }
+  // An example is sent by name, labelled as the CLI labels it (example:NAME, recorded as the
+  // design's `input`); a file as the arrays the loader returned, labelled with its file name.
+  state.mesh = source.kind === 'example' ? { name: `example:${source.name}`, example: source.name }
     : { name: source.name, positions: result.mesh.positions, indices: result.mesh.indices };
   resetFromMesh();
   viewer.setMesh(result.mesh.positions, result.mesh.indices);
