@@ -164,7 +164,31 @@ test('Design, then the ᾱ slider redesigns with the cached distance maps', asyn
   assert.match(summary, /distance maps cached: yes/);
   assert.equal(await byId('summary').getAttribute('data-cached'), 'true');
   assert.notEqual(summary, firstSummary);
-  assert.ok(await page.locator('#plan-img').getAttribute('src'), 'planar.svg shown');
+  await page.getByRole('button', { name: 'Plan (2D)' }).click();
+  await until(() => page.locator('#plan-img').evaluate((i) => i.complete && i.naturalWidth > 0), 5000, 'planar.svg shown');
+  await page.getByRole('button', { name: '3D' }).click();
+});
+
+test('the state is in the URL: a reload restores the design, a second tab is independent', async () => {
+  const summary = await text('summary');
+  const hash = new URL(page.url()).hash;
+  assert.match(hash, new RegExp(`example=${exampleName}.*corners=\\d+%2C\\d+%2C\\d+%2C\\d+.*alpha=`));
+  const other = await page.context().newPage();
+  try {
+    await other.goto(base);
+    await until(() => other.evaluate(() => document.body.dataset.ready === '1'), 10000, 'the second tab');
+    assert.equal(await other.getByTestId('example-select').inputValue(), '');
+    assert.equal(await other.getByTestId('summary').textContent(), '');
+  } finally {
+    await other.close();
+  }
+  await page.reload();
+  await until(async () => (await designCount()) === 1, 60000, 'the restored design');
+  assert.equal(await byId('example-select').inputValue(), exampleName);
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+  const restored = await text('summary');
+  assert.equal(restored.split('\n')[0], summary.split('\n')[0]); // the same ᾱ line
+  assert.match(restored, /distance maps cached: yes/); // the daemon still has this patch's maps
 });
 
 async function downloadJson(testid) {
@@ -254,6 +278,64 @@ test('upload a small OBJ, click four corners on the canvas: the patch', async ()
   assert.match(await text('corners-info'), /1→v\d+, 2→v\d+, 3→v\d+, 4→v\d+/);
 });
 
+test('click a marker, then the surface: the corner moves and the patch follows', async () => {
+  const before = await text('corners-info');
+  const patchBefore = await text('patch-info');
+  const markers = await until(async () => {
+    const m = await byId('viewer').getAttribute('data-markers');
+    return m && m.split(';').length === 4 ? m.split(';').map((p) => p.split(',').map(Number)) : null;
+  }, 5000, 'the four markers drawn');
+  const box = await byId('viewer').boundingBox();
+  await page.mouse.click(box.x + markers[0][0], box.y + markers[0][1]);
+  assert.match(await text('corners-info'), /moving corner 1/);
+  await page.mouse.click(box.x + box.width / 2, box.y + box.height * 0.6); // the middle of the surface
+  const after = await text('corners-info');
+  assert.notEqual(after.split('\n')[0], before.split('\n')[0]);
+  assert.equal(after.split(', ').slice(1).join(), before.split('\n')[0].split(', ').slice(1).join()); // 2..4 stay
+  await until(async () => (await text('patch-info')) !== patchBefore && /η = /.test(await text('patch-info')), 30000, 'the new patch');
+});
+
+/** A binary STL of an n x n height field: 2 (n-1)^2 triangles. */
+function bigStl(n) {
+  const tris = 2 * (n - 1) * (n - 1);
+  const buf = Buffer.alloc(84 + 50 * tris);
+  buf.writeUInt32LE(tris, 80);
+  const z = (x, y) => 3 * Math.sin(x / 7) * Math.cos(y / 9);
+  let o = 84;
+  const put = (...p) => { for (const v of p) { buf.writeFloatLE(v, o); o += 4; } };
+  for (let j = 0; j + 1 < n; ++j)
+    for (let i = 0; i + 1 < n; ++i) {
+      const a = [i, j, z(i, j)], b = [i + 1, j, z(i + 1, j)], c = [i, j + 1, z(i, j + 1)], d = [i + 1, j + 1, z(i + 1, j + 1)];
+      for (const t of [[a, b, d], [a, d, c]]) { put(0, 0, 0); for (const p of t) put(...p); o += 2; }
+    }
+  return buf;
+}
+
+test('a 250k-triangle STL loads and picks (times printed)', async () => {
+  const stl = bigStl(355); // 250,632 triangles, 12.5 MB
+  const t0 = Date.now();
+  await byId('mesh-input').setInputFiles({ name: 'big.stl', mimeType: 'application/octet-stream', buffer: stl });
+  await until(async () => /big\.stl: 126025 vertices, 250632 faces \(stl\)/.test(await text('mesh-info')), 60000, 'the big mesh');
+  console.log(`# 250k-triangle STL: upload + load + BVH + first frame ${Date.now() - t0} ms`);
+  const box = await byId('viewer').boundingBox();
+  const times = [];
+  for (const [i, [dx, dy]] of [[0, 0], [-0.1, 0.05], [0.1, 0.05], [0.05, -0.05]].entries()) {
+    await page.mouse.click(box.x + box.width * (0.5 + dx), box.y + box.height * (0.6 + dy));
+    const ms = await byId('corners-info').getAttribute('data-pick-ms');
+    assert.ok(ms !== null && Number.isFinite(Number(ms)), 'a surface pick');
+    times.push(Number(ms));
+    assert.equal(await byId('corners-info').getAttribute('data-count'), String(i + 1));
+  }
+  console.log(`# pick on 250k triangles (raycast + snap): ${times.map((t) => t.toFixed(1)).join(', ')} ms`);
+  // Its patch takes long (geodesics on 126k vertices): Cancel stops it in the daemon.
+  const cancelled = (daemonLog.match(/CANCELLED/g) ?? []).length;
+  await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled during the patch');
+  await page.waitForTimeout(300);
+  await byId('cancel').click();
+  await until(async () => /patch: cancelled/.test(await text('status')), 5000, 'the cancelled patch');
+  await until(() => (daemonLog.match(/CANCELLED/g) ?? []).length > cancelled, 5000, 'the daemon to cancel the patch');
+});
+
 test('a broken mesh file shows the daemon\'s error with its field', async () => {
   const broken = Buffer.from('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n');
   const direct = await (await fetch(base + 'v1/load', {
@@ -274,7 +356,7 @@ test('a broken mesh file shows the daemon\'s error with its field', async () => 
   const slot = await page.locator('.field-error[data-for=mesh]').textContent();
   assert.ok(slot.includes(direct.error.message), `next to the file input: ${slot}`);
   // The page stays usable: the previous mesh is still there.
-  assert.match(await text('mesh-info'), /bump\.obj/);
+  assert.match(await text('mesh-info'), /big\.stl/);
 });
 
 test('no console errors, no traffic off loopback', () => {

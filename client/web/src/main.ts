@@ -306,6 +306,7 @@ viewer.onPick = (pick: Pick) => {
   state.cornersAuto = false;
   updateCorners();
   ui.status.textContent = `picked vertex ${pick.vertex} in ${viewer.lastPickMs.toFixed(1)} ms`;
+  ui.cornersInfo.dataset['pickMs'] = viewer.lastPickMs.toFixed(2);
   if (state.corners.length === 4) void computePatch();
   else saveUrl();
 };

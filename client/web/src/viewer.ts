@@ -95,7 +95,23 @@ export class Viewer {
     requestAnimationFrame(() => {
       this.frameRequested = false;
       this.renderer.render(this.scene, this.camera);
+      this.publishMarkers();
     });
+  }
+
+  /**
+   * Test hook: the markers' pixel positions (CSS pixels from the canvas's top left) as
+   * `data-markers` on the canvas, "x,y;x,y;...", corner 1 first, after every frame.
+   */
+  private publishMarkers(): void {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    const spots: string[] = [];
+    for (const m of this.markers.children) {
+      if (!(m instanceof THREE.Mesh)) continue;
+      const p = m.position.clone().project(this.camera);
+      spots.push(`${((p.x + 1) / 2 * w).toFixed(1)},${((1 - p.y) / 2 * h).toFixed(1)}`);
+    }
+    this.canvas.dataset['markers'] = spots.join(';');
   }
 
   /** A Float32Array of `xyz` relative to the mesh's centre. */
