@@ -221,6 +221,27 @@ test('design.json downloads, the same bytes as the CLI writes for the same input
   }
 });
 
+test('member counts redesign live; a bad option shows its field next to the controls', async () => {
+  const n = await designCount();
+  await byId('members-u').fill('6');
+  await until(async () => (await designCount()) === n + 1, 60000, 'the redesign with 6 g-members');
+  assert.match(await text('summary'), /members: 6 g × \d+ h inner/);
+  assert.match(await text('summary'), /distance maps cached: yes/);
+  allowHttpErrors = true;
+  try {
+    await byId('lamella-width').fill('-1');
+    await until(() => byId('error').isVisible(), 10000, 'the error of the bad width');
+  } finally {
+    allowHttpErrors = false;
+  }
+  assert.match(await text('error'), /options\.lamella_width: /);
+  assert.match(await page.locator('.field-error[data-for=options]').textContent(), /options\.lamella_width: /);
+  await byId('lamella-width').fill('0');
+  await until(async () => (await designCount()) === n + 2, 60000, 'the redesign after the fix');
+  assert.ok(await byId('error').isHidden());
+  assert.equal(await page.locator('.field-error[data-for=options]').textContent(), '');
+});
+
 test('Simulate: deployment with RMS, deployment.json downloads', async () => {
   await byId('simulate').click();
   await until(async () => /RMS/.test(await text('summary')), 120000, 'the simulation');
@@ -330,10 +351,22 @@ test('a 250k-triangle STL loads and picks (times printed)', async () => {
   // Its patch takes long (geodesics on 126k vertices): Cancel stops it in the daemon.
   const cancelled = (daemonLog.match(/CANCELLED/g) ?? []).length;
   await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled during the patch');
-  await page.waitForTimeout(300);
+  // Progress from the kernel's SSE stream: stage name and percentage, the bar moving.
+  await until(async () => /^patch: .+ \(\d+%\)$/.test(await text('status')), 10000, 'patch progress');
   await byId('cancel').click();
   await until(async () => /patch: cancelled/.test(await text('status')), 5000, 'the cancelled patch');
   await until(() => (daemonLog.match(/CANCELLED/g) ?? []).length > cancelled, 5000, 'the daemon to cancel the patch');
+});
+
+test('drag and drop of a mesh file loads it', async () => {
+  const dataTransfer = await page.evaluateHandle((obj) => {
+    const dt = new DataTransfer();
+    dt.items.add(new File([obj], 'dropped.obj', { type: 'text/plain' }));
+    return dt;
+  }, smallObj(7).toString());
+  await page.dispatchEvent('#drop', 'drop', { dataTransfer });
+  await until(async () => /dropped\.obj: 49 vertices, 72 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the dropped mesh');
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '0');
 });
 
 test('a broken mesh file shows the daemon\'s error with its field', async () => {
@@ -356,10 +389,21 @@ test('a broken mesh file shows the daemon\'s error with its field', async () => 
   const slot = await page.locator('.field-error[data-for=mesh]').textContent();
   assert.ok(slot.includes(direct.error.message), `next to the file input: ${slot}`);
   // The page stays usable: the previous mesh is still there.
-  assert.match(await text('mesh-info'), /big\.stl/);
+  assert.match(await text('mesh-info'), /dropped\.obj/);
 });
 
 test('no console errors, no traffic off loopback', () => {
   assert.deepEqual(consoleErrors, []);
   assert.deepEqual(foreignRequests, []);
+});
+
+// Last: stopping the daemon makes Chromium log the refused connection, after the check above.
+test('the daemon gone: a message, and the page stays', async () => {
+  daemon.kill('SIGTERM');
+  await until(() => daemon.exitCode !== null || daemon.signalCode !== null, 15000, 'gridshelld to stop');
+  await byId('corners-auto').click();
+  await until(() => byId('error').isVisible(), 10000, 'the error');
+  assert.match(await text('error'), /UNAVAILABLE.*cannot be reached/);
+  assert.match(await text('mesh-info'), /dropped\.obj/);
+  assert.ok((await canvasCoverage()) > 0.05, 'the view is still drawn');
 });
