@@ -104,7 +104,13 @@ test('page loads, lists the examples, shows one (page-ready time)', async () => 
   await page.waitForFunction(() => document.querySelector('[data-testid=mesh-info]')?.dataset.ready === '1', null, { timeout: 15000 });
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   const ms = Date.now() - t0;
-  console.log(`# page ready (navigation -> example ${exampleName} shown): ${ms} ms`);
+  const inPage = await page.evaluate(() => ({
+    dom: Math.round(performance.getEntriesByType('navigation')[0].domContentLoadedEventEnd),
+    examples: document.querySelector('[data-testid=example-select]').dataset.loadedMs,
+    shown: document.querySelector('[data-testid=mesh-info]').dataset.readyMs,
+  }));
+  console.log(`# page ready (navigation -> example ${exampleName} shown): ${ms} ms; in the page: bundle ` +
+              `loaded ${inPage.dom} ms, examples listed ${inPage.examples} ms, example shown ${inPage.shown} ms`);
   assert.match(await text('mesh-info'), new RegExp(`${exampleName}: \\d+ vertices, \\d+ faces`));
 });
 

@@ -197,6 +197,7 @@ async function loadExamples(): Promise<void> {
     ui.example.append(o);
   }
   ui.example.dataset['loaded'] = String(result.examples.length);
+  ui.example.dataset['loadedMs'] = performance.now().toFixed(0); // since navigation start
 }
 
 function resetFromMesh(): void {
@@ -239,6 +240,7 @@ async function loadMesh(mesh: MeshJson, source: NonNullable<State['source']>): P
   ui.meshInfo.textContent = `${source.name}: ${r.vertices} vertices, ${r.faces} faces (${r.format})${extent}`;
   ui.warnings.textContent = r.warnings.length ? `loader: ${r.warnings.join('\n')}` : '';
   ui.meshInfo.dataset['ready'] = '1';
+  ui.meshInfo.dataset['readyMs'] = performance.now().toFixed(0); // since navigation start
   ui.auto.disabled = ui.clear.disabled = false;
   saveUrl();
   return true;
