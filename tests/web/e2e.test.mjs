@@ -262,6 +262,10 @@ test('Simulate: deployment with RMS, deployment.json downloads', async () => {
   mkdirSync(outDir, { recursive: true });
   await page.screenshot({ path: path.join(outDir, 'deployment.png') });
   assert.ok((await canvasCoverage()) > 0.05, 'deployment drawn');
+  await byId('colour-by').selectOption('bending');
+  assert.match(await byId('deviation-legend').textContent(), /bending stress per lamella.*\d.* MPa/s);
+  await byId('colour-by').selectOption('deviation');
+  assert.match(await byId('deviation-legend').textContent(), /deviation from the target/);
 });
 
 test('Cancel stops a running simulation (the daemon cancels the job)', async () => {

@@ -65,6 +65,8 @@ const ui = {
   devLegend: el('deviation-legend'),
   devBar: el<HTMLCanvasElement>('deviation-bar'),
   devMax: el('deviation-max'),
+  devTitle: el('deviation-title'),
+  colourBy: el<HTMLSelectElement>('colour-by'),
 };
 
 const viewer = new Viewer(el<HTMLCanvasElement>('viewer'));
@@ -452,14 +454,28 @@ async function simulate(): Promise<void> {
   if (!result) return;
   state.simulation = result;
   const dep = result.deployment;
-  const max = maxDeviation(dep);
-  viewer.setDeployment(dep, d.design.options.lamella_width, max);
-  ui.devLegend.hidden = false;
-  drawBar(ui.devBar, (t) => sequential(t, 1));
-  ui.devMax.textContent = formatNumber(max);
+  showDeployment();
   ui.summary.textContent = `${designSummary(d)}\n\n${deploymentSummary(dep)}`;
   setDownloads([...d.views, ...result.views]);
 }
+
+/** The deployment in 3D, coloured as the panel says, with its legend. */
+function showDeployment(): void {
+  const d = state.design, sim = state.simulation;
+  if (!d || !sim) return;
+  const dep = sim.deployment;
+  const bending = ui.colourBy.value === 'bending';
+  const max = bending ? Math.max(0, ...dep.rods.map((r) => r.max_bending_stress)) : maxDeviation(dep);
+  viewer.setDeployment(dep, d.design.options.lamella_width, max,
+                       bending ? (rod) => rod.max_bending_stress : (rod, i) => rod.deviation[i] ?? 0);
+  ui.devLegend.hidden = false;
+  ui.devTitle.textContent = bending ? `largest bending stress per lamella${dep.options.unit ? '' : ' (scaled: unit unknown)'}`
+    : 'deviation from the target';
+  drawBar(ui.devBar, (t) => sequential(t, 1));
+  ui.devMax.textContent = bending ? `${formatNumber(max / 1e6)} MPa` : formatNumber(max);
+}
+
+ui.colourBy.addEventListener('change', () => showDeployment());
 
 // ---- downloads, views -----------------------------------------------------------------------
 

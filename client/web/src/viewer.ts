@@ -1,6 +1,6 @@
 // The 3D view: the input mesh, four numbered corner markers, the trimmed patch with its Gaussian
 // curvature colours and boundary geodesics, the design on the surface (members, crossings,
-// anchors) and the deployed lamellas as ribbons coloured by deviation. Everything is drawn
+// anchors) and the deployed lamellas as ribbons coloured by deviation or bending stress. Everything is drawn
 // relative to the mesh's bounding-box centre (computed in double precision), so architectural
 // coordinates far from the origin still render and pick precisely. Picking: three-mesh-bvh.
 // Renders on demand only (one frame per change), which matters with a software GL.
@@ -8,7 +8,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { acceleratedRaycast, computeBoundsTree, disposeBoundsTree } from 'three-mesh-bvh';
-import type { Deployment, Design } from './api';
+import type { Deployment, Design, Lamella } from './api';
 import { diverging, sequential } from './colormap';
 
 THREE.BufferGeometry.prototype.computeBoundsTree = computeBoundsTree;
@@ -322,8 +322,12 @@ export class Viewer {
     m.needsUpdate = true;
   }
 
-  /** Deployed lamellas as ribbons of the design's width, coloured by deviation in [0, max]. */
-  setDeployment(deployment: Deployment, width: number, max: number): void {
+  /**
+   * Deployed lamellas as ribbons of the design's width, coloured by `value(rod, vertex)` in
+   * [0, max]: the deviation of each vertex, or a per-lamella quantity (its largest bending stress).
+   */
+  setDeployment(deployment: Deployment, width: number, max: number,
+                value: (rod: Lamella, vertex: number) => number): void {
     this.clearGroup(this.deployment);
     this.design.visible = false;
     this.setPatchOpacity(0.3);
@@ -339,7 +343,7 @@ export class Viewer {
         b.crossVectors(t, n).normalize().multiplyScalar(width / 2);
         if (!Number.isFinite(b.x)) b.set(0, 0, 0);
         pos.push(p.x + b.x, p.y + b.y, p.z + b.z, p.x - b.x, p.y - b.y, p.z - b.z);
-        const c = sequential(rod.deviation[i] ?? 0, max);
+        const c = sequential(value(rod, i), max);
         col.push(...c, ...c);
         if (i + 1 < pts.length) {
           const k = base + 2 * i;
