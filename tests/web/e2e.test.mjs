@@ -18,7 +18,9 @@ const daemonPath = process.env.GRIDSHELLD ?? path.join(root, 'build/gridshelld')
 const cliPath = process.env.GRIDSHELL ?? path.join(root, 'build/gridshell');
 const outDir = path.join(root, 'tests/web/out'); // screenshot, kept out of git
 
-let daemon, daemonLog = '', base, browser, page;
+let daemon, daemonLog = () => '', address, base, browser, page;
+const daemons = [];        // every gridshelld started, stopped in after()
+const allowedHosts = new Set();
 const consoleErrors = [];
 const foreignRequests = [];
 let allowHttpErrors = false; // while a test provokes a 4xx on purpose
@@ -34,22 +36,39 @@ async function until(predicate, ms, what) {
   }
 }
 
+/** Starts gridshelld on free loopback ports serving the page; resolves when it listens. */
+async function startDaemon(extra) {
+  const proc = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', '127.0.0.1:0', '--static', path.join(web, 'dist'),
+                                  '--workers', '2', ...extra], { stdio: ['ignore', 'ignore', 'pipe'] });
+  let log = '';
+  proc.stderr.setEncoding('utf8');
+  proc.stderr.on('data', (d) => { log += d; });
+  const address = await until(() => {
+    const m = log.match(/"event":\s*"listening"[^\n]*?"http":\s*"([^"]+)"/) ??
+              log.match(/"http":\s*"([^"]+)"[^\n]*"event":\s*"listening"/);
+    if (proc.exitCode !== null) throw new Error(`gridshelld exited: ${log}`);
+    return m?.[1];
+  }, 20000, 'gridshelld to listen');
+  allowedHosts.add(address);
+  return { proc, address, log: () => log };
+}
+
+async function stopDaemon(proc) {
+  if (proc.exitCode !== null || proc.signalCode !== null) return;
+  proc.kill('SIGTERM');
+  const exited = await Promise.race([new Promise((r) => proc.once('exit', () => r(true))),
+                                     new Promise((r) => setTimeout(() => r(false), 5000))]);
+  if (!exited) proc.kill('SIGKILL');
+}
+
 const byId = (id) => page.getByTestId(id);
 const text = (id) => byId(id).textContent();
 
 before(async () => {
   assert.ok(existsSync(daemonPath), `no daemon at ${daemonPath} (build it: bash scripts/build.sh)`);
   assert.ok(existsSync(path.join(web, 'dist/index.html')), 'no client/web/dist (bash scripts/build-web.sh)');
-  daemon = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', '127.0.0.1:0', '--static', path.join(web, 'dist'),
-                              '--workers', '2'], { stdio: ['ignore', 'ignore', 'pipe'] });
-  daemon.stderr.setEncoding('utf8');
-  daemon.stderr.on('data', (d) => { daemonLog += d; });
-  const address = await until(() => {
-    const m = daemonLog.match(/"event":\s*"listening"[^\n]*?"http":\s*"([^"]+)"/) ??
-              daemonLog.match(/"http":\s*"([^"]+)"[^\n]*"event":\s*"listening"/);
-    if (daemon.exitCode !== null) throw new Error(`gridshelld exited: ${daemonLog}`);
-    return m?.[1];
-  }, 20000, 'gridshelld to listen');
+  ({ proc: daemon, address, log: daemonLog } = await startDaemon([]));
+  daemons.push(daemon);
   base = `http://${address}/`;
   browser = await chromium.launch({
     executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
@@ -62,7 +81,7 @@ before(async () => {
   // Traffic only to the daemon on loopback: anything else is recorded and refused.
   await context.route('**/*', (route) => {
     const url = new URL(route.request().url());
-    if (url.protocol === 'blob:' || url.protocol === 'data:' || url.host === address) return route.continue();
+    if (url.protocol === 'blob:' || url.protocol === 'data:' || allowedHosts.has(url.host)) return route.continue();
     foreignRequests.push(url.href);
     return route.abort();
   });
@@ -78,12 +97,7 @@ before(async () => {
 
 after(async () => {
   await browser?.close().catch(() => {});
-  if (daemon && daemon.exitCode === null) {
-    daemon.kill('SIGTERM');
-    const exited = await Promise.race([new Promise((r) => daemon.once('exit', () => r(true))),
-                                       new Promise((r) => setTimeout(() => r(false), 5000))]);
-    if (!exited) daemon.kill('SIGKILL');
-  }
+  await Promise.all(daemons.map(stopDaemon));
 });
 
 let exampleName;
@@ -269,13 +283,13 @@ test('Simulate: deployment with RMS, deployment.json downloads', async () => {
 });
 
 test('Cancel stops a running simulation (the daemon cancels the job)', async () => {
-  const before = (daemonLog.match(/CANCELLED/g) ?? []).length;
+  const before = (daemonLog().match(/CANCELLED/g) ?? []).length;
   await byId('simulate').click();
   await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled');
   await byId('cancel').click();
   await until(async () => /simulate: cancelled/.test(await text('status')), 5000, 'the cancelled status');
   assert.ok(await byId('cancel').isDisabled());
-  await until(() => (daemonLog.match(/CANCELLED/g) ?? []).length > before, 5000, 'the daemon to log the cancellation');
+  await until(() => (daemonLog().match(/CANCELLED/g) ?? []).length > before, 5000, 'the daemon to log the cancellation');
   assert.ok(await byId('simulate').isEnabled(), 'the page stays usable');
 });
 
@@ -359,13 +373,13 @@ test('a 250k-triangle STL loads and picks (times printed)', async () => {
   }
   console.log(`# pick on 250k triangles (raycast + snap): ${times.map((t) => t.toFixed(1)).join(', ')} ms`);
   // Its patch takes long (geodesics on 126k vertices): Cancel stops it in the daemon.
-  const cancelled = (daemonLog.match(/CANCELLED/g) ?? []).length;
+  const cancelled = (daemonLog().match(/CANCELLED/g) ?? []).length;
   await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled during the patch');
   // Progress from the kernel's SSE stream: stage name and percentage, the bar moving.
   await until(async () => /^patch: .+ \(\d+%\)$/.test(await text('status')), 10000, 'patch progress');
   await byId('cancel').click();
   await until(async () => /patch: cancelled/.test(await text('status')), 5000, 'the cancelled patch');
-  await until(() => (daemonLog.match(/CANCELLED/g) ?? []).length > cancelled, 5000, 'the daemon to cancel the patch');
+  await until(() => (daemonLog().match(/CANCELLED/g) ?? []).length > cancelled, 5000, 'the daemon to cancel the patch');
 });
 
 test('drag and drop of a mesh file loads it', async () => {
@@ -402,6 +416,33 @@ test('a broken mesh file shows the daemon\'s error with its field', async () => 
   assert.match(await text('mesh-info'), /dropped\.obj/);
 });
 
+test('a daemon with a token: the page asks for it and keeps it in sessionStorage only', async () => {
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-token-'));
+  const token = 'web-e2e-' + Math.random().toString(36).slice(2);
+  writeFileSync(path.join(dir, 'token'), token + '\n', { mode: 0o600 });
+  const other = await startDaemon(['--token-file', path.join(dir, 'token')]);
+  daemons.push(other.proc);
+  const tab = await page.context().newPage();
+  allowHttpErrors = true; // the 401 before the token is given
+  try {
+    await tab.goto(`http://${other.address}/`);
+    await until(() => tab.locator('#token-box').isVisible(), 10000, 'the token field');
+    assert.match(await tab.getByTestId('error').textContent(), /UNAUTHENTICATED/);
+    await tab.locator('#token').fill(token);
+    await tab.locator('#token-save').click();
+    await until(() => tab.evaluate(() => Number(document.querySelector('[data-testid=example-select]').dataset.loaded ?? 0)),
+                10000, 'the examples with the token');
+    assert.equal(await tab.evaluate(() => sessionStorage.getItem('gridshell.token')), token);
+    assert.equal(await tab.evaluate(() => localStorage.length), 0);
+    assert.ok(!tab.url().includes(token));
+  } finally {
+    allowHttpErrors = false;
+    await tab.close();
+    await stopDaemon(other.proc);
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('no console errors, no traffic off loopback', () => {
   assert.deepEqual(consoleErrors, []);
   assert.deepEqual(foreignRequests, []);
@@ -409,8 +450,7 @@ test('no console errors, no traffic off loopback', () => {
 
 // Last: stopping the daemon makes Chromium log the refused connection, after the check above.
 test('the daemon gone: a message, and the page stays', async () => {
-  daemon.kill('SIGTERM');
-  await until(() => daemon.exitCode !== null || daemon.signalCode !== null, 15000, 'gridshelld to stop');
+  await stopDaemon(daemon);
   await byId('corners-auto').click();
   await until(() => byId('error').isVisible(), 10000, 'the error');
   assert.match(await text('error'), /UNAVAILABLE.*cannot be reached/);
