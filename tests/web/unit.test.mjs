@@ -67,3 +67,41 @@ test('colour maps: ends, middle, clamping, robust range', () => {
   assert.equal(c.formatNumber(0.000123), '1.23e-4');
   assert.equal(c.formatNumber(12.5), '12.5');
 });
+
+const api = await load('src/api.ts');
+
+function streamOf(chunks) {
+  const enc = new TextEncoder();
+  return new ReadableStream({ start(c) { for (const x of chunks) c.enqueue(enc.encode(x)); c.close(); } });
+}
+
+test('SSE: progress events, then the result, across arbitrary chunk boundaries', async () => {
+  const text = 'event: progress\ndata: {"stage":"distance maps","fraction":0.5,"message":""}\n\n' +
+               'event: progress\ndata: {"stage":"grid: crossings","fraction":1,"message":"x"}\n\n' +
+               'event: result\ndata: {"design":{"alpha":1.5}}\n\n';
+  for (const cut of [1, 7, 50, 90, text.length - 3]) {
+    const seen = [];
+    const result = await api.readEvents(streamOf([text.slice(0, cut), text.slice(cut)]), (p) => seen.push(p.stage));
+    assert.deepEqual(result, { design: { alpha: 1.5 } });
+    assert.deepEqual(seen, ['distance maps', 'grid: crossings']);
+  }
+});
+
+test('SSE: an error event becomes an ApiError with its field; a cut stream is UNAVAILABLE', async () => {
+  const err = 'event: error\ndata: {"error":{"code":9,"status":"FAILED_PRECONDITION","field":"options.alpha","message":"no feasible angle"}}\n\n';
+  await assert.rejects(api.readEvents(streamOf([err]), () => {}), (e) => {
+    assert.ok(e instanceof api.ApiError);
+    assert.equal(e.status, 'FAILED_PRECONDITION');
+    assert.equal(e.describe(), 'options.alpha: no feasible angle');
+    return true;
+  });
+  await assert.rejects(api.readEvents(streamOf(['event: progress\ndata: {"stage":"a","fraction":0}\n\n']), () => {}),
+                       (e) => e.status === 'UNAVAILABLE');
+});
+
+test('base64 both ways, also past one 32 KiB chunk', () => {
+  const bytes = new Uint8Array(100000).map((_, i) => (i * 7919) & 255);
+  const text = api.bytesToBase64(bytes);
+  assert.equal(text, Buffer.from(bytes).toString('base64'));
+  assert.deepEqual(api.base64ToBytes(text), bytes);
+});

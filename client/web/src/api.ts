@@ -231,7 +231,7 @@ export async function call<T>(method: string, request: unknown, signal?: AbortSi
 }
 
 /** Parses the SSE stream: progress events to the callback, then the result or the error. */
-async function readEvents<T>(body: ReadableStream<Uint8Array>, onProgress: (p: Progress) => void): Promise<T> {
+export async function readEvents<T>(body: ReadableStream<Uint8Array>, onProgress: (p: Progress) => void): Promise<T> {
   const reader = body.getReader();
   const decoder = new TextDecoder();
   let buffer = '';
