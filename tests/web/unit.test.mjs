@@ -66,6 +66,10 @@ test('colour maps: ends, middle, clamping, robust range', () => {
   assert.equal(c.symmetricRange([0, 0]), 1e-12);
   assert.equal(c.formatNumber(0.000123), '1.23e-4');
   assert.equal(c.formatNumber(12.5), '12.5');
+  assert.equal(c.formatNumber(1.5), '1.5');
+  assert.equal(c.formatNumber(100), '100');
+  assert.equal(c.formatNumber(2000), '2000');
+  assert.equal(c.formatNumber(-0.25), '-0.25');
 });
 
 const api = await load('src/api.ts');

@@ -46,7 +46,7 @@ export function formatNumber(v: number): string {
   if (v === 0) return '0';
   const a = Math.abs(v);
   if (a >= 1e4 || a < 1e-2) return v.toExponential(2);
-  return v.toPrecision(3).replace(/\.?0+$/, '');
+  return String(Number(v.toPrecision(3))); // 1.50 -> 1.5, 2000 stays 2000
 }
 
 /** Fills `canvas` with a horizontal colour bar of `map` over t in [0, 1]. */
