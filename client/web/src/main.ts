@@ -61,7 +61,6 @@ const ui = {
   downloads: el('downloads'),
   tokenBox: el('token-box'),
   token: el<HTMLInputElement>('token'),
-  tokenSave: el<HTMLButtonElement>('token-save'),
   devLegend: el('deviation-legend'),
   devBar: el<HTMLCanvasElement>('deviation-bar'),
   devMax: el('deviation-max'),
@@ -176,7 +175,8 @@ window.addEventListener('unhandledrejection', (event) => {
   ui.error.textContent = `unexpected: ${String(event.reason)}`;
 });
 
-ui.tokenSave.addEventListener('click', () => {
+el<HTMLFormElement>('token-form').addEventListener('submit', (e) => {
+  e.preventDefault(); // never sent anywhere (the CSP has form-action 'none' anyway)
   setToken(ui.token.value.trim());
   ui.tokenBox.hidden = true;
   void loadExamples();

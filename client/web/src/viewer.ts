@@ -145,8 +145,9 @@ export class Viewer {
     geometry.computeVertexNormals();
     geometry.computeBoundsTree();
     const material = new THREE.MeshStandardMaterial({
-      color: 0xc9ccd3, roughness: 0.85, metalness: 0, side: THREE.DoubleSide, transparent: true, opacity: 1,
-      polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+      color: 0xc9ccd3, roughness: 0.85, metalness: 0, side: THREE.DoubleSide, transparent: false, opacity: 1,
+      // Pushed back in depth: where the patch lies on it, the patch wins (no z-fighting).
+      polygonOffset: true, polygonOffsetFactor: 4, polygonOffsetUnits: 8,
     });
     this.input = new THREE.Mesh(geometry, material);
     this.scene.add(this.input);
@@ -247,7 +248,7 @@ export class Viewer {
     geometry.setIndex(indices);
     geometry.computeVertexNormals();
     const surface = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({
-      vertexColors: true, roughness: 0.8, side: THREE.DoubleSide, transparent: true, opacity: 1,
+      vertexColors: true, roughness: 0.8, side: THREE.DoubleSide, transparent: false, opacity: 1,
     }));
     surface.name = 'patch-surface';
     this.patch.add(surface);
@@ -268,7 +269,9 @@ export class Viewer {
     if (!this.input) return;
     const m = this.input.material as THREE.MeshStandardMaterial;
     m.opacity = faded ? 0.35 : 1;
+    m.transparent = faded;
     m.depthWrite = !faded;
+    m.needsUpdate = true;
     this.requestRender();
   }
 
@@ -318,6 +321,7 @@ export class Viewer {
     if (!surface) return;
     const m = surface.material as THREE.MeshStandardMaterial;
     m.opacity = opacity;
+    m.transparent = opacity < 1; // opaque: drawn first, hides the faded input mesh under it
     m.depthWrite = opacity >= 1;
     m.needsUpdate = true;
   }
