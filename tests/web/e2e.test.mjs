@@ -293,13 +293,13 @@ test('Cancel stops a running simulation (the daemon cancels the job)', async () 
   assert.ok(await byId('simulate').isEnabled(), 'the page stays usable');
 });
 
-/** A small curved height field as OBJ (n x n vertices). */
-function smallObj(n = 13) {
+/** A small curved height field as OBJ (n x n vertices), optionally far from the origin. */
+function smallObj(n = 13, [ox, oy, oz] = [0, 0, 0]) {
   const lines = ['# bump'];
   for (let j = 0; j < n; ++j)
     for (let i = 0; i < n; ++i) {
       const x = i / (n - 1) * 10 - 5, y = j / (n - 1) * 10 - 5;
-      lines.push(`v ${x} ${y} ${(1.5 * Math.exp(-(x * x + y * y) / 20)).toFixed(6)}`);
+      lines.push(`v ${x + ox} ${y + oy} ${(1.5 * Math.exp(-(x * x + y * y) / 20) + oz).toFixed(6)}`);
     }
   for (let j = 0; j + 1 < n; ++j)
     for (let i = 0; i + 1 < n; ++i) {
@@ -309,9 +309,8 @@ function smallObj(n = 13) {
   return Buffer.from(lines.join('\n') + '\n');
 }
 
-test('upload a small OBJ, click four corners on the canvas: the patch', async () => {
-  await byId('mesh-input').setInputFiles({ name: 'bump.obj', mimeType: 'text/plain', buffer: smallObj() });
-  await until(async () => /bump\.obj: 169 vertices, 288 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the uploaded mesh');
+let clickedCorners;
+async function clickFourCorners() {
   const box = await byId('viewer').boundingBox();
   // Around the middle of the surface as the default camera shows it (seen from the front, above).
   const cx = box.x + box.width / 2, cy = box.y + box.height * 0.6, r = Math.min(box.width, box.height) * 0.1;
@@ -319,8 +318,16 @@ test('upload a small OBJ, click four corners on the canvas: the patch', async ()
     await page.mouse.click(cx + dx * r, cy + dy * r);
   }
   assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+}
+
+test('upload a small OBJ, click four corners on the canvas: the patch', async () => {
+  await byId('mesh-input').setInputFiles({ name: 'bump.obj', mimeType: 'text/plain', buffer: smallObj() });
+  await until(async () => /bump\.obj: 169 vertices, 288 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the uploaded mesh');
+  await clickFourCorners();
   await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch of the clicked corners');
-  assert.match(await text('corners-info'), /1→v\d+, 2→v\d+, 3→v\d+, 4→v\d+/);
+  clickedCorners = (await text('corners-info')).split('\n')[0];
+  assert.match(clickedCorners, /1→v\d+, 2→v\d+, 3→v\d+, 4→v\d+/);
+  assert.equal(new Set(clickedCorners.match(/v\d+/g)).size, 4);
 });
 
 test('click a marker, then the surface: the corner moves and the patch follows', async () => {
@@ -338,6 +345,15 @@ test('click a marker, then the surface: the corner moves and the patch follows',
   assert.notEqual(after.split('\n')[0], before.split('\n')[0]);
   assert.equal(after.split(', ').slice(1).join(), before.split('\n')[0].split(', ').slice(1).join()); // 2..4 stay
   await until(async () => (await text('patch-info')) !== patchBefore && /η = /.test(await text('patch-info')), 30000, 'the new patch');
+});
+
+test('far from the origin (UTM-like coordinates): the same view, the same picked vertices', async () => {
+  const shifted = smallObj(13, [2500000, 5600000, 300]);
+  await byId('mesh-input').setInputFiles({ name: 'utm.obj', mimeType: 'text/plain', buffer: shifted });
+  await until(async () => /utm\.obj: 169 vertices/.test(await text('mesh-info')), 15000, 'the shifted mesh');
+  await clickFourCorners();
+  assert.equal((await text('corners-info')).split('\n')[0], clickedCorners);
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch far from the origin');
 });
 
 /** A binary STL of an n x n height field: 2 (n-1)^2 triangles. */
