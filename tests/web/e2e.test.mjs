@@ -9,6 +9,7 @@ import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
+import { createHash } from 'node:crypto';
 import path from 'node:path';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
@@ -345,6 +346,19 @@ test('click a marker, then the surface: the corner moves and the patch follows',
   assert.notEqual(after.split('\n')[0], before.split('\n')[0]);
   assert.equal(after.split(', ').slice(1).join(), before.split('\n')[0].split(', ').slice(1).join()); // 2..4 stay
   await until(async () => (await text('patch-info')) !== patchBefore && /η = /.test(await text('patch-info')), 30000, 'the new patch');
+});
+
+test('an uploaded mesh in the URL: after a reload, opening the same file restores its corners', async () => {
+  const corners = (await text('corners-info')).split('\n')[0];
+  const hash = new URL(page.url()).hash;
+  const digest = createHash('sha256').update(smallObj()).digest('hex').slice(0, 16);
+  assert.match(hash, new RegExp(`file=bump\\.obj&sha256=${digest}&corners=`));
+  await page.reload();
+  await until(async () => /Open bump\.obj again/.test(await text('status')), 10000, 'the request to open the file again');
+  await byId('mesh-input').setInputFiles({ name: 'bump.obj', mimeType: 'text/plain', buffer: smallObj() });
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the restored patch');
+  assert.equal((await text('corners-info')).split('\n')[0], corners);
+  assert.equal(new URL(page.url()).hash, hash);
 });
 
 test('far from the origin (UTM-like coordinates): the same view, the same picked vertices', async () => {

@@ -50,6 +50,9 @@ test('URL state round-trips', () => {
   const s = { example: 'double-vault', corners: [1, 20, 300, 4000], alpha: 71.5, design: true, options: { mu: '5', mat: 'steel' } };
   const back = f.decodeState('#' + f.encodeState(s));
   assert.deepEqual(back, s);
+  const up = { file: { name: 'my mesh.obj', hash: '0123456789abcdef' }, corners: [1, 2, 3, 4], options: {} };
+  assert.deepEqual(f.decodeState('#' + f.encodeState(up)), up);
+  assert.deepEqual(f.decodeState('#file=x.obj&sha256=nothex'), { options: {} });
   assert.deepEqual(f.decodeState('#corners=1,x,3'), { options: {} });
   assert.deepEqual(f.decodeState(''), { options: {} });
 });

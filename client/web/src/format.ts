@@ -98,6 +98,7 @@ export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate', field:
 /** The page's state in the URL hash: example, corners, options. */
 export interface UrlState {
   example?: string;
+  file?: { name: string; hash: string }; // an uploaded mesh: its name and SHA-256 (hex, 16 digits)
   corners?: number[];
   auto?: boolean;
   alpha?: number;
@@ -110,6 +111,10 @@ export const OPTION_KEYS = ['mu', 'mv', 'w', 't', 'ia', 'unit', 'mat'] as const;
 export function encodeState(s: UrlState): string {
   const p = new URLSearchParams();
   if (s.example) p.set('example', s.example);
+  if (s.file) {
+    p.set('file', s.file.name);
+    p.set('sha256', s.file.hash);
+  }
   if (s.corners && s.corners.length) p.set('corners', s.corners.join(','));
   if (s.auto) p.set('auto', '1');
   if (s.alpha !== undefined) p.set('alpha', String(s.alpha));
@@ -123,6 +128,8 @@ export function decodeState(hash: string): UrlState {
   const s: UrlState = { options: {} };
   const example = p.get('example');
   if (example) s.example = example;
+  const file = p.get('file'), digest = p.get('sha256');
+  if (file && digest && /^[0-9a-f]{16}$/.test(digest)) s.file = { name: file, hash: digest };
   const corners = (p.get('corners') ?? '').split(',').filter((x) => x !== '').map(Number);
   if (corners.length && corners.length <= 4 && corners.every((x) => Number.isInteger(x) && x >= 0)) s.corners = corners;
   if (p.get('auto') === '1') s.auto = true;

@@ -75,7 +75,7 @@ const maps = new Zoomable(el('maps'), el<HTMLImageElement>('maps-img'));
 // ---- state ------------------------------------------------------------------------------------
 
 interface State {
-  source: { kind: 'example' | 'file'; name: string } | null;
+  source: { kind: 'example' | 'file'; name: string; hash?: string } | null;
   mesh: MeshJson | null;         // what every request sends as `mesh`
   loaded: LoadResult | null;
   corners: number[];             // vertex indices into the loaded mesh
@@ -253,11 +253,33 @@ ui.example.addEventListener('change', () => {
   if (name) void loadMesh({ example: name }, { kind: 'example', name });
 });
 
+async function sha256(bytes: Uint8Array<ArrayBuffer>): Promise<string> {
+  const digest = new Uint8Array(await crypto.subtle.digest('SHA-256', bytes));
+  return Array.from(digest.slice(0, 8), (b) => b.toString(16).padStart(2, '0')).join('');
+}
+
+/** The state of a reload whose mesh was an uploaded file: applied when that file is opened again. */
+let pendingFileState: UrlState | null = null;
+
 async function loadFile(file: File): Promise<void> {
   const format = file.name.split('.').pop()?.toLowerCase() ?? '';
   const bytes = new Uint8Array(await file.arrayBuffer());
+  const hash = await sha256(bytes);
   ui.example.value = '';
-  await loadMesh({ name: file.name, file: bytesToBase64(bytes), format }, { kind: 'file', name: file.name });
+  const pending = pendingFileState;
+  const same = pending?.file?.hash === hash;
+  if (same) restoring = true;
+  try {
+    if (!(await loadMesh({ name: file.name, file: bytesToBase64(bytes), format }, { kind: 'file', name: file.name, hash })))
+      return;
+    pendingFileState = null;
+    if (same && pending) await applyState(pending);
+  } finally {
+    if (same) {
+      restoring = false;
+      saveUrl();
+    }
+  }
 }
 
 ui.file.addEventListener('change', () => {
@@ -345,7 +367,10 @@ async function computePatch(): Promise<void> {
   state.patch = state.design = state.simulation = null;
   ui.design.disabled = ui.simulate.disabled = true;
   const result = await run<PatchResult>('patch', 'patch', { mesh: state.mesh, corners: cornersJson() });
-  if (!result) return;
+  if (!result) {
+    if (!current) viewer.clearPatch(); // failed or cancelled (not superseded): no stale patch
+    return;
+  }
   state.patch = result;
   const r = result.report;
   if (state.cornersAuto) {
@@ -524,6 +549,7 @@ function saveUrl(): void {
                ia: ui.anchors.value, unit: ui.unit.value, mat: ui.material.value },
   };
   if (state.source?.kind === 'example') s.example = state.source.name;
+  if (state.source?.kind === 'file' && state.source.hash) s.file = { name: state.source.name, hash: state.source.hash };
   if (state.corners.length) s.corners = state.corners;
   if (state.cornersAuto) s.auto = true;
   if (state.alphaDeg !== null) s.alpha = state.alphaDeg;
@@ -537,25 +563,36 @@ async function restore(): Promise<void> {
   const set = (input: HTMLInputElement | HTMLSelectElement, v: string | undefined) => { if (v !== undefined) input.value = v; };
   set(ui.membersU, o['mu']); set(ui.membersV, o['mv']); set(ui.width, o['w']); set(ui.thickness, o['t']);
   set(ui.anchors, o['ia']); set(ui.unit, o['unit']); set(ui.material, o['mat']);
+  if (s.file && !s.example) {
+    // The bytes of an uploaded file are not in the URL: ask for the file, restore when it comes.
+    pendingFileState = s;
+    ui.status.textContent = `Open ${s.file.name} again to restore its corners and options.`;
+    return;
+  }
   if (!s.example) return;
   restoring = true;
   try {
     ui.example.value = s.example;
     if (!(await loadMesh({ example: s.example }, { kind: 'example', name: s.example }))) return;
-    if (s.corners?.length === 4 || s.auto) {
-      state.corners = s.corners ?? [];
-      state.cornersAuto = s.auto ?? false;
-      updateCorners();
-      if (s.alpha !== undefined) state.alphaDeg = s.alpha;
-      state.designWanted = s.design ?? false;
-      await computePatch();
-    } else if (s.corners) {
-      state.corners = s.corners;
-      updateCorners();
-    }
+    await applyState(s);
   } finally {
     restoring = false;
     saveUrl();
+  }
+}
+
+/** Corners, ᾱ and the design of a restored state, on the mesh just loaded. */
+async function applyState(s: UrlState): Promise<void> {
+  if (s.corners?.length === 4 || s.auto) {
+    state.corners = s.corners ?? [];
+    state.cornersAuto = s.auto ?? false;
+    updateCorners();
+    if (s.alpha !== undefined) state.alphaDeg = s.alpha;
+    state.designWanted = s.design ?? false;
+    await computePatch();
+  } else if (s.corners) {
+    state.corners = s.corners;
+    updateCorners();
   }
 }
 
