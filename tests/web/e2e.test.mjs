@@ -264,11 +264,13 @@ test('member counts redesign live; a bad option shows its field next to the cont
 });
 
 test('Simulate: deployment with RMS, deployment.json downloads', async () => {
+  await byId('unit').selectOption('cm'); // a unit makes the stresses physical
   await byId('simulate').click();
   await until(async () => /RMS/.test(await text('summary')), 120000, 'the simulation');
   const summary = await text('summary');
   assert.match(summary, /with notches: RMS \d/);
   assert.match(summary, /without notches: RMS \d/);
+  assert.match(summary, /max bending stress \d.* MPa.*unit cm/s);
   assert.ok(await byId('deviation-legend').isVisible());
   const { name, bytes } = await downloadJson('download-deployment');
   assert.equal(name, 'deployment.json');

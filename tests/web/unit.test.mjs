@@ -36,6 +36,11 @@ test('alpha option is degrees with the deg suffix', () => {
   assert.equal(f.alphaOption(70.123456), '70.1235deg');
 });
 
+test('stresses: MPa with a unit, marked scaled without one', () => {
+  assert.equal(f.stress(18.6e6, { options: { unit: 'm' } }), '18.6 MPa');
+  assert.equal(f.stress(0.5, { options: { unit: '' } }), '0.5 (scaled: unit unknown)');
+});
+
 test('errors go next to the control their field names', () => {
   assert.equal(f.errorSlot('load', 'mesh.indices[3]'), 'mesh');
   assert.equal(f.errorSlot('load', ''), 'mesh');

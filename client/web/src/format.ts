@@ -49,8 +49,9 @@ export function designSummary(d: DesignResult): string {
   ].join('\n');
 }
 
-function mpa(pa: number): string {
-  return `${formatNumber(pa / 1e6)} MPa`;
+/** A stress: MPa when the model's unit is known, else the simulation's scaled value, marked so. */
+export function stress(pa: number, dep: Deployment): string {
+  return dep.options.unit ? `${formatNumber(pa / 1e6)} MPa` : `${formatNumber(pa)} (scaled: unit unknown)`;
 }
 
 export function deploymentSummary(dep: Deployment): string {
@@ -67,9 +68,9 @@ export function deploymentSummary(dep: Deployment): string {
     bending = Math.max(bending, rod.max_bending_stress);
     torsion = Math.max(torsion, rod.max_torsion_stress);
   }
-  lines.push(`max bending stress ${mpa(bending)}, max torsion stress ${mpa(torsion)} ` +
+  lines.push(`max bending stress ${stress(bending, dep)}, max torsion stress ${stress(torsion, dep)} ` +
              `(${dep.options.material}, E = ${formatNumber(dep.options.young_modulus / 1e9)} GPa` +
-             `${dep.options.unit ? ', unit ' + dep.options.unit : ', unit unknown: stresses scaled'})`);
+             `${dep.options.unit ? ', unit ' + dep.options.unit : ''})`);
   lines.push(`grid vertices ${dep.grid_vertices}; ${dep.converged ? 'every run converged' : 'a run did NOT converge'}`);
   return lines.join('\n');
 }

@@ -12,7 +12,7 @@ import {
 import { diverging, drawBar, formatNumber, sequential, symmetricRange } from './colormap';
 import {
   alphaOption, decodeState, deploymentSummary, designSummary, encodeState, errorSlot, maxDeviation,
-  patchSummary, sliderRange, type UrlState,
+  patchSummary, sliderRange, stress, type UrlState,
 } from './format';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
@@ -491,13 +491,12 @@ function showDeployment(): void {
   const dep = sim.deployment;
   const bending = ui.colourBy.value === 'bending';
   const max = bending ? Math.max(0, ...dep.rods.map((r) => r.max_bending_stress)) : maxDeviation(dep);
-  viewer.setDeployment(dep, d.design.options.lamella_width, max,
+  viewer.setDeployment(dep, d.design.options.lamella_width, d.design.options.lamella_thickness, max,
                        bending ? (rod) => rod.max_bending_stress : (rod, i) => rod.deviation[i] ?? 0);
   ui.devLegend.hidden = false;
-  ui.devTitle.textContent = bending ? `largest bending stress per lamella${dep.options.unit ? '' : ' (scaled: unit unknown)'}`
-    : 'deviation from the target';
+  ui.devTitle.textContent = bending ? 'largest bending stress per lamella' : 'deviation from the target';
   drawBar(ui.devBar, (t) => sequential(t, 1));
-  ui.devMax.textContent = bending ? `${formatNumber(max / 1e6)} MPa` : formatNumber(max);
+  ui.devMax.textContent = bending ? stress(max, dep) : formatNumber(max);
 }
 
 ui.colourBy.addEventListener('change', () => showDeployment());

@@ -1,6 +1,6 @@
 // The 3D view: the input mesh, four numbered corner markers, the trimmed patch with its Gaussian
 // curvature colours and boundary geodesics, the design on the surface (members, crossings,
-// anchors) and the deployed lamellas as ribbons coloured by deviation or bending stress. Everything is drawn
+// anchors) and the deployed lamellas as boxes coloured by deviation or bending stress. Everything is drawn
 // relative to the mesh's bounding-box centre (computed in double precision), so architectural
 // coordinates far from the origin still render and pick precisely. Picking: three-mesh-bvh.
 // Renders on demand only (one frame per change), which matters with a software GL.
@@ -327,38 +327,50 @@ export class Viewer {
   }
 
   /**
-   * Deployed lamellas as ribbons of the design's width, coloured by `value(rod, vertex)` in
-   * [0, max]: the deviation of each vertex, or a per-lamella quantity (its largest bending stress).
+   * Deployed lamellas as boxes of the design's width and thickness (the cross-section spanned by
+   * `normal × tangent` and the material normal), coloured by `value(rod, vertex)` in [0, max]:
+   * the deviation of each vertex, or a per-lamella quantity (its largest bending stress).
    */
-  setDeployment(deployment: Deployment, width: number, max: number,
+  setDeployment(deployment: Deployment, width: number, thickness: number, max: number,
                 value: (rod: Lamella, vertex: number) => number): void {
     this.clearGroup(this.deployment);
     this.design.visible = false;
     this.setPatchOpacity(0.3);
     const pos: number[] = [], col: number[] = [], idx: number[] = [];
-    const t = new THREE.Vector3(), n = new THREE.Vector3(), b = new THREE.Vector3();
+    const t = new THREE.Vector3(), n = new THREE.Vector3(), b = new THREE.Vector3(), h = new THREE.Vector3();
+    // The cross-section's corners as (±b, ±h) and its four faces as consecutive corner pairs.
+    const signs: [number, number][] = [[1, 1], [-1, 1], [-1, -1], [1, -1]];
     for (const rod of deployment.rods) {
       const pts = rod.centerline.map((p) => this.localPoint(p));
-      const base = pos.length / 3;
-      pts.forEach((p, i) => {
+      if (pts.length < 2) continue;
+      const corners: THREE.Vector3[][] = pts.map((p, i) => {
         t.subVectors(pts[Math.min(pts.length - 1, i + 1)]!, pts[Math.max(0, i - 1)]!).normalize();
         const nn = rod.normals[i];
         n.set(nn?.[0] ?? 0, nn?.[1] ?? 0, nn?.[2] ?? 1);
         b.crossVectors(t, n).normalize().multiplyScalar(width / 2);
+        h.copy(n).normalize().multiplyScalar(thickness / 2);
         if (!Number.isFinite(b.x)) b.set(0, 0, 0);
-        pos.push(p.x + b.x, p.y + b.y, p.z + b.z, p.x - b.x, p.y - b.y, p.z - b.z);
-        const c = sequential(value(rod, i), max);
-        col.push(...c, ...c);
-        if (i + 1 < pts.length) {
-          const k = base + 2 * i;
-          idx.push(k, k + 1, k + 2, k + 1, k + 3, k + 2);
-        }
+        if (!Number.isFinite(h.x)) h.set(0, 0, 0);
+        return signs.map(([sb, sh]) => p.clone().addScaledVector(b, sb).addScaledVector(h, sh));
       });
+      for (let face = 0; face < 4; ++face) {
+        const base = pos.length / 3;
+        corners.forEach((c, i) => {
+          const a = c[face]!, d = c[(face + 1) % 4]!;
+          pos.push(a.x, a.y, a.z, d.x, d.y, d.z);
+          const colour = sequential(value(rod, i), max);
+          col.push(...colour, ...colour);
+          if (i + 1 < corners.length) {
+            const k = base + 2 * i;
+            idx.push(k, k + 1, k + 2, k + 1, k + 3, k + 2);
+          }
+        });
+      }
     }
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
     g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(col), 3));
-    g.setIndex(idx);
+    g.setIndex(pos.length / 3 > 65535 ? new THREE.Uint32BufferAttribute(idx, 1) : new THREE.Uint16BufferAttribute(idx, 1));
     g.computeVertexNormals();
     this.deployment.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
     this.requestRender();
