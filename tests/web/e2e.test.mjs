@@ -212,6 +212,33 @@ test('the state is in the URL: a reload restores the design, a second tab is ind
   assert.match(restored, /distance maps cached: yes/); // the daemon still has this patch's maps
 });
 
+/** design.json as `gridshell design MESH` writes it with the page's current options. */
+async function cliDesign(mesh, alphaDeg, cwd) {
+  const flags = [];
+  for (const [id, flag] of [['members-u', '--members-u'], ['members-v', '--members-v'], ['lamella-width', '--lamella-width'],
+                            ['lamella-thickness', '--lamella-thickness'], ['interior-anchors', '--interior-anchors']])
+    flags.push(flag, await byId(id).inputValue());
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-cli-'));
+  try {
+    const r = spawnSync(cliPath, ['design', mesh, '--corners', 'auto', '--alpha', `${alphaDeg}deg`, ...flags, '--out', dir, '--quiet'],
+                        { cwd, encoding: 'utf8', timeout: 60000 });
+    assert.equal(r.status, 0, r.stderr);
+    return readFileSync(path.join(dir, 'design.json'));
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+/** Asserts the page's and the CLI's design.json are the same bytes (both kept in out/ if not). */
+function assertSameBytes(page, cli, name) {
+  if (!cli.equals(page)) {
+    mkdirSync(outDir, { recursive: true });
+    writeFileSync(path.join(outDir, `${name}.page.json`), page);
+    writeFileSync(path.join(outDir, `${name}.cli.json`), cli);
+  }
+  assert.ok(cli.equals(page), `design.json differs from the CLI's (${cli.length} vs ${page.length} bytes; see tests/web/out/${name}.*.json)`);
+}
+
 async function downloadJson(testid) {
   const [download] = await Promise.all([page.waitForEvent('download', { timeout: 10000 }), byId(testid).click()]);
   const file = await download.path();
@@ -225,21 +252,7 @@ test('design.json downloads, the same bytes as the CLI writes for the same input
   assert.ok(Array.isArray(design.members) && design.members.length > 4);
   const alpha = await byId('alpha-slider').inputValue();
   assert.ok(Math.abs(design.alpha_bar * 180 / Math.PI - Number(alpha)) < 0.06);
-  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-cli-'));
-  try {
-    const r = spawnSync(cliPath, ['design', `example:${exampleName}`, '--corners', 'auto', '--alpha', `${Number(alpha)}deg`,
-                                  '--out', dir, '--quiet'], { encoding: 'utf8', timeout: 60000 });
-    assert.equal(r.status, 0, r.stderr);
-    const cli = readFileSync(path.join(dir, 'design.json'));
-    if (!cli.equals(bytes)) { // kept for a look: tests/web/out/design.{page,cli}.json
-      mkdirSync(outDir, { recursive: true });
-      writeFileSync(path.join(outDir, 'design.page.json'), bytes);
-      writeFileSync(path.join(outDir, 'design.cli.json'), cli);
-    }
-    assert.ok(cli.equals(bytes), `design.json differs from the CLI's (${cli.length} vs ${bytes.length} bytes)`);
-  } finally {
-    rmSync(dir, { recursive: true, force: true });
-  }
+  assertSameBytes(bytes, await cliDesign(`example:${exampleName}`, Number(alpha), root), exampleName);
 });
 
 test('member counts redesign live; a bad option shows its field next to the controls', async () => {
@@ -311,6 +324,28 @@ function smallObj(n = 13, [ox, oy, oz] = [0, 0, 0]) {
     }
   return Buffer.from(lines.join('\n') + '\n');
 }
+
+const sharedMeshes = path.join(process.env.GRIDSHELL_SHARED_DIR ?? path.join(root, '../shared'), 'meshes');
+
+test('a shared real mesh (knet1.obj) uploaded: Auto corners, design, slider; design.json as the CLI\'s', async () => {
+  const file = path.join(sharedMeshes, 'knet1.obj');
+  assert.ok(existsSync(file), `no ${file} (shared/meshes beside the repository)`);
+  await byId('mesh-input').setInputFiles(file);
+  await until(async () => /knet1\.obj: 441 vertices, 800 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the shared mesh');
+  await byId('corners-auto').click();
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'its patch');
+  const n = await designCount();
+  await byId('design').click();
+  await until(async () => (await designCount()) === n + 1, 60000, 'its design');
+  const slider = byId('alpha-slider');
+  const [min, max] = [Number(await slider.getAttribute('min')), Number(await slider.getAttribute('max'))];
+  const alpha = Math.round((min + 0.3 * (max - min)) * 10) / 10;
+  await slider.fill(String(alpha));
+  await until(async () => (await designCount()) === n + 2, 60000, 'its redesign');
+  assert.match(await text('summary'), /distance maps cached: yes/);
+  const { bytes } = await downloadJson('download-design');
+  assertSameBytes(bytes, await cliDesign('knet1.obj', alpha, sharedMeshes), 'knet1');
+});
 
 let clickedCorners;
 async function clickFourCorners() {
