@@ -348,11 +348,11 @@ test('a shared real mesh (knet1.obj) uploaded: Auto corners, design, slider; des
 });
 
 let clickedCorners;
-async function clickFourCorners() {
+async function clickFourCorners(order = [[-1, 1], [1, 1], [1, -1], [-1, -1]]) {
   const box = await byId('viewer').boundingBox();
   // Around the middle of the surface as the default camera shows it (seen from the front, above).
   const cx = box.x + box.width / 2, cy = box.y + box.height * 0.6, r = Math.min(box.width, box.height) * 0.1;
-  for (const [dx, dy] of [[-1, 1], [1, 1], [1, -1], [-1, -1]]) {
+  for (const [dx, dy] of order) {
     await page.mouse.click(cx + dx * r, cy + dy * r);
   }
   assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
@@ -405,6 +405,22 @@ test('far from the origin (UTM-like coordinates): the same view, the same picked
   await clickFourCorners();
   assert.equal((await text('corners-info')).split('\n')[0], clickedCorners);
   await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch far from the origin');
+});
+
+test('corners in a bow-tie order: the infeasible patch\'s reason next to the corners', async () => {
+  await byId('corners-clear').click();
+  allowHttpErrors = true; // the 422
+  try {
+    await clickFourCorners([[-1, 1], [1, -1], [1, 1], [-1, -1]]);
+    await until(() => byId('error').isVisible(), 30000, 'the infeasible patch');
+  } finally {
+    allowHttpErrors = false;
+  }
+  assert.match(await text('error'), /FAILED_PRECONDITION.*corners: .*not a simple quadrilateral/s);
+  assert.match(await page.locator('.field-error[data-for=corners]').textContent(), /^corners: .*cross/);
+  assert.equal(await text('patch-info'), '');
+  assert.ok(await byId('legend').isHidden());
+  assert.ok(await byId('design').isDisabled());
 });
 
 /** A binary STL of an n x n height field: 2 (n-1)^2 triangles. */

@@ -368,7 +368,12 @@ async function computePatch(): Promise<void> {
   ui.design.disabled = ui.simulate.disabled = true;
   const result = await run<PatchResult>('patch', 'patch', { mesh: state.mesh, corners: cornersJson() });
   if (!result) {
-    if (!current) viewer.clearPatch(); // failed or cancelled (not superseded): no stale patch
+    if (!current) { // failed or cancelled (not superseded): no stale patch
+      viewer.clearPatch();
+      ui.patchInfo.textContent = '';
+      delete ui.patchInfo.dataset['ready'];
+      ui.legend.hidden = true;
+    }
     return;
   }
   state.patch = result;
