@@ -202,6 +202,7 @@ async function loadExamples(): Promise<void> {
   ui.example.dataset['loadedMs'] = performance.now().toFixed(0); // since navigation start
 }
 
+/** Everything derived from the mesh forgotten (corners, patch, design, simulation, views). */
 function resetFromMesh(): void {
   state.corners = [];
   state.cornersAuto = false;
@@ -211,7 +212,7 @@ function resetFromMesh(): void {
   state.designWanted = false;
   state.simulation = null;
   state.alphaDeg = null;
-  ui.alpha.disabled = true;
+  ui.alpha.disabled = ui.design.disabled = ui.simulate.disabled = true;
   ui.alphaValue.textContent = 'min';
   ui.alphaMin.textContent = ui.alphaMax.textContent = '';
   ui.patchInfo.textContent = '';
@@ -347,13 +348,8 @@ ui.auto.addEventListener('click', () => {
 
 ui.clear.addEventListener('click', () => {
   if (current && current.kind !== 'load') current.controller.abort();
-  const loaded = state.loaded, source = state.source;
-  resetFromMesh();
-  state.loaded = loaded;
-  state.source = source;
+  resetFromMesh(); // keeps the mesh
   viewer.clearPatch();
-  ui.design.disabled = ui.simulate.disabled = true;
-  updateCorners();
   saveUrl();
 });
 
