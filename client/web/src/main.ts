@@ -331,6 +331,7 @@ viewer.onPick = (pick: Pick) => {
     return;
   }
   state.cornersAuto = false;
+  state.alphaDeg = null; // a new patch has its own feasible range: start again from its minimum
   updateCorners();
   ui.status.textContent = `picked vertex ${pick.vertex} in ${viewer.lastPickMs.toFixed(1)} ms`;
   ui.cornersInfo.dataset['pickMs'] = viewer.lastPickMs.toFixed(2);
@@ -342,6 +343,7 @@ ui.auto.addEventListener('click', () => {
   state.corners = [];
   state.cornersAuto = true;
   state.selected = null;
+  state.alphaDeg = null;
   updateCorners();
   void computePatch();
 });
@@ -397,9 +399,9 @@ async function computePatch(): Promise<void> {
 
 // ---- design -------------------------------------------------------------------------------------
 
+/** A number input's value; empty = 0 (automatic). Bad values go to the daemon, which names them. */
 function numberOption(input: HTMLInputElement): number {
-  const v = Number(input.value);
-  return Number.isFinite(v) ? v : NaN;
+  return Number(input.value);
 }
 
 function designOptions(): Record<string, unknown> {
