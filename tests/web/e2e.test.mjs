@@ -332,6 +332,7 @@ test('a shared real mesh (knet1.obj) uploaded: Auto corners, design, slider; des
   assert.ok(existsSync(file), `no ${file} (shared/meshes beside the repository)`);
   await byId('mesh-input').setInputFiles(file);
   await until(async () => /knet1\.obj: 441 vertices, 800 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the shared mesh');
+  assert.match(await text('mesh-info'), /loader: 400 polygons triangulated/); // knet1 is a quad mesh
   await byId('corners-auto').click();
   await until(async () => /η = /.test(await text('patch-info')), 30000, 'its patch');
   const n = await designCount();
@@ -476,6 +477,25 @@ test('drag and drop of a mesh file loads it', async () => {
   assert.equal(await byId('corners-info').getAttribute('data-count'), '0');
 });
 
+test('a mesh the loader repairs: its repairs and warnings, as the daemon reports them', async () => {
+  const lines = [];
+  for (let j = 0; j < 5; ++j) for (let i = 0; i < 5; ++i) lines.push(`v ${i} ${j} ${0.1 * i * j}`);
+  lines.push('v 9 9 9', 'v 0 0 0'); // an isolated vertex, a duplicate of vertex 1
+  for (let j = 0; j < 4; ++j) for (let i = 0; i < 4; ++i) { const a = j * 5 + i + 1; lines.push(`f ${a} ${a + 1} ${a + 6} ${a + 5}`); }
+  lines.push('f 1 2 2'); // degenerate
+  const bytes = Buffer.from(lines.join('\n') + '\n');
+  const loaded = await (await fetch(base + 'v1/load', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ mesh: { file: bytes.toString('base64'), format: 'obj' } }),
+  })).json();
+  assert.equal(loaded.report.warnings.length, 3, JSON.stringify(loaded.report));
+  await byId('mesh-input').setInputFiles({ name: 'repairs.obj', mimeType: 'text/plain', buffer: bytes });
+  await until(async () => /repairs\.obj: 25 vertices, 32 faces/.test(await text('mesh-info')), 15000, 'the repaired mesh');
+  assert.match(await text('mesh-info'), /loader: 16 polygons triangulated, 1 duplicate vertices merged, 1 degenerate faces removed, 1 isolated vertices removed/);
+  const shown = await text('warnings');
+  for (const w of loaded.report.warnings) assert.ok(shown.includes(w), `warning shown: ${w}\n${shown}`);
+});
+
 test('a broken mesh file shows the daemon\'s error with its field', async () => {
   const broken = Buffer.from('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n');
   const direct = await (await fetch(base + 'v1/load', {
@@ -496,7 +516,7 @@ test('a broken mesh file shows the daemon\'s error with its field', async () => 
   const slot = await page.locator('.field-error[data-for=mesh]').textContent();
   assert.ok(slot.includes(direct.error.message), `next to the file input: ${slot}`);
   // The page stays usable: the previous mesh is still there.
-  assert.match(await text('mesh-info'), /dropped\.obj/);
+  assert.match(await text('mesh-info'), /repairs\.obj/);
 });
 
 test('a daemon with a token: the page asks for it and keeps it in sessionStorage only', async () => {
@@ -537,6 +557,6 @@ test('the daemon gone: a message, and the page stays', async () => {
   await byId('corners-auto').click();
   await until(() => byId('error').isVisible(), 10000, 'the error');
   assert.match(await text('error'), /UNAVAILABLE.*cannot be reached/);
-  assert.match(await text('mesh-info'), /dropped\.obj/);
+  assert.match(await text('mesh-info'), /repairs\.obj/);
   assert.ok((await canvasCoverage()) > 0.05, 'the view is still drawn');
 });

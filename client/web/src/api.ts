@@ -45,6 +45,10 @@ export interface MeshReport {
   format: string;
   file_vertices: number;
   file_faces: number;
+  polygons_triangulated: number;
+  degenerate_faces_removed: number;
+  duplicate_vertices_merged: number;
+  isolated_vertices_removed: number;
   warnings: string[];
   vertices: number;
   faces: number;

@@ -240,7 +240,12 @@ async function loadMesh(mesh: MeshJson, source: NonNullable<State['source']>): P
   const r = result.report;
   const box = r.bounding_box;
   const extent = box.length === 6 ? `; extent ${[0, 1, 2].map((i) => formatNumber(box[i + 3]! - box[i]!)).join(' × ')}` : '';
-  ui.meshInfo.textContent = `${source.name}: ${r.vertices} vertices, ${r.faces} faces (${r.format})${extent}`;
+  const repairs = [
+    [r.polygons_triangulated, 'polygons triangulated'], [r.duplicate_vertices_merged, 'duplicate vertices merged'],
+    [r.degenerate_faces_removed, 'degenerate faces removed'], [r.isolated_vertices_removed, 'isolated vertices removed'],
+  ].filter(([k]) => Number(k) > 0).map(([k, what]) => `${k} ${what}`);
+  ui.meshInfo.textContent = `${source.name}: ${r.vertices} vertices, ${r.faces} faces (${r.format})${extent}` +
+    (repairs.length ? `\nloader: ${repairs.join(', ')}` : '');
   ui.warnings.textContent = r.warnings.length ? `loader: ${r.warnings.join('\n')}` : '';
   ui.meshInfo.dataset['ready'] = '1';
   ui.meshInfo.dataset['readyMs'] = performance.now().toFixed(0); // since navigation start
