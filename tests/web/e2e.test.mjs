@@ -309,6 +309,18 @@ test('Cancel stops a running simulation (the daemon cancels the job)', async () 
   assert.ok(await byId('simulate').isEnabled(), 'the page stays usable');
 });
 
+test('a redesign after the simulation shows the design again, not the old deployment', async () => {
+  const layers = () => byId('viewer').getAttribute('data-layers');
+  assert.match(await layers(), /deployment/);
+  assert.doesNotMatch(await layers(), /design/);
+  const n = await designCount();
+  await byId('members-v').fill('7');
+  await until(async () => (await designCount()) === n + 1, 60000, 'the redesign');
+  await until(async () => (await layers()) === 'mesh,markers,patch,design', 5000, 'the design layers');
+  assert.ok(await byId('deviation-legend').isHidden());
+  assert.doesNotMatch(await text('summary'), /RMS/);
+});
+
 /** A small curved height field as OBJ (n x n vertices), optionally far from the origin. */
 function smallObj(n = 13, [ox, oy, oz] = [0, 0, 0]) {
   const lines = ['# bump'];

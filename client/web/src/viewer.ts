@@ -95,15 +95,16 @@ export class Viewer {
     requestAnimationFrame(() => {
       this.frameRequested = false;
       this.renderer.render(this.scene, this.camera);
-      this.publishMarkers();
+      this.publishHooks();
     });
   }
 
   /**
-   * Test hook: the markers' pixel positions (CSS pixels from the canvas's top left) as
-   * `data-markers` on the canvas, "x,y;x,y;...", corner 1 first, after every frame.
+   * Test hooks, after every frame: the markers' pixel positions (CSS pixels from the canvas's
+   * top left) as `data-markers` on the canvas, "x,y;x,y;...", corner 1 first; the layers drawn
+   * as `data-layers` ("mesh,markers,patch,design").
    */
-  private publishMarkers(): void {
+  private publishHooks(): void {
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
     const spots: string[] = [];
     for (const m of this.markers.children) {
@@ -112,6 +113,10 @@ export class Viewer {
       spots.push(`${((p.x + 1) / 2 * w).toFixed(1)},${((1 - p.y) / 2 * h).toFixed(1)}`);
     }
     this.canvas.dataset['markers'] = spots.join(';');
+    const layers: [string, THREE.Object3D | null][] = [['mesh', this.input], ['markers', this.markers], ['patch', this.patch],
+                                                       ['design', this.design], ['deployment', this.deployment]];
+    this.canvas.dataset['layers'] = layers.filter(([, o]) => o && o.visible && (o === this.input || o.children.length > 0))
+      .map(([name]) => name).join(',');
   }
 
   /** A Float32Array of `xyz` relative to the mesh's centre. */
@@ -140,8 +145,7 @@ export class Viewer {
     this.positions = this.local(positions);
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(this.positions, 3));
-    geometry.setIndex(indices.length > 65535 * 3 ? new THREE.Uint32BufferAttribute(indices, 1)
-                                                  : new THREE.BufferAttribute(Uint32Array.from(indices), 1));
+    geometry.setIndex(new THREE.BufferAttribute(Uint32Array.from(indices), 1));
     geometry.computeVertexNormals();
     geometry.computeBoundsTree();
     const material = new THREE.MeshStandardMaterial({
@@ -286,6 +290,7 @@ export class Viewer {
   setDesign(design: Design): void {
     this.clearGroup(this.design);
     this.clearGroup(this.deployment);
+    this.design.visible = true; // hidden while a deployment was shown
     this.setPatchOpacity(1);
     const families: Record<string, number[]> = { g: [], h: [], boundary: [] };
     for (const m of design.members) {
@@ -376,13 +381,6 @@ export class Viewer {
     this.requestRender();
   }
 
-  /** Back from the deployment to the design view. */
-  showDesign(): void {
-    this.clearGroup(this.deployment);
-    this.design.visible = true;
-    this.setPatchOpacity(1);
-    this.requestRender();
-  }
 }
 
 const digitCache = new Map<number, THREE.Texture>();
