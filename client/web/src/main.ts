@@ -422,10 +422,14 @@ function designOptions(): Record<string, unknown> {
 async function computeDesign(): Promise<void> {
   if (!state.mesh || !state.patch) return;
   state.designWanted = true;
+  ui.simulate.disabled = true; // simulate the design on screen, not one being replaced
   const result = await run<DesignResult>('design', 'design', {
     mesh: state.mesh, corners: cornersJson(), options: designOptions(), files: true,
   });
-  if (!result) return;
+  if (!result) {
+    if (!current) ui.simulate.disabled = !state.design; // failed or cancelled: the old one stays
+    return;
+  }
   state.design = result;
   state.simulation = null;
   const g = result.design;
