@@ -518,11 +518,10 @@ ui.colourBy.addEventListener('change', () => showDeployment());
 const urls: string[] = [];
 const TYPES: Record<string, string> = { json: 'application/json', svg: 'image/svg+xml', obj: 'text/plain', ply: 'application/octet-stream' };
 
+/** A blob URL of a file's bytes; the caller revokes it (downloads: setDownloads, views: Zoomable). */
 function blobUrl(file: FileJson): string {
   const ext = file.name.split('.').pop() ?? '';
-  const url = URL.createObjectURL(new Blob([base64ToBytes(file.content)], { type: TYPES[ext] ?? 'application/octet-stream' }));
-  urls.push(url);
-  return url;
+  return URL.createObjectURL(new Blob([base64ToBytes(file.content)], { type: TYPES[ext] ?? 'application/octet-stream' }));
 }
 
 function setDownloads(files: FileJson[]): void {
@@ -531,6 +530,7 @@ function setDownloads(files: FileJson[]): void {
   for (const f of files) {
     const a = document.createElement('a');
     a.href = blobUrl(f);
+    urls.push(a.href);
     a.download = f.name;
     a.textContent = f.name;
     const id = f.name === 'design.json' ? 'download-design' : f.name === 'deployment.json' ? 'download-deployment'

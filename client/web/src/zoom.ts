@@ -6,6 +6,7 @@ export class Zoomable {
   private x = 0;
   private y = 0;
   private drag: { x: number; y: number } | null = null;
+  private url = '';
 
   constructor(private readonly pane: HTMLElement, private readonly img: HTMLImageElement) {
     img.draggable = false;
@@ -34,11 +35,16 @@ export class Zoomable {
     pane.addEventListener('dblclick', () => this.fit());
   }
 
+  /** Shows the image at `url` (a blob URL this object now owns and revokes when replaced). */
   show(url: string): void {
+    this.clear();
+    this.url = url;
     this.img.src = url;
   }
 
   clear(): void {
+    if (this.url) URL.revokeObjectURL(this.url);
+    this.url = '';
     this.img.removeAttribute('src');
   }
 
