@@ -17,6 +17,10 @@ import {
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
 
+// The example list is asked for first, so the daemon answers while the WebGL context is created
+// (half a second on a software GL).
+let examplesRequest: Promise<{ examples: ExampleInfo[] }> | null = call('examples', {});
+
 function el<T extends HTMLElement = HTMLElement>(id: string): T {
   const e = document.getElementById(id);
   if (!e) throw new Error(`missing #${id}`);
@@ -185,7 +189,9 @@ el<HTMLFormElement>('token-form').addEventListener('submit', (e) => {
 // ---- mesh in ------------------------------------------------------------------------------------
 
 async function loadExamples(): Promise<void> {
-  const result = await call<{ examples: ExampleInfo[] }>('examples', {}).catch((e: unknown) => {
+  const request = examplesRequest ?? call<{ examples: ExampleInfo[] }>('examples', {});
+  examplesRequest = null; // a retry (after a token was given) asks again
+  const result = await request.catch((e: unknown) => {
     showError('load', e);
     return null;
   });
