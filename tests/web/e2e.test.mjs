@@ -212,15 +212,17 @@ test('the state is in the URL: a reload restores the design, a second tab is ind
   assert.match(restored, /distance maps cached: yes/); // the daemon still has this patch's maps
 });
 
-/** design.json as `gridshell design MESH` writes it with the page's current options. */
-async function cliDesign(mesh, alphaDeg, cwd) {
+/** design.json as `gridshell design MESH` writes it with the page's current options (corners
+ *  given as CLI flags, [] = the CLI's default: an example's own corners). */
+async function cliDesign(mesh, alphaDeg, cwd, corners = ['--corners', 'auto']) {
   const flags = [];
   for (const [id, flag] of [['members-u', '--members-u'], ['members-v', '--members-v'], ['lamella-width', '--lamella-width'],
                             ['lamella-thickness', '--lamella-thickness'], ['interior-anchors', '--interior-anchors']])
     flags.push(flag, await byId(id).inputValue());
   const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-cli-'));
   try {
-    const r = spawnSync(cliPath, ['design', mesh, '--corners', 'auto', '--alpha', `${alphaDeg}deg`, ...flags, '--out', dir, '--quiet'],
+    const alpha = alphaDeg === null ? [] : ['--alpha', `${alphaDeg}deg`]; // null: the default (min)
+    const r = spawnSync(cliPath, ['design', mesh, ...corners, ...alpha, ...flags, '--out', dir, '--quiet'],
                         { cwd, encoding: 'utf8', timeout: 60000 });
     assert.equal(r.status, 0, r.stderr);
     return readFileSync(path.join(dir, 'design.json'));
@@ -253,6 +255,19 @@ test('design.json downloads, the same bytes as the CLI writes for the same input
   const alpha = await byId('alpha-slider').inputValue();
   assert.ok(Math.abs(design.alpha_bar * 180 / Math.PI - Number(alpha)) < 0.06);
   assertSameBytes(bytes, await cliDesign(`example:${exampleName}`, Number(alpha), root), exampleName);
+});
+
+test('the example\'s suggested corners: a redesign from ᾱ min, design.json as the CLI\'s defaults', async () => {
+  assert.ok(await byId('corners-example').isEnabled());
+  const n = await designCount();
+  await byId('corners-example').click();
+  await until(async () => (await designCount()) === n + 1, 60000, 'the design on the suggested corners');
+  assert.match(await text('corners-info'), /corners \(example\): /);
+  const { bytes } = await downloadJson('download-design');
+  const design = JSON.parse(bytes.toString('utf8'));
+  assert.equal(design.options.corners, 'example');
+  assert.ok(Math.abs(design.alpha_bar - design.alpha_bar_range[0]) < 1e-12, 'ᾱ from the minimum again');
+  assertSameBytes(bytes, await cliDesign(`example:${exampleName}`, null, root, []), `${exampleName}-suggested`);
 });
 
 test('member counts redesign live; a bad option shows its field next to the controls', async () => {

@@ -102,6 +102,7 @@ export interface UrlState {
   file?: { name: string; hash: string }; // an uploaded mesh: its name and SHA-256 (hex, 16 digits)
   corners?: number[];
   auto?: boolean;
+  suggested?: boolean; // the example's suggested corners
   alpha?: number;
   design?: boolean;
   options: Record<string, string>;
@@ -118,6 +119,7 @@ export function encodeState(s: UrlState): string {
   }
   if (s.corners && s.corners.length) p.set('corners', s.corners.join(','));
   if (s.auto) p.set('auto', '1');
+  if (s.suggested) p.set('suggested', '1');
   if (s.alpha !== undefined) p.set('alpha', String(s.alpha));
   if (s.design) p.set('design', '1');
   for (const k of OPTION_KEYS) if (s.options[k] !== undefined && s.options[k] !== '') p.set(k, s.options[k]!);
@@ -134,6 +136,7 @@ export function decodeState(hash: string): UrlState {
   const corners = (p.get('corners') ?? '').split(',').filter((x) => x !== '').map(Number);
   if (corners.length && corners.length <= 4 && corners.every((x) => Number.isInteger(x) && x >= 0)) s.corners = corners;
   if (p.get('auto') === '1') s.auto = true;
+  if (p.get('suggested') === '1') s.suggested = true;
   const alpha = Number(p.get('alpha'));
   if (p.has('alpha') && Number.isFinite(alpha)) s.alpha = alpha;
   if (p.get('design') === '1') s.design = true;

@@ -34,6 +34,7 @@ const ui = {
   main: el('main'),
   meshInfo: el('mesh-info'),
   auto: el<HTMLButtonElement>('corners-auto'),
+  suggested: el<HTMLButtonElement>('corners-example'),
   clear: el<HTMLButtonElement>('corners-clear'),
   cornersInfo: el('corners-info'),
   patchInfo: el('patch-info'),
@@ -83,7 +84,7 @@ interface State {
   mesh: MeshJson | null;         // what every request sends as `mesh`
   loaded: LoadResult | null;
   corners: number[];             // vertex indices into the loaded mesh
-  cornersAuto: boolean;          // the corners came from "Auto"
+  cornersLabel: '' | 'auto' | 'example'; // from "Auto", "Suggested" (the example's), or clicked
   selected: number | null;       // marker picked for a move
   patch: PatchResult | null;
   design: DesignResult | null;
@@ -93,7 +94,7 @@ interface State {
 }
 
 const state: State = {
-  source: null, mesh: null, loaded: null, corners: [], cornersAuto: false, selected: null,
+  source: null, mesh: null, loaded: null, corners: [], cornersLabel: '', selected: null,
   patch: null, design: null, designWanted: false, simulation: null, alphaDeg: null,
 };
 
@@ -211,7 +212,7 @@ async function loadExamples(): Promise<void> {
 /** Everything derived from the mesh forgotten (corners, patch, design, simulation, views). */
 function resetFromMesh(): void {
   state.corners = [];
-  state.cornersAuto = false;
+  state.cornersLabel = '';
   state.selected = null;
   state.patch = null;
   state.design = null;
@@ -256,6 +257,7 @@ async function loadMesh(mesh: MeshJson, source: NonNullable<State['source']>): P
   ui.meshInfo.dataset['ready'] = '1';
   ui.meshInfo.dataset['readyMs'] = performance.now().toFixed(0); // since navigation start
   ui.auto.disabled = ui.clear.disabled = false;
+  ui.suggested.disabled = (result.example_corners?.vertices ?? []).length !== 4;
   saveUrl();
   return true;
 }
@@ -320,7 +322,7 @@ function updateCorners(): void {
   viewer.setCorners(state.corners, state.selected);
   const n = state.corners.length;
   ui.cornersInfo.textContent = n === 0 ? (state.loaded ? 'No corners yet.' : '')
-    : `corners${state.cornersAuto ? ' (auto)' : ''}: ${state.corners.map((v, i) => `${i + 1}→v${v}`).join(', ')}` +
+    : `corners${state.cornersLabel ? ` (${state.cornersLabel})` : ''}: ${state.corners.map((v, i) => `${i + 1}→v${v}`).join(', ')}` +
       (state.selected !== null ? `\nmoving corner ${state.selected + 1}: click the surface` : n < 4 ? `\nclick to place corner ${n + 1}` : '');
   ui.cornersInfo.dataset['count'] = String(n);
 }
@@ -341,7 +343,7 @@ viewer.onPick = (pick: Pick) => {
     ui.status.textContent = 'Four corners are set: click a marker to move it.';
     return;
   }
-  state.cornersAuto = false;
+  state.cornersLabel = '';
   state.alphaDeg = null; // a new patch has its own feasible range: start again from its minimum
   updateCorners();
   ui.status.textContent = `picked vertex ${pick.vertex} in ${viewer.lastPickMs.toFixed(1)} ms`;
@@ -352,7 +354,18 @@ viewer.onPick = (pick: Pick) => {
 
 ui.auto.addEventListener('click', () => {
   state.corners = [];
-  state.cornersAuto = true;
+  state.cornersLabel = 'auto';
+  state.selected = null;
+  state.alphaDeg = null;
+  updateCorners();
+  void computePatch();
+});
+
+ui.suggested.addEventListener('click', () => {
+  const suggested = state.loaded?.example_corners?.vertices ?? [];
+  if (suggested.length !== 4) return;
+  state.corners = [...suggested];
+  state.cornersLabel = 'example';
   state.selected = null;
   state.alphaDeg = null;
   updateCorners();
@@ -367,8 +380,9 @@ ui.clear.addEventListener('click', () => {
 });
 
 function cornersJson(): { vertices?: number[]; label?: string } {
-  if (state.cornersAuto && state.corners.length !== 4) return {}; // neither: automatic
-  return state.cornersAuto ? { vertices: state.corners, label: 'auto' } : { vertices: state.corners };
+  if (state.cornersLabel === 'auto' && state.corners.length !== 4) return {}; // neither: automatic
+  // The label is what design.json records as options.corners, as the CLI does ("auto", "example").
+  return state.cornersLabel ? { vertices: state.corners, label: state.cornersLabel } : { vertices: state.corners };
 }
 
 async function computePatch(): Promise<void> {
@@ -387,7 +401,7 @@ async function computePatch(): Promise<void> {
   }
   state.patch = result;
   const r = result.report;
-  if (state.cornersAuto) {
+  if (state.cornersLabel === 'auto') {
     state.corners = r.corners.map((c) => c.input_vertex);
     updateCorners();
   }
@@ -568,7 +582,8 @@ function saveUrl(): void {
   if (state.source?.kind === 'example') s.example = state.source.name;
   if (state.source?.kind === 'file' && state.source.hash) s.file = { name: state.source.name, hash: state.source.hash };
   if (state.corners.length) s.corners = state.corners;
-  if (state.cornersAuto) s.auto = true;
+  if (state.cornersLabel === 'auto') s.auto = true;
+  if (state.cornersLabel === 'example') s.suggested = true;
   if (state.alphaDeg !== null) s.alpha = state.alphaDeg;
   if (state.designWanted) s.design = true;
   history.replaceState(null, '', `#${encodeState(s)}`);
@@ -602,7 +617,7 @@ async function restore(): Promise<void> {
 async function applyState(s: UrlState): Promise<void> {
   if (s.corners?.length === 4 || s.auto) {
     state.corners = s.corners ?? [];
-    state.cornersAuto = s.auto ?? false;
+    state.cornersLabel = s.auto ? 'auto' : s.suggested ? 'example' : '';
     updateCorners();
     if (s.alpha !== undefined) state.alphaDeg = s.alpha;
     state.designWanted = s.design ?? false;
