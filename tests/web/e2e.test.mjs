@@ -187,6 +187,13 @@ test('Design, then the ᾱ slider redesigns with the cached distance maps', asyn
   assert.notEqual(summary, firstSummary);
   await page.getByRole('button', { name: 'Plan (2D)' }).click();
   await until(() => page.locator('#plan-img').evaluate((i) => i.complete && i.naturalWidth > 0), 5000, 'planar.svg shown');
+  const scale = () => page.locator('#plan-img').evaluate((i) => Number(/scale\(([\d.e+-]+)\)/.exec(i.style.transform)?.[1]));
+  await until(async () => (await scale()) > 0, 5000, 'the plan fitted');
+  const fitted = await scale();
+  const box = await byId('plan').boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.wheel(0, -300); // zoom in about the cursor
+  await until(async () => (await scale()) > fitted * 1.2, 5000, 'the plan zoomed in');
   await page.getByRole('button', { name: '3D' }).click();
 });
 
