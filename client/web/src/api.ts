@@ -1,0 +1,283 @@
+// The daemon's HTTP/JSON API (docs/api.md): POST /v1/NAME with a protobuf-JSON body, progress as
+// Server-Sent Events (Accept: text/event-stream), errors as {"error": {code, status, field,
+// message}}. Cancelling = aborting the fetch: the gateway sees the connection close and cancels
+// the job in the kernel. Replies use the proto field names (snake_case); requests use them too.
+
+export interface Progress {
+  stage: string;
+  fraction: number;
+  message: string;
+}
+
+/** A failed call: the daemon's error body, or a transport failure / cancellation of our own. */
+export class ApiError extends Error {
+  readonly status: string;
+  readonly field: string;
+  readonly httpStatus: number;
+  constructor(status: string, field: string, message: string, httpStatus: number) {
+    super(message);
+    this.status = status;
+    this.field = field;
+    this.httpStatus = httpStatus;
+  }
+  /** "field: message", as the CLI prints it. */
+  describe(): string {
+    return this.field ? `${this.field}: ${this.message}` : this.message;
+  }
+}
+
+export function isCancelled(e: unknown): boolean {
+  return e instanceof ApiError && e.status === 'CANCELLED';
+}
+
+// ---- message shapes (the subset the page reads) -----------------------------------------------
+
+export interface MeshJson {
+  name?: string;
+  positions?: number[];
+  indices?: number[];
+  file?: string; // base64
+  format?: string;
+  example?: string;
+}
+
+export interface MeshReport {
+  format: string;
+  file_vertices: number;
+  file_faces: number;
+  polygons_triangulated: number;
+  degenerate_faces_removed: number;
+  duplicate_vertices_merged: number;
+  isolated_vertices_removed: number;
+  warnings: string[];
+  vertices: number;
+  faces: number;
+  bounding_box: number[];
+}
+
+export interface LoadResult {
+  mesh: MeshJson & { positions: number[]; indices: number[] };
+  report: MeshReport;
+  example_corners?: { vertices?: number[] };
+}
+
+export interface ExampleInfo {
+  name: string;
+  description: string;
+  vertices: number;
+  corners: number[];
+}
+
+export interface PatchReport {
+  vertex_count: number;
+  face_count: number;
+  corners: { position: number[]; input_vertex: number; patch_vertex: number }[];
+  corner_angles: number[];
+  boundary_lengths: number[];
+  area: number;
+  gaussian_curvature_max: number;
+  injectivity_ok: boolean;
+  eta_before: number;
+  eta_after: number;
+  eta_max: number;
+  smoothing_iterations: number;
+  warnings: string[];
+  sides: { vertices: number[]; length: number }[];
+  seconds: number;
+}
+
+export interface PatchResult {
+  report: PatchReport;
+  patch: { positions: number[]; indices: number[] };
+  gaussian_curvature: number[];
+}
+
+export type Point3 = [number, number, number];
+export type Point2 = [number, number];
+
+export interface Design {
+  input: string;
+  alpha: number;
+  alpha_bar: number;
+  alpha_bar_range: number[];
+  side_lengths: number[];
+  members: { family: string; index: number; boundary: boolean; surface: Point3[] }[];
+  crossings: { g: number; h: number; surface_point: number[]; on_boundary: boolean }[];
+  anchors: { corner: boolean; side: number; position: number[] }[];
+  options: { lamella_width: number; lamella_thickness: number; members_u: number; members_v: number };
+}
+
+export interface DesignReport {
+  members_g: number;
+  members_h: number;
+  crossings: number;
+  max_notch: number;
+  max_length_mismatch: number;
+  seconds: number;
+  distance_maps_cached: boolean;
+}
+
+export interface FileJson {
+  name: string;
+  content: string; // base64
+}
+
+export interface DesignResult {
+  design: Design;
+  report: DesignReport;
+  views: FileJson[];
+}
+
+export interface Lamella {
+  member: { family: string; index: number };
+  boundary: boolean;
+  centerline: Point3[];
+  normals: Point3[];
+  deviation: number[];
+  max_bending_stress: number;
+  max_torsion_stress: number;
+}
+
+export interface SimulationRun {
+  rms: number;
+  max_deviation: number;
+  iterations: number;
+  converged: boolean;
+  seconds: number;
+  termination: string;
+}
+
+export interface Deployment {
+  options: { material: string; unit: string; young_modulus: number };
+  rms_without_notches?: number;
+  rms_with_notches?: number;
+  seconds_without_notches?: number;
+  seconds_with_notches?: number;
+  converged: boolean;
+  iterations: number;
+  grid_vertices: number;
+  rods: Lamella[];
+  rods_without_notches: Lamella[];
+  with_notches?: SimulationRun;
+  without_notches?: SimulationRun;
+}
+
+export interface SimulateResult {
+  deployment: Deployment;
+  views: FileJson[];
+}
+
+// ---- transport --------------------------------------------------------------------------------
+
+const TOKEN_KEY = 'gridshell.token';
+
+export function getToken(): string {
+  return sessionStorage.getItem(TOKEN_KEY) ?? '';
+}
+export function setToken(token: string): void {
+  if (token) sessionStorage.setItem(TOKEN_KEY, token);
+  else sessionStorage.removeItem(TOKEN_KEY);
+}
+
+function headers(sse: boolean): Record<string, string> {
+  const h: Record<string, string> = { 'Content-Type': 'application/json' };
+  if (sse) h['Accept'] = 'text/event-stream';
+  const token = getToken();
+  if (token) h['Authorization'] = `Bearer ${token}`;
+  return h;
+}
+
+async function errorFrom(response: Response): Promise<ApiError> {
+  const text = await response.text().catch(() => '');
+  try {
+    const body = JSON.parse(text) as { error?: { status?: string; field?: string; message?: string } };
+    if (body.error)
+      return new ApiError(body.error.status ?? 'UNKNOWN', body.error.field ?? '', body.error.message ?? text,
+                          response.status);
+  } catch {
+    // not JSON: fall through
+  }
+  return new ApiError('UNKNOWN', '', `HTTP ${response.status}${text ? ': ' + text.slice(0, 200) : ''}`,
+                      response.status);
+}
+
+function transportError(e: unknown, signal?: AbortSignal): ApiError {
+  if (signal?.aborted) return new ApiError('CANCELLED', '', 'cancelled', 0);
+  const message = e instanceof Error ? e.message : String(e);
+  return new ApiError('UNAVAILABLE', '', `the daemon cannot be reached (${message})`, 0);
+}
+
+/**
+ * One call: the result message, with progress events passed to onProgress. Rejects with ApiError
+ * (status CANCELLED when `signal` aborted it).
+ */
+export async function call<T>(method: string, request: unknown, signal?: AbortSignal,
+                              onProgress?: (p: Progress) => void): Promise<T> {
+  const sse = onProgress !== undefined;
+  let response: Response;
+  try {
+    response = await fetch(`v1/${method}`, {
+      method: 'POST', headers: headers(sse), body: JSON.stringify(request), signal,
+      cache: 'no-store',
+    });
+  } catch (e) {
+    throw transportError(e, signal);
+  }
+  if (!response.ok) throw await errorFrom(response);
+  const type = response.headers.get('Content-Type') ?? '';
+  try {
+    if (!type.startsWith('text/event-stream') || !response.body) return (await response.json()) as T;
+    return await readEvents<T>(response.body, onProgress ?? (() => {}));
+  } catch (e) {
+    if (e instanceof ApiError) throw e;
+    throw transportError(e, signal);
+  }
+}
+
+/** Parses the SSE stream: progress events to the callback, then the result or the error. */
+export async function readEvents<T>(body: ReadableStream<Uint8Array>, onProgress: (p: Progress) => void): Promise<T> {
+  const reader = body.getReader();
+  const decoder = new TextDecoder();
+  let buffer = '';
+  for (;;) {
+    const { done, value } = await reader.read();
+    if (value) buffer += decoder.decode(value, { stream: true });
+    let end: number;
+    while ((end = buffer.indexOf('\n\n')) >= 0) {
+      const block = buffer.slice(0, end);
+      buffer = buffer.slice(end + 2);
+      let event = 'message';
+      let data = '';
+      for (const line of block.split('\n')) {
+        if (line.startsWith('event:')) event = line.slice(6).trim();
+        else if (line.startsWith('data:')) data += line.slice(5).trimStart();
+      }
+      if (event === 'progress') onProgress(JSON.parse(data) as Progress);
+      else if (event === 'result') {
+        void reader.cancel().catch(() => {});
+        return JSON.parse(data) as T;
+      } else if (event === 'error') {
+        const e = (JSON.parse(data) as { error: { status: string; field: string; message: string } }).error;
+        throw new ApiError(e.status, e.field, e.message, 200);
+      }
+    }
+    if (done) throw new ApiError('UNAVAILABLE', '', 'the daemon closed the stream without a result', 0);
+  }
+}
+
+// ---- helpers ----------------------------------------------------------------------------------
+
+export function bytesToBase64(bytes: Uint8Array): string {
+  let binary = '';
+  const chunk = 0x8000;
+  for (let i = 0; i < bytes.length; i += chunk)
+    binary += String.fromCharCode(...bytes.subarray(i, i + chunk));
+  return btoa(binary);
+}
+
+export function base64ToBytes(text: string): Uint8Array<ArrayBuffer> {
+  const binary = atob(text);
+  const bytes = new Uint8Array(binary.length);
+  for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
+  return bytes;
+}

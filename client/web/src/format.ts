@@ -1,0 +1,148 @@
+// Pure helpers of the page (no DOM): angles, the slider's feasible range, the summary text, the
+// URL state, where an error belongs. Unit-tested by tests/web/unit.test.mjs.
+
+import type { Deployment, DesignResult, PatchReport } from './api';
+import { formatNumber } from './colormap';
+
+export const DEG = 180 / Math.PI;
+
+/** The slider's [min, max] in degrees for a feasible range in radians, rounded inward to `step`. */
+export function sliderRange(rangeRad: number[], step = 0.1): [number, number] | null {
+  if (rangeRad.length !== 2 || !rangeRad.every(Number.isFinite)) return null;
+  const k = 1 / step;
+  const lo = Math.ceil(rangeRad[0]! * DEG * k - 1e-9) / k;
+  const hi = Math.floor(rangeRad[1]! * DEG * k + 1e-9) / k;
+  return lo <= hi ? [lo, hi] : null;
+}
+
+/** DesignRequest.options.alpha for a slider value in degrees ("70.5deg"). */
+export function alphaOption(deg: number): string {
+  return `${Number(deg.toFixed(4))}deg`;
+}
+
+export function degrees(rad: number): string {
+  return `${(rad * DEG).toFixed(1)}°`;
+}
+
+export function patchSummary(r: PatchReport): string {
+  const lines = [
+    `η = ${r.eta_after.toFixed(5)} (before smoothing ${r.eta_before.toFixed(5)}, limit ${r.eta_max})`,
+    `corner angles: ${r.corner_angles.map(degrees).join(', ')}`,
+    `sides: ${r.boundary_lengths.map(formatNumber).join(', ')}; area ${formatNumber(r.area)}`,
+    `patch: ${r.vertex_count} vertices, ${r.face_count} faces; ${r.smoothing_iterations} smoothing iterations`,
+    `injectivity: ${r.injectivity_ok ? 'ok' : 'NOT ok (members may cross)'}`,
+  ];
+  return lines.join('\n');
+}
+
+export function designSummary(d: DesignResult): string {
+  const g = d.design, r = d.report;
+  const range = g.alpha_bar_range.length === 2
+    ? ` (feasible ${degrees(g.alpha_bar_range[0]!)}–${degrees(g.alpha_bar_range[1]!)})` : '';
+  return [
+    `ᾱ = ${degrees(g.alpha_bar)}${range}`,
+    `α = ${degrees(g.alpha)} (spatial angle at corner 1)`,
+    `members: ${r.members_g} g × ${r.members_h} h inner, ${r.crossings} crossings, ${g.anchors.length} anchors`,
+    `lamella: ${formatNumber(g.options.lamella_width)} × ${formatNumber(g.options.lamella_thickness)}`,
+    `max notch ${formatNumber(r.max_notch)}; max length mismatch ${(100 * r.max_length_mismatch).toFixed(2)}%`,
+    `design ${r.seconds.toFixed(3)} s; distance maps cached: ${r.distance_maps_cached ? 'yes' : 'no'}`,
+  ].join('\n');
+}
+
+/** A stress: MPa when the model's unit is known, else the simulation's scaled value, marked so. */
+export function stress(pa: number, dep: Deployment): string {
+  return dep.options.unit ? `${formatNumber(pa / 1e6)} MPa` : `${formatNumber(pa)} (scaled: unit unknown)`;
+}
+
+export function deploymentSummary(dep: Deployment): string {
+  const lines: string[] = [];
+  const run = (name: string, rms: number | undefined, s: number | undefined, r: Deployment['with_notches']) => {
+    if (rms === undefined || !r) return;
+    lines.push(`${name}: RMS ${formatNumber(rms)}, max deviation ${formatNumber(r.max_deviation)}, ` +
+               `${r.iterations} iterations, ${r.converged ? 'converged' : 'NOT converged'}, ${(s ?? r.seconds).toFixed(2)} s`);
+  };
+  run('with notches', dep.rms_with_notches, dep.seconds_with_notches, dep.with_notches);
+  run('without notches', dep.rms_without_notches, dep.seconds_without_notches, dep.without_notches);
+  let bending = 0, torsion = 0;
+  for (const rod of dep.rods) {
+    bending = Math.max(bending, rod.max_bending_stress);
+    torsion = Math.max(torsion, rod.max_torsion_stress);
+  }
+  lines.push(`max bending stress ${stress(bending, dep)}, max torsion stress ${stress(torsion, dep)} ` +
+             `(${dep.options.material}, E = ${formatNumber(dep.options.young_modulus / 1e9)} GPa` +
+             `${dep.options.unit ? ', unit ' + dep.options.unit : ''})`);
+  lines.push(`grid vertices ${dep.grid_vertices}; ${dep.converged ? 'every run converged' : 'a run did NOT converge'}`);
+  return lines.join('\n');
+}
+
+/** Largest deviation over the rods (the colour map's top). */
+export function maxDeviation(dep: Deployment): number {
+  let m = 0;
+  for (const rod of dep.rods) for (const d of rod.deviation) if (Number.isFinite(d)) m = Math.max(m, d);
+  return m;
+}
+
+/**
+ * Which control an error concerns: the daemon's field path (`mesh.indices[3]`,
+ * `corners.vertices[2]`, `options.alpha`, `design.members[4]`) mapped to the page's
+ * `data-for` slots, given the call it came from.
+ */
+export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate', field: string): string {
+  if (call === 'simulate') return field.startsWith('design') ? 'options' : 'simulation';
+  if (field.startsWith('mesh')) return 'mesh';
+  if (field.startsWith('corners')) return 'corners';
+  if (field.startsWith('options.alpha')) return 'options.alpha';
+  if (field.startsWith('options')) return call === 'patch' ? 'corners' : 'options';
+  return call === 'load' ? 'mesh' : call === 'patch' ? 'corners' : 'options';
+}
+
+/** The page's state in the URL hash: example, corners, options. */
+export interface UrlState {
+  example?: string;
+  file?: { name: string; hash: string }; // an uploaded mesh: its name and SHA-256 (hex, 16 digits)
+  corners?: number[];
+  auto?: boolean;
+  suggested?: boolean; // the example's suggested corners
+  alpha?: number;
+  design?: boolean;
+  options: Record<string, string>;
+}
+
+export const OPTION_KEYS = ['mu', 'mv', 'w', 't', 'ia', 'unit', 'mat'] as const;
+
+export function encodeState(s: UrlState): string {
+  const p = new URLSearchParams();
+  if (s.example) p.set('example', s.example);
+  if (s.file) {
+    p.set('file', s.file.name);
+    p.set('sha256', s.file.hash);
+  }
+  if (s.corners && s.corners.length) p.set('corners', s.corners.join(','));
+  if (s.auto) p.set('auto', '1');
+  if (s.suggested) p.set('suggested', '1');
+  if (s.alpha !== undefined) p.set('alpha', String(s.alpha));
+  if (s.design) p.set('design', '1');
+  for (const k of OPTION_KEYS) if (s.options[k] !== undefined && s.options[k] !== '') p.set(k, s.options[k]!);
+  return p.toString();
+}
+
+export function decodeState(hash: string): UrlState {
+  const p = new URLSearchParams(hash.replace(/^#/, ''));
+  const s: UrlState = { options: {} };
+  const example = p.get('example');
+  if (example) s.example = example;
+  const file = p.get('file'), digest = p.get('sha256');
+  if (file && digest && /^[0-9a-f]{16}$/.test(digest)) s.file = { name: file, hash: digest };
+  const corners = (p.get('corners') ?? '').split(',').filter((x) => x !== '').map(Number);
+  if (corners.length && corners.length <= 4 && corners.every((x) => Number.isInteger(x) && x >= 0)) s.corners = corners;
+  if (p.get('auto') === '1') s.auto = true;
+  if (p.get('suggested') === '1') s.suggested = true;
+  const alpha = Number(p.get('alpha'));
+  if (p.has('alpha') && Number.isFinite(alpha)) s.alpha = alpha;
+  if (p.get('design') === '1') s.design = true;
+  for (const k of OPTION_KEYS) {
+    const v = p.get(k);
+    if (v !== null) s.options[k] = v;
+  }
+  return s;
+}

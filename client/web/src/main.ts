@@ -1,0 +1,637 @@
+// The gridshell page: mesh in (example or file) -> four corners -> patch -> design (live ᾱ
+// slider and counts) -> simulate, with progress, Cancel, errors next to their controls and
+// downloads of the daemon's files. One call in flight at a time: a new one aborts the previous
+// (the daemon cancels a job whose HTTP client went away).
+
+import './style.css';
+import {
+  ApiError, base64ToBytes, bytesToBase64, call, isCancelled, setToken,
+  type DesignResult, type ExampleInfo, type FileJson, type LoadResult, type MeshJson, type PatchResult,
+  type Progress, type SimulateResult,
+} from './api';
+import { diverging, drawBar, formatNumber, sequential, symmetricRange } from './colormap';
+import {
+  alphaOption, decodeState, deploymentSummary, designSummary, encodeState, errorSlot, maxDeviation,
+  patchSummary, sliderRange, stress, type UrlState,
+} from './format';
+import { Viewer, type Pick } from './viewer';
+import { Zoomable } from './zoom';
+
+// The example list is asked for first, so the daemon answers while the WebGL context is created
+// (half a second on a software GL).
+let examplesRequest: Promise<{ examples: ExampleInfo[] }> | null = call('examples', {});
+
+function el<T extends HTMLElement = HTMLElement>(id: string): T {
+  const e = document.getElementById(id);
+  if (!e) throw new Error(`missing #${id}`);
+  return e as T;
+}
+
+const ui = {
+  example: el<HTMLSelectElement>('example-select'),
+  file: el<HTMLInputElement>('mesh-input'),
+  drop: el('drop'),
+  main: el('main'),
+  meshInfo: el('mesh-info'),
+  auto: el<HTMLButtonElement>('corners-auto'),
+  suggested: el<HTMLButtonElement>('corners-example'),
+  clear: el<HTMLButtonElement>('corners-clear'),
+  cornersInfo: el('corners-info'),
+  patchInfo: el('patch-info'),
+  legend: el('legend'),
+  legendTitle: el('legend-title'),
+  legendBar: el<HTMLCanvasElement>('legend-bar'),
+  legendMin: el('legend-min'),
+  legendMid: el('legend-mid'),
+  legendMax: el('legend-max'),
+  alpha: el<HTMLInputElement>('alpha-slider'),
+  alphaValue: el<HTMLOutputElement>('alpha-value'),
+  alphaMin: el('alpha-min'),
+  alphaMax: el('alpha-max'),
+  membersU: el<HTMLInputElement>('members-u'),
+  membersV: el<HTMLInputElement>('members-v'),
+  width: el<HTMLInputElement>('lamella-width'),
+  thickness: el<HTMLInputElement>('lamella-thickness'),
+  anchors: el<HTMLInputElement>('interior-anchors'),
+  design: el<HTMLButtonElement>('design'),
+  unit: el<HTMLSelectElement>('unit'),
+  material: el<HTMLSelectElement>('material'),
+  simulate: el<HTMLButtonElement>('simulate'),
+  progress: el<HTMLProgressElement>('progress'),
+  cancel: el<HTMLButtonElement>('cancel'),
+  status: el('status'),
+  error: el('error'),
+  warnings: el('warnings'),
+  summary: el('summary'),
+  downloads: el('downloads'),
+  tokenBox: el('token-box'),
+  token: el<HTMLInputElement>('token'),
+  devLegend: el('deviation-legend'),
+  devBar: el<HTMLCanvasElement>('deviation-bar'),
+  devMax: el('deviation-max'),
+  devTitle: el('deviation-title'),
+  colourBy: el<HTMLSelectElement>('colour-by'),
+};
+
+const viewer = new Viewer(el<HTMLCanvasElement>('viewer'));
+const plan = new Zoomable(el('plan'), el<HTMLImageElement>('plan-img'));
+const maps = new Zoomable(el('maps'), el<HTMLImageElement>('maps-img'));
+
+// ---- state ------------------------------------------------------------------------------------
+
+interface State {
+  source: { kind: 'example' | 'file'; name: string; hash?: string } | null;
+  mesh: MeshJson | null;         // what every request sends as `mesh`
+  loaded: LoadResult | null;
+  corners: number[];             // vertex indices into the loaded mesh
+  cornersLabel: '' | 'auto' | 'example'; // from "Auto", "Suggested" (the example's), or clicked
+  selected: number | null;       // marker picked for a move
+  patch: PatchResult | null;
+  design: DesignResult | null;
+  designWanted: boolean;         // redesign on every change once the user asked for a design
+  simulation: SimulateResult | null;
+  alphaDeg: number | null;       // null = the daemon's default ("min")
+}
+
+const state: State = {
+  source: null, mesh: null, loaded: null, corners: [], cornersLabel: '', selected: null,
+  patch: null, design: null, designWanted: false, simulation: null, alphaDeg: null,
+};
+
+// ---- calls: one at a time, cancellable ----------------------------------------------------------
+
+type CallKind = 'load' | 'patch' | 'design' | 'simulate';
+let current: { kind: CallKind; controller: AbortController; byUser: boolean } | null = null;
+
+function setBusy(busy: boolean): void {
+  ui.cancel.disabled = !busy;
+  if (!busy) ui.progress.value = 0;
+}
+
+/**
+ * Runs one call with progress; aborts the call in flight. Resolves with the result, or null
+ * when it was superseded or cancelled (the status line says which) or failed (the error is shown).
+ */
+async function run<T>(kind: CallKind, method: string, request: unknown): Promise<T | null> {
+  if (current) current.controller.abort();
+  const job = { kind, controller: new AbortController(), byUser: false };
+  current = job;
+  clearErrors(kind);
+  setBusy(true);
+  ui.progress.removeAttribute('value');
+  ui.status.textContent = `${kind}: starting…`;
+  const t0 = performance.now();
+  try {
+    const result = await call<T>(method, request, job.controller.signal, (p: Progress) => {
+      if (current !== job) return;
+      ui.progress.value = Math.max(0, Math.min(1, p.fraction));
+      ui.status.textContent = `${kind}: ${p.stage}${p.message ? ' — ' + p.message : ''} (${Math.round(100 * p.fraction)}%)`;
+    });
+    if (current !== job) return null;
+    ui.status.textContent = `${kind}: done in ${((performance.now() - t0) / 1000).toFixed(2)} s`;
+    return result;
+  } catch (e) {
+    if (current !== job && !job.byUser) return null; // superseded by a newer call
+    if (isCancelled(e) || job.controller.signal.aborted) {
+      ui.status.textContent = `${kind}: cancelled`;
+      return null;
+    }
+    showError(kind, e);
+    return null;
+  } finally {
+    if (current === job) {
+      current = null;
+      setBusy(false);
+    }
+  }
+}
+
+ui.cancel.addEventListener('click', () => {
+  if (!current) return;
+  current.byUser = true;
+  current.controller.abort();
+});
+
+// ---- errors -----------------------------------------------------------------------------------
+
+function clearErrors(kind: CallKind): void {
+  ui.error.hidden = true;
+  ui.error.textContent = '';
+  const slots = kind === 'simulate' ? ['simulation'] : kind === 'load' ? ['mesh', 'corners', 'options', 'options.alpha']
+    : kind === 'patch' ? ['corners', 'options', 'options.alpha'] : ['options', 'options.alpha'];
+  for (const s of slots) {
+    const slot = document.querySelector<HTMLElement>(`.field-error[data-for="${s}"]`);
+    if (slot) slot.textContent = '';
+  }
+}
+
+function showError(kind: CallKind, e: unknown): void {
+  const err = e instanceof ApiError ? e : new ApiError('INTERNAL', '', e instanceof Error ? e.message : String(e), 0);
+  if (err.status === 'UNAUTHENTICATED') ui.tokenBox.hidden = false;
+  ui.error.hidden = false;
+  ui.error.textContent = `${kind} failed (${err.status}): ${err.describe()}`;
+  ui.status.textContent = `${kind}: failed`;
+  const slot = document.querySelector<HTMLElement>(`.field-error[data-for="${errorSlot(kind, err.field)}"]`);
+  if (slot) slot.textContent = err.describe();
+}
+
+window.addEventListener('unhandledrejection', (event) => {
+  ui.error.hidden = false;
+  ui.error.textContent = `unexpected: ${String(event.reason)}`;
+});
+
+el<HTMLFormElement>('token-form').addEventListener('submit', (e) => {
+  e.preventDefault(); // never sent anywhere (the CSP has form-action 'none' anyway)
+  setToken(ui.token.value.trim());
+  ui.tokenBox.hidden = true;
+  void loadExamples();
+});
+
+// ---- mesh in ------------------------------------------------------------------------------------
+
+async function loadExamples(): Promise<void> {
+  const request = examplesRequest ?? call<{ examples: ExampleInfo[] }>('examples', {});
+  examplesRequest = null; // a retry (after a token was given) asks again
+  const result = await request.catch((e: unknown) => {
+    showError('load', e);
+    return null;
+  });
+  if (!result) return;
+  ui.example.length = 1;
+  for (const ex of result.examples) {
+    const o = document.createElement('option');
+    o.value = ex.name;
+    o.textContent = `${ex.name} (${ex.vertices} vertices)`;
+    o.title = ex.description;
+    ui.example.append(o);
+  }
+  ui.example.dataset['loaded'] = String(result.examples.length);
+  ui.example.dataset['loadedMs'] = performance.now().toFixed(0); // since navigation start
+}
+
+/** Everything derived from the mesh forgotten (corners, patch, design, simulation, views). */
+function resetFromMesh(): void {
+  state.corners = [];
+  state.cornersLabel = '';
+  state.selected = null;
+  state.patch = null;
+  state.design = null;
+  state.designWanted = false;
+  state.simulation = null;
+  state.alphaDeg = null;
+  ui.alpha.disabled = ui.design.disabled = ui.simulate.disabled = true;
+  ui.alphaValue.textContent = 'min';
+  ui.alphaMin.textContent = ui.alphaMax.textContent = '';
+  ui.patchInfo.textContent = '';
+  ui.summary.textContent = '';
+  ui.warnings.textContent = '';
+  ui.legend.hidden = true;
+  ui.devLegend.hidden = true;
+  setDownloads([]);
+  plan.clear();
+  maps.clear();
+  updateCorners();
+}
+
+async function loadMesh(mesh: MeshJson, source: NonNullable<State['source']>): Promise<boolean> {
+  const result = await run<LoadResult>('load', 'load', { mesh });
+  if (!result) return false;
+  state.loaded = result;
+  state.source = source;
+  // An example is sent by name, labelled as the CLI labels it (example:NAME, recorded as the
+  // design's `input`); a file as the arrays the loader returned, labelled with its file name.
+  state.mesh = source.kind === 'example' ? { name: `example:${source.name}`, example: source.name }
+    : { name: source.name, positions: result.mesh.positions, indices: result.mesh.indices };
+  resetFromMesh();
+  viewer.setMesh(result.mesh.positions, result.mesh.indices);
+  const r = result.report;
+  const box = r.bounding_box;
+  const extent = box.length === 6 ? `; extent ${[0, 1, 2].map((i) => formatNumber(box[i + 3]! - box[i]!)).join(' × ')}` : '';
+  const repairs = [
+    [r.polygons_triangulated, 'polygons triangulated'], [r.duplicate_vertices_merged, 'duplicate vertices merged'],
+    [r.degenerate_faces_removed, 'degenerate faces removed'], [r.isolated_vertices_removed, 'isolated vertices removed'],
+  ].filter(([k]) => Number(k) > 0).map(([k, what]) => `${k} ${what}`);
+  ui.meshInfo.textContent = `${source.name}: ${r.vertices} vertices, ${r.faces} faces (${r.format})${extent}` +
+    (repairs.length ? `\nloader: ${repairs.join(', ')}` : '');
+  ui.warnings.textContent = r.warnings.length ? `loader: ${r.warnings.join('\n')}` : '';
+  ui.meshInfo.dataset['ready'] = '1';
+  ui.meshInfo.dataset['readyMs'] = performance.now().toFixed(0); // since navigation start
+  ui.auto.disabled = ui.clear.disabled = false;
+  ui.suggested.disabled = (result.example_corners?.vertices ?? []).length !== 4;
+  saveUrl();
+  return true;
+}
+
+ui.example.addEventListener('change', () => {
+  const name = ui.example.value;
+  if (name) void loadMesh({ example: name }, { kind: 'example', name });
+});
+
+async function sha256(bytes: Uint8Array<ArrayBuffer>): Promise<string> {
+  const digest = new Uint8Array(await crypto.subtle.digest('SHA-256', bytes));
+  return Array.from(digest.slice(0, 8), (b) => b.toString(16).padStart(2, '0')).join('');
+}
+
+/** The state of a reload whose mesh was an uploaded file: applied when that file is opened again. */
+let pendingFileState: UrlState | null = null;
+
+async function loadFile(file: File): Promise<void> {
+  const format = file.name.split('.').pop()?.toLowerCase() ?? '';
+  const bytes = new Uint8Array(await file.arrayBuffer());
+  const hash = await sha256(bytes);
+  ui.example.value = '';
+  const pending = pendingFileState;
+  const same = pending?.file?.hash === hash;
+  if (same) restoring = true;
+  try {
+    if (!(await loadMesh({ name: file.name, file: bytesToBase64(bytes), format }, { kind: 'file', name: file.name, hash })))
+      return;
+    pendingFileState = null;
+    if (same && pending) await applyState(pending);
+  } finally {
+    if (same) {
+      restoring = false;
+      saveUrl();
+    }
+  }
+}
+
+ui.file.addEventListener('change', () => {
+  const f = ui.file.files?.[0];
+  if (f) void loadFile(f);
+  ui.file.value = '';
+});
+
+for (const target of [ui.drop, ui.main]) {
+  target.addEventListener('dragover', (e) => {
+    e.preventDefault();
+    target.classList.add('over');
+  });
+  target.addEventListener('dragleave', () => target.classList.remove('over'));
+  target.addEventListener('drop', (e) => {
+    e.preventDefault();
+    target.classList.remove('over');
+    const f = e.dataTransfer?.files[0];
+    if (f) void loadFile(f);
+  });
+}
+
+// ---- corners and patch ------------------------------------------------------------------------
+
+function updateCorners(): void {
+  viewer.setCorners(state.corners, state.selected);
+  const n = state.corners.length;
+  ui.cornersInfo.textContent = n === 0 ? (state.loaded ? 'No corners yet.' : '')
+    : `corners${state.cornersLabel ? ` (${state.cornersLabel})` : ''}: ${state.corners.map((v, i) => `${i + 1}→v${v}`).join(', ')}` +
+      (state.selected !== null ? `\nmoving corner ${state.selected + 1}: click the surface` : n < 4 ? `\nclick to place corner ${n + 1}` : '');
+  ui.cornersInfo.dataset['count'] = String(n);
+}
+
+viewer.onPick = (pick: Pick) => {
+  if (!state.loaded) return;
+  if (pick.kind === 'marker') {
+    state.selected = state.selected === pick.index ? null : pick.index;
+    updateCorners();
+    return;
+  }
+  if (state.selected !== null) {
+    state.corners[state.selected] = pick.vertex;
+    state.selected = null;
+  } else if (state.corners.length < 4) {
+    state.corners.push(pick.vertex);
+  } else {
+    ui.status.textContent = 'Four corners are set: click a marker to move it.';
+    return;
+  }
+  state.cornersLabel = '';
+  state.alphaDeg = null; // a new patch has its own feasible range: start again from its minimum
+  updateCorners();
+  ui.status.textContent = `picked vertex ${pick.vertex} in ${viewer.lastPickMs.toFixed(1)} ms`;
+  ui.cornersInfo.dataset['pickMs'] = viewer.lastPickMs.toFixed(2);
+  if (state.corners.length === 4) void computePatch();
+  else saveUrl();
+};
+
+ui.auto.addEventListener('click', () => {
+  state.corners = [];
+  state.cornersLabel = 'auto';
+  state.selected = null;
+  state.alphaDeg = null;
+  updateCorners();
+  void computePatch();
+});
+
+ui.suggested.addEventListener('click', () => {
+  const suggested = state.loaded?.example_corners?.vertices ?? [];
+  if (suggested.length !== 4) return;
+  state.corners = [...suggested];
+  state.cornersLabel = 'example';
+  state.selected = null;
+  state.alphaDeg = null;
+  updateCorners();
+  void computePatch();
+});
+
+ui.clear.addEventListener('click', () => {
+  if (current && current.kind !== 'load') current.controller.abort();
+  resetFromMesh(); // keeps the mesh
+  viewer.clearPatch();
+  saveUrl();
+});
+
+function cornersJson(): { vertices?: number[]; label?: string } {
+  if (state.cornersLabel === 'auto' && state.corners.length !== 4) return {}; // neither: automatic
+  // The label is what design.json records as options.corners, as the CLI does ("auto", "example").
+  return state.cornersLabel ? { vertices: state.corners, label: state.cornersLabel } : { vertices: state.corners };
+}
+
+async function computePatch(): Promise<void> {
+  if (!state.mesh) return;
+  state.patch = state.design = state.simulation = null;
+  ui.design.disabled = ui.simulate.disabled = true;
+  const result = await run<PatchResult>('patch', 'patch', { mesh: state.mesh, corners: cornersJson() });
+  if (!result) {
+    if (!current) { // failed or cancelled (not superseded): no stale patch
+      viewer.clearPatch();
+      ui.patchInfo.textContent = '';
+      delete ui.patchInfo.dataset['ready'];
+      ui.legend.hidden = true;
+    }
+    return;
+  }
+  state.patch = result;
+  const r = result.report;
+  if (state.cornersLabel === 'auto') {
+    state.corners = r.corners.map((c) => c.input_vertex);
+    updateCorners();
+  }
+  const range = symmetricRange(result.gaussian_curvature);
+  viewer.setPatch(result.patch.positions, result.patch.indices, result.gaussian_curvature, range,
+                  r.sides.map((s) => s.vertices));
+  ui.patchInfo.textContent = patchSummary(r);
+  ui.patchInfo.dataset['ready'] = '1';
+  ui.legend.hidden = false;
+  ui.legendTitle.textContent = 'Gaussian curvature K (1/length²)';
+  drawBar(ui.legendBar, (t) => diverging(2 * t - 1, 1));
+  ui.legendMin.textContent = formatNumber(-range);
+  ui.legendMid.textContent = '0';
+  ui.legendMax.textContent = formatNumber(range);
+  ui.warnings.textContent = r.warnings.length ? `patch: ${r.warnings.join('\n')}` : '';
+  ui.design.disabled = false;
+  saveUrl();
+  if (state.designWanted) void computeDesign();
+}
+
+// ---- design -------------------------------------------------------------------------------------
+
+/** A number input's value; empty = 0 (automatic). Bad values go to the daemon, which names them. */
+function numberOption(input: HTMLInputElement): number {
+  return Number(input.value);
+}
+
+function designOptions(): Record<string, unknown> {
+  const o: Record<string, unknown> = {
+    members_u: numberOption(ui.membersU), members_v: numberOption(ui.membersV),
+    lamella_width: numberOption(ui.width), lamella_thickness: numberOption(ui.thickness),
+    interior_anchors: numberOption(ui.anchors),
+  };
+  if (state.alphaDeg !== null) o['alpha'] = alphaOption(state.alphaDeg);
+  return o;
+}
+
+async function computeDesign(): Promise<void> {
+  if (!state.mesh || !state.patch) return;
+  state.designWanted = true;
+  ui.simulate.disabled = true; // simulate the design on screen, not one being replaced
+  const result = await run<DesignResult>('design', 'design', {
+    mesh: state.mesh, corners: cornersJson(), options: designOptions(), files: true,
+  });
+  if (!result) {
+    if (!current) ui.simulate.disabled = !state.design; // failed or cancelled: the old one stays
+    return;
+  }
+  state.design = result;
+  state.simulation = null;
+  const g = result.design;
+  const range = sliderRange(g.alpha_bar_range);
+  if (range) {
+    ui.alpha.min = String(range[0]);
+    ui.alpha.max = String(range[1]);
+    ui.alphaMin.textContent = `${range[0]}°`;
+    ui.alphaMax.textContent = `${range[1]}°`;
+    ui.alpha.disabled = false;
+  }
+  ui.alpha.value = String(Math.round(g.alpha_bar * 1800 / Math.PI) / 10);
+  ui.alphaValue.textContent = `${(g.alpha_bar * 180 / Math.PI).toFixed(1)}°`;
+  viewer.setDesign(g);
+  ui.devLegend.hidden = true;
+  ui.summary.textContent = designSummary(result);
+  ui.summary.dataset['cached'] = String(result.report.distance_maps_cached);
+  ui.summary.dataset['designs'] = String(Number(ui.summary.dataset['designs'] ?? '0') + 1);
+  setDownloads(result.views);
+  const svg = (name: string) => result.views.find((f) => f.name === name);
+  const p = svg('planar.svg'), m = svg('maps.svg');
+  if (p) plan.show(blobUrl(p));
+  if (m) maps.show(blobUrl(m));
+  ui.simulate.disabled = false;
+  saveUrl();
+}
+
+ui.design.addEventListener('click', () => void computeDesign());
+
+let redesignTimer = 0;
+function redesignSoon(ms: number): void {
+  window.clearTimeout(redesignTimer);
+  if (!state.designWanted || !state.patch) return;
+  redesignTimer = window.setTimeout(() => void computeDesign(), ms);
+}
+
+ui.alpha.addEventListener('input', () => {
+  state.alphaDeg = Number(ui.alpha.value);
+  ui.alphaValue.textContent = `${state.alphaDeg.toFixed(1)}°`;
+  redesignSoon(120);
+});
+for (const input of [ui.membersU, ui.membersV, ui.width, ui.thickness, ui.anchors]) {
+  input.addEventListener('input', () => redesignSoon(350));
+}
+for (const s of [ui.unit, ui.material]) s.addEventListener('change', () => saveUrl());
+
+// ---- simulate -----------------------------------------------------------------------------------
+
+ui.simulate.addEventListener('click', () => void simulate());
+
+async function simulate(): Promise<void> {
+  const d = state.design;
+  if (!d) return;
+  const options: Record<string, unknown> = { notches: 'both', material: ui.material.value };
+  if (ui.unit.value) options['unit'] = ui.unit.value;
+  const result = await run<SimulateResult>('simulate', 'simulate', {
+    design: d.design, options, design_name: 'design.json', files: true,
+  });
+  if (!result) return;
+  state.simulation = result;
+  const dep = result.deployment;
+  showDeployment();
+  ui.summary.textContent = `${designSummary(d)}\n\n${deploymentSummary(dep)}`;
+  setDownloads([...d.views, ...result.views]);
+}
+
+/** The deployment in 3D, coloured as the panel says, with its legend. */
+function showDeployment(): void {
+  const d = state.design, sim = state.simulation;
+  if (!d || !sim) return;
+  const dep = sim.deployment;
+  const bending = ui.colourBy.value === 'bending';
+  const max = bending ? Math.max(0, ...dep.rods.map((r) => r.max_bending_stress)) : maxDeviation(dep);
+  viewer.setDeployment(dep, d.design.options.lamella_width, d.design.options.lamella_thickness, max,
+                       bending ? (rod) => rod.max_bending_stress : (rod, i) => rod.deviation[i] ?? 0);
+  ui.devLegend.hidden = false;
+  ui.devTitle.textContent = bending ? 'largest bending stress per lamella' : 'deviation from the target';
+  drawBar(ui.devBar, (t) => sequential(t, 1));
+  ui.devMax.textContent = bending ? stress(max, dep) : formatNumber(max);
+}
+
+ui.colourBy.addEventListener('change', () => showDeployment());
+
+// ---- downloads, views -----------------------------------------------------------------------
+
+const urls: string[] = [];
+const TYPES: Record<string, string> = { json: 'application/json', svg: 'image/svg+xml', obj: 'text/plain', ply: 'application/octet-stream' };
+
+/** A blob URL of a file's bytes; the caller revokes it (downloads: setDownloads, views: Zoomable). */
+function blobUrl(file: FileJson): string {
+  const ext = file.name.split('.').pop() ?? '';
+  return URL.createObjectURL(new Blob([base64ToBytes(file.content)], { type: TYPES[ext] ?? 'application/octet-stream' }));
+}
+
+function setDownloads(files: FileJson[]): void {
+  for (const u of urls.splice(0)) URL.revokeObjectURL(u);
+  ui.downloads.replaceChildren();
+  for (const f of files) {
+    const a = document.createElement('a');
+    a.href = blobUrl(f);
+    urls.push(a.href);
+    a.download = f.name;
+    a.textContent = f.name;
+    const id = f.name === 'design.json' ? 'download-design' : f.name === 'deployment.json' ? 'download-deployment'
+      : `download-${f.name.replace(/[^a-z0-9]+/gi, '-')}`;
+    a.dataset['testid'] = id;
+    ui.downloads.append(a);
+  }
+}
+
+for (const tab of document.querySelectorAll<HTMLButtonElement>('.tab')) {
+  tab.addEventListener('click', () => {
+    for (const t of document.querySelectorAll('.tab')) t.classList.toggle('active', t === tab);
+    for (const p of document.querySelectorAll('.pane')) p.classList.toggle('active', p.id === tab.dataset['tab']);
+    if (tab.dataset['tab'] === 'plan') plan.fit();
+    if (tab.dataset['tab'] === 'maps') maps.fit();
+    viewer.requestRender();
+  });
+}
+
+// ---- state in the URL -------------------------------------------------------------------------
+
+let restoring = false;
+function saveUrl(): void {
+  if (restoring) return;
+  const s: UrlState = {
+    options: { mu: ui.membersU.value, mv: ui.membersV.value, w: ui.width.value, t: ui.thickness.value,
+               ia: ui.anchors.value, unit: ui.unit.value, mat: ui.material.value },
+  };
+  if (state.source?.kind === 'example') s.example = state.source.name;
+  if (state.source?.kind === 'file' && state.source.hash) s.file = { name: state.source.name, hash: state.source.hash };
+  if (state.corners.length) s.corners = state.corners;
+  if (state.cornersLabel === 'auto') s.auto = true;
+  if (state.cornersLabel === 'example') s.suggested = true;
+  if (state.alphaDeg !== null) s.alpha = state.alphaDeg;
+  if (state.designWanted) s.design = true;
+  history.replaceState(null, '', `#${encodeState(s)}`);
+}
+
+async function restore(): Promise<void> {
+  const s = decodeState(location.hash);
+  const o = s.options;
+  const set = (input: HTMLInputElement | HTMLSelectElement, v: string | undefined) => { if (v !== undefined) input.value = v; };
+  set(ui.membersU, o['mu']); set(ui.membersV, o['mv']); set(ui.width, o['w']); set(ui.thickness, o['t']);
+  set(ui.anchors, o['ia']); set(ui.unit, o['unit']); set(ui.material, o['mat']);
+  if (s.file && !s.example) {
+    // The bytes of an uploaded file are not in the URL: ask for the file, restore when it comes.
+    pendingFileState = s;
+    ui.status.textContent = `Open ${s.file.name} again to restore its corners and options.`;
+    return;
+  }
+  if (!s.example) return;
+  restoring = true;
+  try {
+    ui.example.value = s.example;
+    if (!(await loadMesh({ example: s.example }, { kind: 'example', name: s.example }))) return;
+    await applyState(s);
+  } finally {
+    restoring = false;
+    saveUrl();
+  }
+}
+
+/** Corners, ᾱ and the design of a restored state, on the mesh just loaded. */
+async function applyState(s: UrlState): Promise<void> {
+  if (s.corners?.length === 4 || s.auto) {
+    state.corners = s.corners ?? [];
+    state.cornersLabel = s.auto ? 'auto' : s.suggested ? 'example' : '';
+    updateCorners();
+    if (s.alpha !== undefined) state.alphaDeg = s.alpha;
+    state.designWanted = s.design ?? false;
+    await computePatch();
+  } else if (s.corners) {
+    state.corners = s.corners;
+    updateCorners();
+  }
+}
+
+// ---- start ------------------------------------------------------------------------------------
+
+void (async () => {
+  await loadExamples();
+  await restore();
+  document.body.dataset['ready'] = '1';
+})();

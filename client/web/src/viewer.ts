@@ -1,0 +1,406 @@
+// The 3D view: the input mesh, four numbered corner markers, the trimmed patch with its Gaussian
+// curvature colours and boundary geodesics, the design on the surface (members, crossings,
+// anchors) and the deployed lamellas as boxes coloured by deviation or bending stress. Everything is drawn
+// relative to the mesh's bounding-box centre (computed in double precision), so architectural
+// coordinates far from the origin still render and pick precisely. Picking: three-mesh-bvh.
+// Renders on demand only (one frame per change), which matters with a software GL.
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { acceleratedRaycast, computeBoundsTree, disposeBoundsTree } from 'three-mesh-bvh';
+import type { Deployment, Design, Lamella } from './api';
+import { diverging, sequential } from './colormap';
+
+THREE.BufferGeometry.prototype.computeBoundsTree = computeBoundsTree;
+THREE.BufferGeometry.prototype.disposeBoundsTree = disposeBoundsTree;
+THREE.Mesh.prototype.raycast = acceleratedRaycast;
+
+export type Pick = { kind: 'surface'; vertex: number } | { kind: 'marker'; index: number };
+
+const MARKER_COLORS = [0xe6194b, 0x3cb44b, 0x4363d8, 0xf58231];
+
+function disposeTree(object: THREE.Object3D): void {
+  object.traverse((o) => {
+    const m = o as THREE.Mesh;
+    if (m.geometry) {
+      m.geometry.disposeBoundsTree?.();
+      m.geometry.dispose();
+    }
+    const mat = (m as { material?: THREE.Material | THREE.Material[] }).material;
+    if (Array.isArray(mat)) mat.forEach((x) => x.dispose());
+    else mat?.dispose();
+  });
+}
+
+export class Viewer {
+  readonly canvas: HTMLCanvasElement;
+  onPick: (pick: Pick) => void = () => {};
+  /** Milliseconds the last surface pick took (raycast + snap), for the page's status line. */
+  lastPickMs = 0;
+
+  private renderer: THREE.WebGLRenderer;
+  private scene = new THREE.Scene();
+  private camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1000);
+  private controls: OrbitControls;
+  private offset: [number, number, number] = [0, 0, 0];
+  private radius = 1;
+  private positions: Float32Array<ArrayBuffer> = new Float32Array(0);
+  private input: THREE.Mesh | null = null;
+  private markers = new THREE.Group();
+  private patch = new THREE.Group();
+  private design = new THREE.Group();
+  private deployment = new THREE.Group();
+  private frameRequested = false;
+  private down: { x: number; y: number } | null = null;
+
+  constructor(canvas: HTMLCanvasElement) {
+    this.canvas = canvas;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(Math.min(2, window.devicePixelRatio || 1));
+    this.renderer.setClearColor(0xf4f5f7, 1);
+    this.camera.up.set(0, 0, 1);
+    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.addEventListener('change', () => this.requestRender());
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8f99, 1.6));
+    const light = new THREE.DirectionalLight(0xffffff, 1.4);
+    light.position.set(0.5, 0.3, 1);
+    this.camera.add(light);
+    this.scene.add(this.camera, this.markers, this.patch, this.design, this.deployment);
+    new ResizeObserver(() => this.resize()).observe(canvas);
+    canvas.addEventListener('pointerdown', (e) => {
+      if (e.button === 0) this.down = { x: e.clientX, y: e.clientY };
+    });
+    canvas.addEventListener('pointerup', (e) => {
+      const d = this.down;
+      this.down = null;
+      if (!d || e.button !== 0 || Math.hypot(e.clientX - d.x, e.clientY - d.y) > 5) return;
+      const pick = this.pick(e.clientX, e.clientY);
+      if (pick) this.onPick(pick);
+    });
+    this.resize();
+  }
+
+  private resize(): void {
+    const w = Math.max(1, this.canvas.clientWidth);
+    const h = Math.max(1, this.canvas.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.requestRender();
+  }
+
+  requestRender(): void {
+    if (this.frameRequested) return;
+    this.frameRequested = true;
+    requestAnimationFrame(() => {
+      this.frameRequested = false;
+      this.renderer.render(this.scene, this.camera);
+      this.publishHooks();
+    });
+  }
+
+  /**
+   * Test hooks, after every frame: the markers' pixel positions (CSS pixels from the canvas's
+   * top left) as `data-markers` on the canvas, "x,y;x,y;...", corner 1 first; the layers drawn
+   * as `data-layers` ("mesh,markers,patch,design").
+   */
+  private publishHooks(): void {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    const spots: string[] = [];
+    for (const m of this.markers.children) {
+      if (!(m instanceof THREE.Mesh)) continue;
+      const p = m.position.clone().project(this.camera);
+      spots.push(`${((p.x + 1) / 2 * w).toFixed(1)},${((1 - p.y) / 2 * h).toFixed(1)}`);
+    }
+    this.canvas.dataset['markers'] = spots.join(';');
+    const layers: [string, THREE.Object3D | null][] = [['mesh', this.input], ['markers', this.markers], ['patch', this.patch],
+                                                       ['design', this.design], ['deployment', this.deployment]];
+    this.canvas.dataset['layers'] = layers.filter(([, o]) => o && o.visible && (o === this.input || o.children.length > 0))
+      .map(([name]) => name).join(',');
+  }
+
+  /** A Float32Array of `xyz` relative to the mesh's centre. */
+  private local(xyz: ArrayLike<number>): Float32Array<ArrayBuffer> {
+    const out = new Float32Array(xyz.length);
+    for (let i = 0; i < xyz.length; ++i) out[i] = xyz[i]! - this.offset[i % 3]!;
+    return out;
+  }
+
+  private localPoint(p: ArrayLike<number>): THREE.Vector3 {
+    return new THREE.Vector3(p[0]! - this.offset[0], p[1]! - this.offset[1], p[2]! - this.offset[2]);
+  }
+
+  /** The input mesh; clears everything else and recentres the camera on it. */
+  setMesh(positions: number[], indices: number[]): void {
+    this.clear();
+    const min = [Infinity, Infinity, Infinity];
+    const max = [-Infinity, -Infinity, -Infinity];
+    for (let i = 0; i < positions.length; ++i) {
+      const c = i % 3;
+      min[c] = Math.min(min[c]!, positions[i]!);
+      max[c] = Math.max(max[c]!, positions[i]!);
+    }
+    this.offset = [(min[0]! + max[0]!) / 2, (min[1]! + max[1]!) / 2, (min[2]! + max[2]!) / 2];
+    this.radius = Math.max(1e-9, Math.hypot(max[0]! - min[0]!, max[1]! - min[1]!, max[2]! - min[2]!) / 2);
+    this.positions = this.local(positions);
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(this.positions, 3));
+    geometry.setIndex(new THREE.BufferAttribute(Uint32Array.from(indices), 1));
+    geometry.computeVertexNormals();
+    geometry.computeBoundsTree();
+    const material = new THREE.MeshStandardMaterial({
+      color: 0xc9ccd3, roughness: 0.85, metalness: 0, side: THREE.DoubleSide, transparent: false, opacity: 1,
+      // Pushed back in depth: where the patch lies on it, the patch wins (no z-fighting).
+      polygonOffset: true, polygonOffsetFactor: 4, polygonOffsetUnits: 8,
+    });
+    this.input = new THREE.Mesh(geometry, material);
+    this.scene.add(this.input);
+    this.fit();
+  }
+
+  private fit(): void {
+    const r = this.radius;
+    this.camera.near = r / 200;
+    this.camera.far = r * 200;
+    this.camera.position.set(0.55, -1.25, 0.95).normalize().multiplyScalar(r * 2.7);
+    this.controls.target.set(0, 0, 0);
+    this.camera.updateProjectionMatrix();
+    this.controls.update();
+    this.requestRender();
+  }
+
+  private clear(): void {
+    for (const g of [this.markers, this.patch, this.design, this.deployment]) this.clearGroup(g);
+    if (this.input) {
+      this.scene.remove(this.input);
+      disposeTree(this.input);
+      this.input = null;
+    }
+  }
+
+  private clearGroup(group: THREE.Group): void {
+    for (const child of [...group.children]) {
+      group.remove(child);
+      disposeTree(child);
+    }
+    this.requestRender();
+  }
+
+  /** What is under the pixel: a marker first, else the nearest vertex of the hit face. */
+  pick(clientX: number, clientY: number): Pick | null {
+    const t0 = performance.now();
+    const rect = this.canvas.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - rect.left) / rect.width) * 2 - 1,
+                                  -((clientY - rect.top) / rect.height) * 2 + 1);
+    // Markers just placed have not been rendered yet: bring every world matrix up to date.
+    this.scene.updateMatrixWorld();
+    const raycaster = new THREE.Raycaster();
+    raycaster.setFromCamera(ndc, this.camera);
+    const markerHit = raycaster.intersectObjects(this.markers.children.filter((c) => c instanceof THREE.Mesh), false)[0];
+    if (markerHit) return { kind: 'marker', index: markerHit.object.userData['index'] as number };
+    if (!this.input) return null;
+    raycaster.firstHitOnly = true;
+    const hit = raycaster.intersectObject(this.input, false)[0];
+    if (!hit || !hit.face) return null;
+    const p = hit.point;
+    let best = hit.face.a;
+    let bestD = Infinity;
+    for (const v of [hit.face.a, hit.face.b, hit.face.c]) {
+      const d = Math.hypot(this.positions[3 * v]! - p.x, this.positions[3 * v + 1]! - p.y,
+                           this.positions[3 * v + 2]! - p.z);
+      if (d < bestD) {
+        bestD = d;
+        best = v;
+      }
+    }
+    this.lastPickMs = performance.now() - t0;
+    return { kind: 'surface', vertex: best };
+  }
+
+  /** Numbered markers at the corner vertices; `selected` is drawn larger. */
+  setCorners(vertices: number[], selected: number | null): void {
+    this.clearGroup(this.markers);
+    const r = this.radius * 0.025;
+    vertices.forEach((v, i) => {
+      const at = new THREE.Vector3(this.positions[3 * v]!, this.positions[3 * v + 1]!, this.positions[3 * v + 2]!);
+      const sphere = new THREE.Mesh(new THREE.SphereGeometry(i === selected ? r * 1.5 : r, 20, 12),
+                                    new THREE.MeshStandardMaterial({ color: MARKER_COLORS[i % 4]!, emissive: i === selected ? 0x444444 : 0 }));
+      sphere.position.copy(at);
+      sphere.userData['index'] = i;
+      this.markers.add(sphere);
+      const label = new THREE.Sprite(new THREE.SpriteMaterial({ map: digitTexture(i + 1), depthTest: false }));
+      label.position.copy(at).add(new THREE.Vector3(0, 0, r * 2.6));
+      label.scale.setScalar(r * 3);
+      label.renderOrder = 10;
+      this.markers.add(label);
+    });
+    this.requestRender();
+  }
+
+  /** The trimmed patch coloured by Gaussian curvature in [-range, range], and its four sides. */
+  setPatch(positions: number[], indices: number[], curvature: number[], range: number,
+           sides: number[][]): void {
+    this.clearGroup(this.patch);
+    this.clearGroup(this.design);
+    this.clearGroup(this.deployment);
+    const local = this.local(positions);
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(local, 3));
+    const colors = new Float32Array(local.length);
+    for (let v = 0; v < local.length / 3; ++v) colors.set(diverging(curvature[v] ?? 0, range), 3 * v);
+    geometry.setAttribute('color', new THREE.BufferAttribute(colors, 3));
+    geometry.setIndex(indices);
+    geometry.computeVertexNormals();
+    const surface = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({
+      vertexColors: true, roughness: 0.8, side: THREE.DoubleSide, transparent: false, opacity: 1,
+    }));
+    surface.name = 'patch-surface';
+    this.patch.add(surface);
+    const segments: number[] = [];
+    for (const side of sides)
+      for (let i = 0; i + 1 < side.length; ++i) {
+        const a = side[i]!, b = side[i + 1]!;
+        segments.push(local[3 * a]!, local[3 * a + 1]!, local[3 * a + 2]!, local[3 * b]!, local[3 * b + 1]!, local[3 * b + 2]!);
+      }
+    const lines = new THREE.BufferGeometry();
+    lines.setAttribute('position', new THREE.BufferAttribute(new Float32Array(segments), 3));
+    this.patch.add(new THREE.LineSegments(lines, new THREE.LineBasicMaterial({ color: 0x111111 })));
+    this.setInputFaded(true);
+    this.requestRender();
+  }
+
+  private setInputFaded(faded: boolean): void {
+    if (!this.input) return;
+    const m = this.input.material as THREE.MeshStandardMaterial;
+    m.opacity = faded ? 0.35 : 1;
+    m.transparent = faded;
+    m.depthWrite = !faded;
+    m.needsUpdate = true;
+    this.requestRender();
+  }
+
+  clearPatch(): void {
+    this.clearGroup(this.patch);
+    this.clearGroup(this.design);
+    this.clearGroup(this.deployment);
+    this.setInputFaded(false);
+  }
+
+  /** Members on the surface (g red, h blue, boundary black), crossings and anchors. */
+  setDesign(design: Design): void {
+    this.clearGroup(this.design);
+    this.clearGroup(this.deployment);
+    this.design.visible = true; // hidden while a deployment was shown
+    this.setPatchOpacity(1);
+    const families: Record<string, number[]> = { g: [], h: [], boundary: [] };
+    for (const m of design.members) {
+      const list = m.boundary ? families['boundary']! : families[m.family === 'g' ? 'g' : 'h']!;
+      for (let i = 0; i + 1 < m.surface.length; ++i) {
+        const a = this.localPoint(m.surface[i]!), b = this.localPoint(m.surface[i + 1]!);
+        list.push(a.x, a.y, a.z, b.x, b.y, b.z);
+      }
+    }
+    const colors: Record<string, number> = { g: 0xb2182b, h: 0x2166ac, boundary: 0x111111 };
+    for (const [k, list] of Object.entries(families)) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(list), 3));
+      this.design.add(new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: colors[k]!, depthTest: true })));
+    }
+    const crossing = new Float32Array(design.crossings.length * 3);
+    design.crossings.forEach((c, i) => crossing.set(this.localPoint(c.surface_point).toArray(), 3 * i));
+    const cg = new THREE.BufferGeometry();
+    cg.setAttribute('position', new THREE.BufferAttribute(crossing, 3));
+    this.design.add(new THREE.Points(cg, new THREE.PointsMaterial({ color: 0x222222, size: 4, sizeAttenuation: false })));
+    const r = this.radius * 0.012;
+    const anchors = new THREE.InstancedMesh(new THREE.BoxGeometry(r * 2, r * 2, r * 2),
+                                            new THREE.MeshStandardMaterial({ color: 0x1b7837 }), Math.max(1, design.anchors.length));
+    anchors.count = design.anchors.length;
+    const m = new THREE.Matrix4();
+    design.anchors.forEach((a, i) => anchors.setMatrixAt(i, m.makeTranslation(this.localPoint(a.position))));
+    this.design.add(anchors);
+    this.requestRender();
+  }
+
+  private setPatchOpacity(opacity: number): void {
+    const surface = this.patch.getObjectByName('patch-surface') as THREE.Mesh | undefined;
+    if (!surface) return;
+    const m = surface.material as THREE.MeshStandardMaterial;
+    m.opacity = opacity;
+    m.transparent = opacity < 1; // opaque: drawn first, hides the faded input mesh under it
+    m.depthWrite = opacity >= 1;
+    m.needsUpdate = true;
+  }
+
+  /**
+   * Deployed lamellas as boxes of the design's width and thickness (the cross-section spanned by
+   * `normal × tangent` and the material normal), coloured by `value(rod, vertex)` in [0, max]:
+   * the deviation of each vertex, or a per-lamella quantity (its largest bending stress).
+   */
+  setDeployment(deployment: Deployment, width: number, thickness: number, max: number,
+                value: (rod: Lamella, vertex: number) => number): void {
+    this.clearGroup(this.deployment);
+    this.design.visible = false;
+    this.setPatchOpacity(0.3);
+    const pos: number[] = [], col: number[] = [], idx: number[] = [];
+    const t = new THREE.Vector3(), n = new THREE.Vector3(), b = new THREE.Vector3(), h = new THREE.Vector3();
+    // The cross-section's corners as (±b, ±h) and its four faces as consecutive corner pairs.
+    const signs: [number, number][] = [[1, 1], [-1, 1], [-1, -1], [1, -1]];
+    for (const rod of deployment.rods) {
+      const pts = rod.centerline.map((p) => this.localPoint(p));
+      if (pts.length < 2) continue;
+      const corners: THREE.Vector3[][] = pts.map((p, i) => {
+        t.subVectors(pts[Math.min(pts.length - 1, i + 1)]!, pts[Math.max(0, i - 1)]!).normalize();
+        const nn = rod.normals[i];
+        n.set(nn?.[0] ?? 0, nn?.[1] ?? 0, nn?.[2] ?? 1);
+        b.crossVectors(t, n).normalize().multiplyScalar(width / 2);
+        h.copy(n).normalize().multiplyScalar(thickness / 2);
+        if (!Number.isFinite(b.x)) b.set(0, 0, 0);
+        if (!Number.isFinite(h.x)) h.set(0, 0, 0);
+        return signs.map(([sb, sh]) => p.clone().addScaledVector(b, sb).addScaledVector(h, sh));
+      });
+      for (let face = 0; face < 4; ++face) {
+        const base = pos.length / 3;
+        corners.forEach((c, i) => {
+          const a = c[face]!, d = c[(face + 1) % 4]!;
+          pos.push(a.x, a.y, a.z, d.x, d.y, d.z);
+          const colour = sequential(value(rod, i), max);
+          col.push(...colour, ...colour);
+          if (i + 1 < corners.length) {
+            const k = base + 2 * i;
+            idx.push(k, k + 1, k + 2, k + 1, k + 3, k + 2);
+          }
+        });
+      }
+    }
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
+    g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(col), 3));
+    g.setIndex(pos.length / 3 > 65535 ? new THREE.Uint32BufferAttribute(idx, 1) : new THREE.Uint16BufferAttribute(idx, 1));
+    g.computeVertexNormals();
+    this.deployment.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
+    this.requestRender();
+  }
+
+}
+
+const digitCache = new Map<number, THREE.Texture>();
+function digitTexture(n: number): THREE.Texture {
+  const cached = digitCache.get(n);
+  if (cached) return cached;
+  const canvas = document.createElement('canvas');
+  canvas.width = canvas.height = 64;
+  const ctx = canvas.getContext('2d')!;
+  ctx.fillStyle = 'rgba(255,255,255,0.9)';
+  ctx.beginPath();
+  ctx.arc(32, 32, 28, 0, Math.PI * 2);
+  ctx.fill();
+  ctx.fillStyle = '#111';
+  ctx.font = 'bold 40px sans-serif';
+  ctx.textAlign = 'center';
+  ctx.textBaseline = 'middle';
+  ctx.fillText(String(n), 32, 34);
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.colorSpace = THREE.SRGBColorSpace;
+  digitCache.set(n, texture);
+  return texture;
+}

@@ -1,0 +1,596 @@
+// End-to-end tests of the web page: a real gridshelld (started here on free loopback ports,
+// serving client/web/dist) and real headless Debian Chromium driven by playwright-core. One
+// browser page walks the whole flow in order, as a user would. Every wait is bounded; the
+// daemon and the browser are stopped at the end, also when a test fails.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn, spawnSync } from 'node:child_process';
+import { createRequire } from 'node:module';
+import { fileURLToPath } from 'node:url';
+import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { createHash } from 'node:crypto';
+import path from 'node:path';
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+const web = path.join(root, 'client/web');
+const { chromium } = createRequire(path.join(web, 'package.json'))('playwright-core');
+const daemonPath = process.env.GRIDSHELLD ?? path.join(root, 'build/gridshelld');
+const cliPath = process.env.GRIDSHELL ?? path.join(root, 'build/gridshell');
+const outDir = path.join(root, 'tests/web/out'); // screenshot, kept out of git
+
+let daemon, daemonLog = () => '', address, base, browser, page;
+const daemons = [];        // every gridshelld started, stopped in after()
+const allowedHosts = new Set();
+const consoleErrors = [];
+const foreignRequests = [];
+let allowHttpErrors = false; // while a test provokes a 4xx on purpose
+
+/** Waits until `predicate()` is truthy (polling), at most `ms`. */
+async function until(predicate, ms, what) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const v = await predicate();
+    if (v) return v;
+    if (Date.now() > end) throw new Error(`timed out after ${ms} ms waiting for ${what}`);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+}
+
+/** Starts gridshelld on free loopback ports serving the page; resolves when it listens. */
+async function startDaemon(extra) {
+  const proc = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', '127.0.0.1:0', '--static', path.join(web, 'dist'),
+                                  '--workers', '2', ...extra], { stdio: ['ignore', 'ignore', 'pipe'] });
+  let log = '';
+  proc.stderr.setEncoding('utf8');
+  proc.stderr.on('data', (d) => { log += d; });
+  const address = await until(() => {
+    const m = log.match(/"event":\s*"listening"[^\n]*?"http":\s*"([^"]+)"/) ??
+              log.match(/"http":\s*"([^"]+)"[^\n]*"event":\s*"listening"/);
+    if (proc.exitCode !== null) throw new Error(`gridshelld exited: ${log}`);
+    return m?.[1];
+  }, 20000, 'gridshelld to listen');
+  allowedHosts.add(address);
+  return { proc, address, log: () => log };
+}
+
+async function stopDaemon(proc) {
+  if (proc.exitCode !== null || proc.signalCode !== null) return;
+  proc.kill('SIGTERM');
+  const exited = await Promise.race([new Promise((r) => proc.once('exit', () => r(true))),
+                                     new Promise((r) => setTimeout(() => r(false), 5000))]);
+  if (!exited) proc.kill('SIGKILL');
+}
+
+const byId = (id) => page.getByTestId(id);
+const text = (id) => byId(id).textContent();
+
+before(async () => {
+  assert.ok(existsSync(daemonPath), `no daemon at ${daemonPath} (build it: bash scripts/build.sh)`);
+  assert.ok(existsSync(path.join(web, 'dist/index.html')), 'no client/web/dist (bash scripts/build-web.sh)');
+  ({ proc: daemon, address, log: daemonLog } = await startDaemon([]));
+  daemons.push(daemon);
+  base = `http://${address}/`;
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
+    args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--no-sandbox', '--headless',
+           '--disable-background-networking', '--disable-component-update', '--disable-sync',
+           '--no-first-run', '--disable-quic'], // Playwright gives it a fresh temporary profile
+    timeout: 30000,
+  });
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true });
+  // Traffic only to the daemon on loopback: anything else is recorded and refused.
+  await context.route('**/*', (route) => {
+    const url = new URL(route.request().url());
+    if (url.protocol === 'blob:' || url.protocol === 'data:' || allowedHosts.has(url.host)) return route.continue();
+    foreignRequests.push(url.href);
+    return route.abort();
+  });
+  page = await context.newPage();
+  page.setDefaultTimeout(20000);
+  page.on('console', (m) => {
+    if (m.type() !== 'error') return;
+    if (allowHttpErrors && /Failed to load resource: the server responded with a status of 4\d\d/.test(m.text())) return;
+    consoleErrors.push(m.text());
+  });
+  page.on('pageerror', (e) => consoleErrors.push(`pageerror: ${e.message}`));
+});
+
+after(async () => {
+  await browser?.close().catch(() => {});
+  await Promise.all(daemons.map(stopDaemon));
+});
+
+let exampleName;
+
+test('page loads, lists the examples, shows one (page-ready time)', async () => {
+  const t0 = Date.now();
+  await page.goto(base, { waitUntil: 'load' });
+  await until(() => page.evaluate(() => Number(document.querySelector('[data-testid=example-select]')?.dataset.loaded ?? 0)),
+              10000, 'the example list');
+  const options = await byId('example-select').locator('option').evaluateAll((os) => os.map((o) => o.value).filter(Boolean));
+  assert.ok(options.length >= 3, `examples: ${options}`);
+  // The daemon's own list, for comparison: the page shows all of them.
+  const listed = await (await fetch(base + 'v1/examples', { method: 'POST', body: '{}', headers: { 'Content-Type': 'application/json' } })).json();
+  assert.deepEqual(options, listed.examples.map((e) => e.name));
+  const smallest = listed.examples.reduce((a, b) => (b.vertices < a.vertices ? b : a));
+  exampleName = process.env.GRIDSHELL_WEB_EXAMPLE ?? (options.includes('double-vault') ? 'double-vault' : smallest.name);
+  await byId('example-select').selectOption(exampleName);
+  await page.waitForFunction(() => document.querySelector('[data-testid=mesh-info]')?.dataset.ready === '1', null, { timeout: 15000 });
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const ms = Date.now() - t0;
+  const inPage = await page.evaluate(() => ({
+    dom: Math.round(performance.getEntriesByType('navigation')[0].domContentLoadedEventEnd),
+    examples: document.querySelector('[data-testid=example-select]').dataset.loadedMs,
+    shown: document.querySelector('[data-testid=mesh-info]').dataset.readyMs,
+  }));
+  console.log(`# page ready (navigation -> example ${exampleName} shown): ${ms} ms; in the page: bundle ` +
+              `loaded ${inPage.dom} ms, examples listed ${inPage.examples} ms, example shown ${inPage.shown} ms`);
+  assert.match(await text('mesh-info'), new RegExp(`${exampleName}: \\d+ vertices, \\d+ faces`));
+});
+
+/** Fraction of canvas pixels that differ from the background colour. */
+async function canvasCoverage() {
+  return page.evaluate(() => {
+    const src = document.querySelector('[data-testid=viewer]');
+    const c = document.createElement('canvas');
+    c.width = 160; c.height = 100;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0, c.width, c.height);
+    const d = ctx.getImageData(0, 0, c.width, c.height).data;
+    const bg = [d[0], d[1], d[2]];
+    let differ = 0;
+    for (let i = 0; i < d.length; i += 4)
+      if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 30) ++differ;
+    return differ / (d.length / 4);
+  });
+}
+
+test('the mesh is drawn (canvas not blank)', async () => {
+  const coverage = await until(async () => { const v = await canvasCoverage(); return v > 0.05 ? v : 0; }, 5000, 'a drawn mesh');
+  assert.ok(coverage < 0.98, `coverage ${coverage}`);
+});
+
+test('Auto corners: the patch with η, corner angles, legend', async () => {
+  await byId('corners-auto').click();
+  await page.waitForFunction(() => document.querySelector('[data-testid=patch-info]')?.dataset.ready === '1', null, { timeout: 30000 });
+  const info = await text('patch-info');
+  assert.match(info, /η = \d\.\d{5}/);
+  assert.match(info, /corner angles: (\d+\.\d°(, )?){4}/);
+  assert.ok(await byId('legend').isVisible());
+  assert.match(await byId('legend').textContent(), /Gaussian curvature/);
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+  assert.match(await text('corners-info'), /\(auto\)/);
+});
+
+async function designCount() {
+  return Number(await byId('summary').getAttribute('data-designs') ?? 0);
+}
+
+let firstSummary;
+test('Design, then the ᾱ slider redesigns with the cached distance maps', async () => {
+  await byId('design').click();
+  await until(async () => (await designCount()) === 1, 60000, 'the first design');
+  firstSummary = await text('summary');
+  assert.match(firstSummary, /ᾱ = \d+\.\d°/);
+  const slider = byId('alpha-slider');
+  assert.ok(await slider.isEnabled());
+  const [min, max] = [Number(await slider.getAttribute('min')), Number(await slider.getAttribute('max'))];
+  assert.ok(min < max, `range ${min}..${max}`);
+  const target = Math.round((min + 0.5 * (max - min)) * 10) / 10;
+  await slider.fill(String(target));
+  await until(async () => (await designCount()) === 2, 60000, 'the redesign');
+  const summary = await text('summary');
+  assert.match(summary, new RegExp(`ᾱ = ${target.toFixed(1).replace('.', '\\.')}°`));
+  assert.match(summary, /distance maps cached: yes/);
+  assert.equal(await byId('summary').getAttribute('data-cached'), 'true');
+  assert.notEqual(summary, firstSummary);
+  await page.getByRole('button', { name: 'Plan (2D)' }).click();
+  await until(() => page.locator('#plan-img').evaluate((i) => i.complete && i.naturalWidth > 0), 5000, 'planar.svg shown');
+  const scale = () => page.locator('#plan-img').evaluate((i) => Number(/scale\(([\d.e+-]+)\)/.exec(i.style.transform)?.[1]));
+  await until(async () => (await scale()) > 0, 5000, 'the plan fitted');
+  const fitted = await scale();
+  const box = await byId('plan').boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.wheel(0, -300); // zoom in about the cursor
+  await until(async () => (await scale()) > fitted * 1.2, 5000, 'the plan zoomed in');
+  await page.getByRole('button', { name: '3D' }).click();
+});
+
+test('the state is in the URL: a reload restores the design, a second tab is independent', async () => {
+  const summary = await text('summary');
+  const hash = new URL(page.url()).hash;
+  assert.match(hash, new RegExp(`example=${exampleName}.*corners=\\d+%2C\\d+%2C\\d+%2C\\d+.*alpha=`));
+  const other = await page.context().newPage();
+  try {
+    await other.goto(base);
+    await until(() => other.evaluate(() => document.body.dataset.ready === '1'), 10000, 'the second tab');
+    assert.equal(await other.getByTestId('example-select').inputValue(), '');
+    assert.equal(await other.getByTestId('summary').textContent(), '');
+  } finally {
+    await other.close();
+  }
+  await page.reload();
+  await until(async () => (await designCount()) === 1, 60000, 'the restored design');
+  assert.equal(await byId('example-select').inputValue(), exampleName);
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+  const restored = await text('summary');
+  assert.equal(restored.split('\n')[0], summary.split('\n')[0]); // the same ᾱ line
+  assert.match(restored, /distance maps cached: yes/); // the daemon still has this patch's maps
+});
+
+/** design.json as `gridshell design MESH` writes it with the page's current options (corners
+ *  given as CLI flags, [] = the CLI's default: an example's own corners). */
+async function cliDesign(mesh, alphaDeg, cwd, corners = ['--corners', 'auto']) {
+  const flags = [];
+  for (const [id, flag] of [['members-u', '--members-u'], ['members-v', '--members-v'], ['lamella-width', '--lamella-width'],
+                            ['lamella-thickness', '--lamella-thickness'], ['interior-anchors', '--interior-anchors']])
+    flags.push(flag, await byId(id).inputValue());
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-cli-'));
+  try {
+    const alpha = alphaDeg === null ? [] : ['--alpha', `${alphaDeg}deg`]; // null: the default (min)
+    const r = spawnSync(cliPath, ['design', mesh, ...corners, ...alpha, ...flags, '--out', dir, '--quiet'],
+                        { cwd, encoding: 'utf8', timeout: 60000 });
+    assert.equal(r.status, 0, r.stderr);
+    return readFileSync(path.join(dir, 'design.json'));
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+/** Asserts the page's and the CLI's design.json are the same bytes (both kept in out/ if not). */
+function assertSameBytes(page, cli, name) {
+  if (!cli.equals(page)) {
+    mkdirSync(outDir, { recursive: true });
+    writeFileSync(path.join(outDir, `${name}.page.json`), page);
+    writeFileSync(path.join(outDir, `${name}.cli.json`), cli);
+  }
+  assert.ok(cli.equals(page), `design.json differs from the CLI's (${cli.length} vs ${page.length} bytes; see tests/web/out/${name}.*.json)`);
+}
+
+async function downloadJson(testid) {
+  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 10000 }), byId(testid).click()]);
+  const file = await download.path();
+  return { name: download.suggestedFilename(), bytes: readFileSync(file) };
+}
+
+test('design.json downloads, the same bytes as the CLI writes for the same inputs', async () => {
+  const { name, bytes } = await downloadJson('download-design');
+  assert.equal(name, 'design.json');
+  const design = JSON.parse(bytes.toString('utf8'));
+  assert.ok(Array.isArray(design.members) && design.members.length > 4);
+  const alpha = await byId('alpha-slider').inputValue();
+  assert.ok(Math.abs(design.alpha_bar * 180 / Math.PI - Number(alpha)) < 0.06);
+  assertSameBytes(bytes, await cliDesign(`example:${exampleName}`, Number(alpha), root), exampleName);
+});
+
+test('the example\'s suggested corners: a redesign from ᾱ min, design.json as the CLI\'s defaults', async () => {
+  assert.ok(await byId('corners-example').isEnabled());
+  const n = await designCount();
+  await byId('corners-example').click();
+  await until(async () => (await designCount()) === n + 1, 60000, 'the design on the suggested corners');
+  assert.match(await text('corners-info'), /corners \(example\): /);
+  const { bytes } = await downloadJson('download-design');
+  const design = JSON.parse(bytes.toString('utf8'));
+  assert.equal(design.options.corners, 'example');
+  assert.ok(Math.abs(design.alpha_bar - design.alpha_bar_range[0]) < 1e-12, 'ᾱ from the minimum again');
+  assertSameBytes(bytes, await cliDesign(`example:${exampleName}`, null, root, []), `${exampleName}-suggested`);
+});
+
+test('member counts redesign live; a bad option shows its field next to the controls', async () => {
+  const n = await designCount();
+  await byId('members-u').fill('6');
+  await until(async () => (await designCount()) === n + 1, 60000, 'the redesign with 6 g-members');
+  assert.match(await text('summary'), /members: 6 g × \d+ h inner/);
+  assert.match(await text('summary'), /distance maps cached: yes/);
+  allowHttpErrors = true;
+  try {
+    await byId('lamella-width').fill('-1');
+    await until(() => byId('error').isVisible(), 10000, 'the error of the bad width');
+  } finally {
+    allowHttpErrors = false;
+  }
+  assert.match(await text('error'), /options\.lamella_width: /);
+  assert.match(await page.locator('.field-error[data-for=options]').textContent(), /options\.lamella_width: /);
+  await byId('lamella-width').fill('0');
+  await until(async () => (await designCount()) === n + 2, 60000, 'the redesign after the fix');
+  assert.ok(await byId('error').isHidden());
+  assert.equal(await page.locator('.field-error[data-for=options]').textContent(), '');
+});
+
+test('Simulate: deployment with RMS, deployment.json downloads', async () => {
+  await byId('unit').selectOption('cm'); // a unit makes the stresses physical
+  await byId('simulate').click();
+  await until(async () => /RMS/.test(await text('summary')), 120000, 'the simulation');
+  const summary = await text('summary');
+  assert.match(summary, /with notches: RMS \d/);
+  assert.match(summary, /without notches: RMS \d/);
+  assert.match(summary, /max bending stress \d.* MPa.*unit cm/s);
+  assert.ok(await byId('deviation-legend').isVisible());
+  const { name, bytes } = await downloadJson('download-deployment');
+  assert.equal(name, 'deployment.json');
+  const dep = JSON.parse(bytes.toString('utf8'));
+  assert.ok(dep.rods.length > 0 && Number.isFinite(dep.rms_with_notches));
+  mkdirSync(outDir, { recursive: true });
+  await page.screenshot({ path: path.join(outDir, 'deployment.png') });
+  assert.ok((await canvasCoverage()) > 0.05, 'deployment drawn');
+  await byId('colour-by').selectOption('bending');
+  assert.match(await byId('deviation-legend').textContent(), /bending stress per lamella.*\d.* MPa/s);
+  await byId('colour-by').selectOption('deviation');
+  assert.match(await byId('deviation-legend').textContent(), /deviation from the target/);
+});
+
+test('Cancel stops a running simulation (the daemon cancels the job)', async () => {
+  const before = (daemonLog().match(/CANCELLED/g) ?? []).length;
+  await byId('simulate').click();
+  await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled');
+  await byId('cancel').click();
+  await until(async () => /simulate: cancelled/.test(await text('status')), 5000, 'the cancelled status');
+  assert.ok(await byId('cancel').isDisabled());
+  await until(() => (daemonLog().match(/CANCELLED/g) ?? []).length > before, 5000, 'the daemon to log the cancellation');
+  assert.ok(await byId('simulate').isEnabled(), 'the page stays usable');
+});
+
+test('a redesign after the simulation shows the design again, not the old deployment', async () => {
+  const layers = () => byId('viewer').getAttribute('data-layers');
+  assert.match(await layers(), /deployment/);
+  assert.doesNotMatch(await layers(), /design/);
+  const n = await designCount();
+  await byId('members-v').fill('7');
+  await until(async () => (await designCount()) === n + 1, 60000, 'the redesign');
+  await until(async () => (await layers()) === 'mesh,markers,patch,design', 5000, 'the design layers');
+  assert.ok(await byId('deviation-legend').isHidden());
+  assert.doesNotMatch(await text('summary'), /RMS/);
+});
+
+/** A small curved height field as OBJ (n x n vertices), optionally far from the origin. */
+function smallObj(n = 13, [ox, oy, oz] = [0, 0, 0]) {
+  const lines = ['# bump'];
+  for (let j = 0; j < n; ++j)
+    for (let i = 0; i < n; ++i) {
+      const x = i / (n - 1) * 10 - 5, y = j / (n - 1) * 10 - 5;
+      lines.push(`v ${x + ox} ${y + oy} ${(1.5 * Math.exp(-(x * x + y * y) / 20) + oz).toFixed(6)}`);
+    }
+  for (let j = 0; j + 1 < n; ++j)
+    for (let i = 0; i + 1 < n; ++i) {
+      const a = j * n + i + 1, b = a + 1, c = a + n, d = c + 1;
+      lines.push(`f ${a} ${b} ${d}`, `f ${a} ${d} ${c}`);
+    }
+  return Buffer.from(lines.join('\n') + '\n');
+}
+
+const sharedMeshes = path.join(process.env.GRIDSHELL_SHARED_DIR ?? path.join(root, '../shared'), 'meshes');
+
+test('a shared real mesh (knet1.obj) uploaded: Auto corners, design, slider; design.json as the CLI\'s', async () => {
+  const file = path.join(sharedMeshes, 'knet1.obj');
+  assert.ok(existsSync(file), `no ${file} (shared/meshes beside the repository)`);
+  await byId('mesh-input').setInputFiles(file);
+  await until(async () => /knet1\.obj: 441 vertices, 800 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the shared mesh');
+  assert.match(await text('mesh-info'), /loader: 400 polygons triangulated/); // knet1 is a quad mesh
+  await byId('corners-auto').click();
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'its patch');
+  const n = await designCount();
+  await byId('design').click();
+  await until(async () => (await designCount()) === n + 1, 60000, 'its design');
+  const slider = byId('alpha-slider');
+  const [min, max] = [Number(await slider.getAttribute('min')), Number(await slider.getAttribute('max'))];
+  const alpha = Math.round((min + 0.3 * (max - min)) * 10) / 10;
+  await slider.fill(String(alpha));
+  await until(async () => (await designCount()) === n + 2, 60000, 'its redesign');
+  assert.match(await text('summary'), /distance maps cached: yes/);
+  const { bytes } = await downloadJson('download-design');
+  assertSameBytes(bytes, await cliDesign('knet1.obj', alpha, sharedMeshes), 'knet1');
+});
+
+let clickedCorners;
+async function clickFourCorners(order = [[-1, 1], [1, 1], [1, -1], [-1, -1]]) {
+  const box = await byId('viewer').boundingBox();
+  // Around the middle of the surface as the default camera shows it (seen from the front, above).
+  const cx = box.x + box.width / 2, cy = box.y + box.height * 0.6, r = Math.min(box.width, box.height) * 0.1;
+  for (const [dx, dy] of order) {
+    await page.mouse.click(cx + dx * r, cy + dy * r);
+  }
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '4');
+}
+
+test('upload a small OBJ, click four corners on the canvas: the patch', async () => {
+  await byId('mesh-input').setInputFiles({ name: 'bump.obj', mimeType: 'text/plain', buffer: smallObj() });
+  await until(async () => /bump\.obj: 169 vertices, 288 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the uploaded mesh');
+  await clickFourCorners();
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch of the clicked corners');
+  clickedCorners = (await text('corners-info')).split('\n')[0];
+  assert.match(clickedCorners, /1→v\d+, 2→v\d+, 3→v\d+, 4→v\d+/);
+  assert.equal(new Set(clickedCorners.match(/v\d+/g)).size, 4);
+});
+
+test('click a marker, then the surface: the corner moves and the patch follows', async () => {
+  const before = await text('corners-info');
+  const patchBefore = await text('patch-info');
+  const markers = await until(async () => {
+    const m = await byId('viewer').getAttribute('data-markers');
+    return m && m.split(';').length === 4 ? m.split(';').map((p) => p.split(',').map(Number)) : null;
+  }, 5000, 'the four markers drawn');
+  const box = await byId('viewer').boundingBox();
+  await page.mouse.click(box.x + markers[0][0], box.y + markers[0][1]);
+  assert.match(await text('corners-info'), /moving corner 1/);
+  await page.mouse.click(box.x + box.width / 2, box.y + box.height * 0.6); // the middle of the surface
+  const after = await text('corners-info');
+  assert.notEqual(after.split('\n')[0], before.split('\n')[0]);
+  assert.equal(after.split(', ').slice(1).join(), before.split('\n')[0].split(', ').slice(1).join()); // 2..4 stay
+  await until(async () => (await text('patch-info')) !== patchBefore && /η = /.test(await text('patch-info')), 30000, 'the new patch');
+});
+
+test('an uploaded mesh in the URL: after a reload, opening the same file restores its corners', async () => {
+  const corners = (await text('corners-info')).split('\n')[0];
+  const hash = new URL(page.url()).hash;
+  const digest = createHash('sha256').update(smallObj()).digest('hex').slice(0, 16);
+  assert.match(hash, new RegExp(`file=bump\\.obj&sha256=${digest}&corners=`));
+  await page.reload();
+  await until(async () => /Open bump\.obj again/.test(await text('status')), 10000, 'the request to open the file again');
+  await byId('mesh-input').setInputFiles({ name: 'bump.obj', mimeType: 'text/plain', buffer: smallObj() });
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the restored patch');
+  assert.equal((await text('corners-info')).split('\n')[0], corners);
+  assert.equal(new URL(page.url()).hash, hash);
+});
+
+test('far from the origin (UTM-like coordinates): the same view, the same picked vertices', async () => {
+  const shifted = smallObj(13, [2500000, 5600000, 300]);
+  await byId('mesh-input').setInputFiles({ name: 'utm.obj', mimeType: 'text/plain', buffer: shifted });
+  await until(async () => /utm\.obj: 169 vertices/.test(await text('mesh-info')), 15000, 'the shifted mesh');
+  await clickFourCorners();
+  assert.equal((await text('corners-info')).split('\n')[0], clickedCorners);
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch far from the origin');
+});
+
+test('corners in a bow-tie order: the infeasible patch\'s reason next to the corners', async () => {
+  await byId('corners-clear').click();
+  allowHttpErrors = true; // the 422
+  try {
+    await clickFourCorners([[-1, 1], [1, -1], [1, 1], [-1, -1]]);
+    await until(() => byId('error').isVisible(), 30000, 'the infeasible patch');
+  } finally {
+    allowHttpErrors = false;
+  }
+  assert.match(await text('error'), /FAILED_PRECONDITION.*corners: .*not a simple quadrilateral/s);
+  assert.match(await page.locator('.field-error[data-for=corners]').textContent(), /^corners: .*cross/);
+  assert.equal(await text('patch-info'), '');
+  assert.ok(await byId('legend').isHidden());
+  assert.ok(await byId('design').isDisabled());
+});
+
+/** A binary STL of an n x n height field: 2 (n-1)^2 triangles. */
+function bigStl(n) {
+  const tris = 2 * (n - 1) * (n - 1);
+  const buf = Buffer.alloc(84 + 50 * tris);
+  buf.writeUInt32LE(tris, 80);
+  const z = (x, y) => 3 * Math.sin(x / 7) * Math.cos(y / 9);
+  let o = 84;
+  const put = (...p) => { for (const v of p) { buf.writeFloatLE(v, o); o += 4; } };
+  for (let j = 0; j + 1 < n; ++j)
+    for (let i = 0; i + 1 < n; ++i) {
+      const a = [i, j, z(i, j)], b = [i + 1, j, z(i + 1, j)], c = [i, j + 1, z(i, j + 1)], d = [i + 1, j + 1, z(i + 1, j + 1)];
+      for (const t of [[a, b, d], [a, d, c]]) { put(0, 0, 0); for (const p of t) put(...p); o += 2; }
+    }
+  return buf;
+}
+
+test('a 250k-triangle STL loads and picks (times printed)', async () => {
+  const stl = bigStl(355); // 250,632 triangles, 12.5 MB
+  const t0 = Date.now();
+  await byId('mesh-input').setInputFiles({ name: 'big.stl', mimeType: 'application/octet-stream', buffer: stl });
+  await until(async () => /big\.stl: 126025 vertices, 250632 faces \(stl\)/.test(await text('mesh-info')), 60000, 'the big mesh');
+  console.log(`# 250k-triangle STL: upload + load + BVH + first frame ${Date.now() - t0} ms`);
+  const box = await byId('viewer').boundingBox();
+  const times = [];
+  for (const [i, [dx, dy]] of [[0, 0], [-0.1, 0.05], [0.1, 0.05], [0.05, -0.05]].entries()) {
+    await page.mouse.click(box.x + box.width * (0.5 + dx), box.y + box.height * (0.6 + dy));
+    const ms = await byId('corners-info').getAttribute('data-pick-ms');
+    assert.ok(ms !== null && Number.isFinite(Number(ms)), 'a surface pick');
+    times.push(Number(ms));
+    assert.equal(await byId('corners-info').getAttribute('data-count'), String(i + 1));
+  }
+  console.log(`# pick on 250k triangles (raycast + snap): ${times.map((t) => t.toFixed(1)).join(', ')} ms`);
+  // Its patch takes long (geodesics on 126k vertices): Cancel stops it in the daemon.
+  const cancelled = (daemonLog().match(/CANCELLED/g) ?? []).length;
+  await until(() => byId('cancel').isEnabled(), 5000, 'Cancel enabled during the patch');
+  // Progress from the kernel's SSE stream: stage name and percentage, the bar moving.
+  await until(async () => /^patch: .+ \(\d+%\)$/.test(await text('status')), 10000, 'patch progress');
+  await byId('cancel').click();
+  await until(async () => /patch: cancelled/.test(await text('status')), 5000, 'the cancelled patch');
+  await until(() => (daemonLog().match(/CANCELLED/g) ?? []).length > cancelled, 5000, 'the daemon to cancel the patch');
+});
+
+test('drag and drop of a mesh file loads it', async () => {
+  const dataTransfer = await page.evaluateHandle((obj) => {
+    const dt = new DataTransfer();
+    dt.items.add(new File([obj], 'dropped.obj', { type: 'text/plain' }));
+    return dt;
+  }, smallObj(7).toString());
+  await page.dispatchEvent('#drop', 'drop', { dataTransfer });
+  await until(async () => /dropped\.obj: 49 vertices, 72 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the dropped mesh');
+  assert.equal(await byId('corners-info').getAttribute('data-count'), '0');
+});
+
+test('a mesh the loader repairs: its repairs and warnings, as the daemon reports them', async () => {
+  const lines = [];
+  for (let j = 0; j < 5; ++j) for (let i = 0; i < 5; ++i) lines.push(`v ${i} ${j} ${0.1 * i * j}`);
+  lines.push('v 9 9 9', 'v 0 0 0'); // an isolated vertex, a duplicate of vertex 1
+  for (let j = 0; j < 4; ++j) for (let i = 0; i < 4; ++i) { const a = j * 5 + i + 1; lines.push(`f ${a} ${a + 1} ${a + 6} ${a + 5}`); }
+  lines.push('f 1 2 2'); // degenerate
+  const bytes = Buffer.from(lines.join('\n') + '\n');
+  const loaded = await (await fetch(base + 'v1/load', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ mesh: { file: bytes.toString('base64'), format: 'obj' } }),
+  })).json();
+  assert.equal(loaded.report.warnings.length, 3, JSON.stringify(loaded.report));
+  await byId('mesh-input').setInputFiles({ name: 'repairs.obj', mimeType: 'text/plain', buffer: bytes });
+  await until(async () => /repairs\.obj: 25 vertices, 32 faces/.test(await text('mesh-info')), 15000, 'the repaired mesh');
+  assert.match(await text('mesh-info'), /loader: 16 polygons triangulated, 1 duplicate vertices merged, 1 degenerate faces removed, 1 isolated vertices removed/);
+  const shown = await text('warnings');
+  for (const w of loaded.report.warnings) assert.ok(shown.includes(w), `warning shown: ${w}\n${shown}`);
+});
+
+test('a broken mesh file shows the daemon\'s error with its field', async () => {
+  const broken = Buffer.from('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n');
+  const direct = await (await fetch(base + 'v1/load', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ mesh: { name: 'broken.obj', file: broken.toString('base64'), format: 'obj' } }),
+  })).json();
+  assert.ok(direct.error?.message, JSON.stringify(direct));
+  allowHttpErrors = true;
+  try {
+    await byId('mesh-input').setInputFiles({ name: 'broken.obj', mimeType: 'text/plain', buffer: broken });
+    await until(() => byId('error').isVisible(), 10000, 'the error message');
+  } finally {
+    allowHttpErrors = false;
+  }
+  const shown = await text('error');
+  assert.ok(shown.includes(direct.error.message), `page: ${shown}\ndaemon: ${direct.error.message}`);
+  if (direct.error.field) assert.ok(shown.includes(direct.error.field), shown);
+  const slot = await page.locator('.field-error[data-for=mesh]').textContent();
+  assert.ok(slot.includes(direct.error.message), `next to the file input: ${slot}`);
+  // The page stays usable: the previous mesh is still there.
+  assert.match(await text('mesh-info'), /repairs\.obj/);
+});
+
+test('a daemon with a token: the page asks for it and keeps it in sessionStorage only', async () => {
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-token-'));
+  const token = 'web-e2e-' + Math.random().toString(36).slice(2);
+  writeFileSync(path.join(dir, 'token'), token + '\n', { mode: 0o600 });
+  const other = await startDaemon(['--token-file', path.join(dir, 'token')]);
+  daemons.push(other.proc);
+  const tab = await page.context().newPage();
+  allowHttpErrors = true; // the 401 before the token is given
+  try {
+    await tab.goto(`http://${other.address}/`);
+    await until(() => tab.locator('#token-box').isVisible(), 10000, 'the token field');
+    assert.match(await tab.getByTestId('error').textContent(), /UNAUTHENTICATED/);
+    await tab.locator('#token').fill(token);
+    await tab.locator('#token-save').click();
+    await until(() => tab.evaluate(() => Number(document.querySelector('[data-testid=example-select]').dataset.loaded ?? 0)),
+                10000, 'the examples with the token');
+    assert.equal(await tab.evaluate(() => sessionStorage.getItem('gridshell.token')), token);
+    assert.equal(await tab.evaluate(() => localStorage.length), 0);
+    assert.ok(!tab.url().includes(token));
+  } finally {
+    allowHttpErrors = false;
+    await tab.close();
+    await stopDaemon(other.proc);
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('no console errors, no traffic off loopback', () => {
+  assert.deepEqual(consoleErrors, []);
+  assert.deepEqual(foreignRequests, []);
+});
+
+// Last: stopping the daemon makes Chromium log the refused connection, after the check above.
+test('the daemon gone: a message, and the page stays', async () => {
+  await stopDaemon(daemon);
+  await byId('corners-auto').click();
+  await until(() => byId('error').isVisible(), 10000, 'the error');
+  assert.match(await text('error'), /UNAVAILABLE.*cannot be reached/);
+  assert.match(await text('mesh-info'), /repairs\.obj/);
+  assert.ok((await canvasCoverage()) > 0.05, 'the view is still drawn');
+});

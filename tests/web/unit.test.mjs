@@ -1,0 +1,119 @@
+// Unit tests of the page's pure code (client/web/src/format.ts, colormap.ts): bundled on the fly
+// with the esbuild that Vite brings (no second TypeScript toolchain), then run with node:test.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { createRequire } from 'node:module';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+import { mkdtempSync, writeFileSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+
+const web = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../client/web');
+const esbuild = createRequire(path.join(web, 'package.json'))('esbuild');
+
+async function load(entry) {
+  const out = await esbuild.build({ entryPoints: [path.join(web, entry)], bundle: true, format: 'esm', write: false, platform: 'neutral' });
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-unit-'));
+  const file = path.join(dir, 'm.mjs');
+  writeFileSync(file, out.outputFiles[0].text);
+  try { return await import(pathToFileURL(file).href); } finally { rmSync(dir, { recursive: true, force: true }); }
+}
+
+const f = await load('src/format.ts');
+const c = await load('src/colormap.ts');
+
+test('slider range rounds the feasible range inward', () => {
+  const r = f.sliderRange([1.0, 1.5]);
+  assert.deepEqual(r, [57.3, 85.9]); // 57.2958 -> 57.3, 85.9437 -> 85.9
+  assert.ok(r[0] >= 1.0 * 180 / Math.PI && r[1] <= 1.5 * 180 / Math.PI);
+  assert.equal(f.sliderRange([]), null);
+  assert.equal(f.sliderRange([1, Number.NaN]), null);
+  assert.equal(f.sliderRange([1.00001, 1.00002]), null); // narrower than a step
+});
+
+test('alpha option is degrees with the deg suffix', () => {
+  assert.equal(f.alphaOption(70), '70deg');
+  assert.equal(f.alphaOption(70.123456), '70.1235deg');
+});
+
+test('stresses: MPa with a unit, marked scaled without one', () => {
+  assert.equal(f.stress(18.6e6, { options: { unit: 'm' } }), '18.6 MPa');
+  assert.equal(f.stress(0.5, { options: { unit: '' } }), '0.5 (scaled: unit unknown)');
+});
+
+test('errors go next to the control their field names', () => {
+  assert.equal(f.errorSlot('load', 'mesh.indices[3]'), 'mesh');
+  assert.equal(f.errorSlot('load', ''), 'mesh');
+  assert.equal(f.errorSlot('patch', 'corners.vertices[2]'), 'corners');
+  assert.equal(f.errorSlot('design', 'options.alpha'), 'options.alpha');
+  assert.equal(f.errorSlot('design', 'options.members_u'), 'options');
+  assert.equal(f.errorSlot('simulate', 'options.material'), 'simulation');
+  assert.equal(f.errorSlot('simulate', 'design.members[4]'), 'options');
+});
+
+test('URL state round-trips', () => {
+  const s = { example: 'double-vault', corners: [1, 20, 300, 4000], alpha: 71.5, design: true, options: { mu: '5', mat: 'steel' } };
+  const back = f.decodeState('#' + f.encodeState(s));
+  assert.deepEqual(back, s);
+  const up = { file: { name: 'my mesh.obj', hash: '0123456789abcdef' }, corners: [1, 2, 3, 4], options: {} };
+  assert.deepEqual(f.decodeState('#' + f.encodeState(up)), up);
+  assert.deepEqual(f.decodeState('#file=x.obj&sha256=nothex'), { options: {} });
+  assert.deepEqual(f.decodeState('#corners=1,x,3'), { options: {} });
+  assert.deepEqual(f.decodeState(''), { options: {} });
+});
+
+test('colour maps: ends, middle, clamping, robust range', () => {
+  assert.deepEqual(c.diverging(0, 1).map((x) => x.toFixed(2)), ['0.97', '0.97', '0.97']);
+  assert.ok(c.diverging(-1, 1)[2] > c.diverging(-1, 1)[0]); // blue for negative
+  assert.ok(c.diverging(1, 1)[0] > c.diverging(1, 1)[2]); // red for positive
+  assert.deepEqual(c.diverging(5, 1), c.diverging(1, 1));
+  assert.deepEqual(c.sequential(Number.NaN, 1), c.sequential(0, 1));
+  const values = Array.from({ length: 100 }, (_, i) => (i % 2 ? 1 : -1) * 0.01);
+  values.push(1e6); // one spike must not flatten the map
+  assert.equal(c.symmetricRange(values), 0.01);
+  assert.equal(c.symmetricRange([0, 0]), 1e-12);
+  assert.equal(c.formatNumber(0.000123), '1.23e-4');
+  assert.equal(c.formatNumber(12.5), '12.5');
+  assert.equal(c.formatNumber(1.5), '1.5');
+  assert.equal(c.formatNumber(100), '100');
+  assert.equal(c.formatNumber(2000), '2000');
+  assert.equal(c.formatNumber(-0.25), '-0.25');
+});
+
+const api = await load('src/api.ts');
+
+function streamOf(chunks) {
+  const enc = new TextEncoder();
+  return new ReadableStream({ start(c) { for (const x of chunks) c.enqueue(enc.encode(x)); c.close(); } });
+}
+
+test('SSE: progress events, then the result, across arbitrary chunk boundaries', async () => {
+  const text = 'event: progress\ndata: {"stage":"distance maps","fraction":0.5,"message":""}\n\n' +
+               'event: progress\ndata: {"stage":"grid: crossings","fraction":1,"message":"x"}\n\n' +
+               'event: result\ndata: {"design":{"alpha":1.5}}\n\n';
+  for (const cut of [1, 7, 50, 90, text.length - 3]) {
+    const seen = [];
+    const result = await api.readEvents(streamOf([text.slice(0, cut), text.slice(cut)]), (p) => seen.push(p.stage));
+    assert.deepEqual(result, { design: { alpha: 1.5 } });
+    assert.deepEqual(seen, ['distance maps', 'grid: crossings']);
+  }
+});
+
+test('SSE: an error event becomes an ApiError with its field; a cut stream is UNAVAILABLE', async () => {
+  const err = 'event: error\ndata: {"error":{"code":9,"status":"FAILED_PRECONDITION","field":"options.alpha","message":"no feasible angle"}}\n\n';
+  await assert.rejects(api.readEvents(streamOf([err]), () => {}), (e) => {
+    assert.ok(e instanceof api.ApiError);
+    assert.equal(e.status, 'FAILED_PRECONDITION');
+    assert.equal(e.describe(), 'options.alpha: no feasible angle');
+    return true;
+  });
+  await assert.rejects(api.readEvents(streamOf(['event: progress\ndata: {"stage":"a","fraction":0}\n\n']), () => {}),
+                       (e) => e.status === 'UNAVAILABLE');
+});
+
+test('base64 both ways, also past one 32 KiB chunk', () => {
+  const bytes = new Uint8Array(100000).map((_, i) => (i * 7919) & 255);
+  const text = api.bytesToBase64(bytes);
+  assert.equal(text, Buffer.from(bytes).toString('base64'));
+  assert.deepEqual(api.base64ToBytes(text), bytes);
+});
