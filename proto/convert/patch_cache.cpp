@@ -102,6 +102,7 @@ std::size_t memory_bytes(const PatchWork& work) {
   for (const DistanceMap* map : {&work.maps.g, &work.maps.h})
     bytes += heap(static_cast<std::size_t>(map->distances.size()) * sizeof(double));
   bytes += 96 * work.target.stage_seconds.size();  // map nodes with their strings
+  if (work.members) bytes += heap(sizeof(MemberMemo)) + work.members->max_bytes();  // its bound
   return bytes;
 }
 

@@ -425,7 +425,12 @@ Design design_with_cache(PatchCache& cache, const DesignInputs& in, const Progre
         const auto start = std::chrono::steady_clock::now();
         TargetPatch target = make_target_patch(in.mesh, in.corners, in.options.patch, progress);
         patch_seconds = seconds_since(start);
-        return prepare_patch_work(std::move(target), in.options, progress);
+        PatchWork work = prepare_patch_work(std::move(target), in.options, progress);
+        // Room for the members of a few designs (a design's are a few hundred KB on the
+        // examples), counted with the entry from the start.
+        work.members =
+            std::make_shared<MemberMemo>(std::max<std::size_t>(2u << 20, memory_bytes(work)));
+        return work;
       },
       cached, progress);
   DesignOptions options = in.options;

@@ -69,9 +69,33 @@ TEST(PatchCache, CachedRedesignIsByteIdenticalToAnUncachedOne) {
   EXPECT_EQ(counts.report().members_g(), cold.report().members_g() - 1);
   EXPECT_EQ(counts.report().members_h(), cold.report().members_h() + 1);
   EXPECT_EQ(design_json(counts), design_json(run_design(request, {}, {1})));
+  // One family's count changed alone: the other family's members come from the patch's member
+  // memo. Then an angle visited before: every member from it. The same bytes as fresh designs.
+  const DesignInputs in = prepare_design(request);
+  bool hit = false;
+  const auto work = cache.get(
+      patch_key(in.mesh, in.corners, in.options), [] { return PatchWork{}; }, &hit);
+  ASSERT_TRUE(hit && work->members);
+  std::uint64_t found = work->members->hits();
+  request.mutable_options()->set_members_u(cold.report().members_g() - 2);  // g: new positions
+  request.mutable_options()->set_members_v(0);  // h: automatic at ᾱ_min, as in the cold design
+  const v1::DesignResult one = run_design(request, {}, with_cache(cache));
+  EXPECT_GE(work->members->hits() - found, static_cast<std::uint64_t>(cold.report().members_h()))
+      << "the h-members of the cold design (and g-members that earlier designs had too)";
+  EXPECT_EQ(design_json(one), design_json(run_design(request, {}, {1})));
+  found = work->members->hits();
+  request.mutable_options()->set_members_u(0);
+  request.mutable_options()->set_alpha(std::to_string(lo + 0.3 * (hi - lo)));
+  const v1::DesignResult again = run_design(request, {}, with_cache(cache));
+  EXPECT_EQ(work->members->hits() - found,
+            static_cast<std::uint64_t>(again.report().members_g() + again.report().members_h()));
+  EXPECT_EQ(design_json(again), design_json(run_design(request, {}, {1})));
+  EXPECT_LE(work->members->bytes(), work->members->max_bytes());
+  EXPECT_GT(work->members->size(), 0u);
+
   const PatchCache::Stats stats = cache.stats();
   EXPECT_EQ(stats.misses, 1u);
-  EXPECT_EQ(stats.hits, 3u);
+  EXPECT_EQ(stats.hits, 6u);
   EXPECT_EQ(stats.entries, 1u);
   EXPECT_GT(stats.bytes, 0u);
 }

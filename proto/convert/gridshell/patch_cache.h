@@ -31,8 +31,9 @@ struct PatchKey {
 PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
                    const DesignOptions& options);
 
-/// Bytes a PatchWork holds (the patch mesh with its topology, the maps, the reports): what the
-/// cache counts against its bound.
+/// Bytes a PatchWork holds (the patch mesh with its topology, the maps, the reports, and the
+/// bound of its member memo, which fills as designs on the patch are made): what the cache counts
+/// against its bound.
 std::size_t memory_bytes(const PatchWork& work);
 
 /// A bounded least-recently-used cache of PatchWork, safe to use from many threads. A key is
