@@ -426,10 +426,12 @@ Design design_with_cache(PatchCache& cache, const DesignInputs& in, const Progre
         TargetPatch target = make_target_patch(in.mesh, in.corners, in.options.patch, progress);
         patch_seconds = seconds_since(start);
         PatchWork work = prepare_patch_work(std::move(target), in.options, progress);
-        // Room for the members of a few designs (a design's are a few hundred KB on the
-        // examples), counted with the entry from the start.
-        work.members =
-            std::make_shared<MemberMemo>(std::max<std::size_t>(2u << 20, memory_bytes(work)));
+        // Room for the members of a few designs: 2 MiB (a design's members are a few hundred
+        // KB on the examples) plus a quarter of the patch mesh's bytes, since members grow with
+        // the mesh, not with the maps; counted with the entry from the start.
+        const std::size_t maps =
+            (work.maps.g.distances.size() + work.maps.h.distances.size()) * sizeof(double);
+        work.members = std::make_shared<MemberMemo>((2u << 20) + (memory_bytes(work) - maps) / 4);
         return work;
       },
       cached, progress);
