@@ -172,6 +172,8 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
   if (o.queue < 0 || o.queue > 100000) throw InvalidInput("--queue", "must be 0..100000");
   if (o.request_threads < 0 || o.request_threads > 1024)
     throw InvalidInput("--request-threads", "must be 0..1024");
+  if (o.redesign_threads < 0 || o.redesign_threads > 1024)
+    throw InvalidInput("--redesign-threads", "must be 0..1024");
   if (o.progress_interval_ms < 0 || o.progress_interval_ms > 60000)
     throw InvalidInput("--progress-interval-ms", "must be 0..60000");
   if (o.max_message_mib < 1 || o.max_message_mib > 2047)
@@ -205,6 +207,7 @@ void Daemon::start() {
   RunSettings settings;
   settings.patch_cache = o.cache_mib > 0 ? d.patch_cache.get() : nullptr;
   settings.threads = o.request_threads;
+  settings.redesign_threads = o.redesign_threads;
   d.methods = make_methods(settings);
   d.service = std::make_unique<GridshellService>(*d.queue, d.methods, d.token);
 
@@ -281,7 +284,9 @@ void Daemon::start() {
          {"token", !d.token.empty()},
          {"workers", d.queue->stats().workers},
          {"queue", o.queue},
-         {"request_threads", o.request_threads}});
+         {"request_threads", o.request_threads},
+         {"redesign_threads", o.redesign_threads},
+         {"cache_mib", o.cache_mib}});
 }
 
 int Daemon::grpc_port() const { return impl_->grpc_port; }

@@ -20,6 +20,10 @@ struct DaemonOptions {
   /// Kernel threads inside one request. 1: the pool already keeps every core busy with
   /// concurrent requests, and more would oversubscribe them. Results do not depend on it.
   int request_threads = 1;
+  /// Kernel threads of a redesign on a cached patch (ᾱ or member counts changed: the grid stage
+  /// only, a client waiting for it while a slider moves); 0 = all cores. Short bursts, so they
+  /// may take the cores of the pool for a moment. Results do not depend on it.
+  int redesign_threads = 0;
   int progress_interval_ms = 100;  ///< progress events per request and stage at most this often
   int max_message_mib = 256;       ///< largest gRPC message, either direction
   /// Largest HTTP request body. 32 MiB holds a 250k-triangle mesh as an ASCII OBJ sent as file

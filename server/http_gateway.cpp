@@ -341,8 +341,11 @@ class HttpGateway::Impl::Session final : public SessionBase,
   }
 
   std::string too_large_message() const {
-    return "request body larger than the limit of " + std::to_string(gateway_.options.body_limit) +
-           " bytes (--http-body-limit-mib)";
+    const std::size_t limit = gateway_.options.body_limit;
+    return "request body larger than the limit of " +
+           (limit % (1u << 20) == 0 ? std::to_string(limit >> 20) + " MiB"
+                                    : std::to_string(limit) + " bytes") +
+           " (gridshelld --http-body-limit-mib)";
   }
 
   bool authorized(const http::request<http::string_body>& request) const {

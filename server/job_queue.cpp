@@ -1,6 +1,9 @@
 #include "job_queue.h"
 
 #include <algorithm>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <ctime>
 #include <new>
 #include <nlohmann/json.hpp>
@@ -262,6 +265,12 @@ void JobQueue::work() {
       }
     }
     finish(job, std::move(status), std::move(result), Count::Running);
+#ifdef __GLIBC__
+    // Hand the request's freed memory back to the system: glibc keeps it in the worker's arena
+    // otherwise, and a daemon whose cache evicts multi-MiB maps would hold about 1.5x its cache
+    // bound in RSS (measured: docs/benchmarks.md). After the answer, so nobody waits for it.
+    malloc_trim(0);
+#endif
   }
 }
 

@@ -34,6 +34,9 @@ int main(int argc, char** argv) {
   app.add_option("--request-threads", options.request_threads,
                  "kernel threads per request (0 = all cores)")
       ->capture_default_str();
+  app.add_option("--redesign-threads", options.redesign_threads,
+                 "kernel threads of a redesign on a cached patch (0 = all cores)")
+      ->capture_default_str();
   app.add_option("--progress-interval-ms", options.progress_interval_ms,
                  "progress events per request and stage at most this often (0 = all)")
       ->capture_default_str();

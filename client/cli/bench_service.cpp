@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -66,7 +67,8 @@ std::string read_all(const std::string& path) {
 /// gridshelld as a child process, its log in a file.
 class Daemon {
  public:
-  explicit Daemon(const std::string& log_path) : log_path_(log_path) {
+  explicit Daemon(const std::string& log_path, std::vector<std::string> extra = {})
+      : log_path_(log_path) {
     std::error_code ec;
     const fs::path self = fs::read_symlink("/proc/self/exe", ec);
     const std::string binary = (self.parent_path() / "gridshelld").string();
@@ -77,8 +79,13 @@ class Daemon {
     if (pid_ == 0) {
       const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       dup2(fd, STDERR_FILENO);
-      execl(binary.c_str(), binary.c_str(), "--listen", "127.0.0.1:0", "--no-http", "--queue", "64",
-            static_cast<char*>(nullptr));
+      std::vector<std::string> args{binary,      "--listen", "127.0.0.1:0",
+                                    "--no-http", "--queue",  "64"};
+      args.insert(args.end(), extra.begin(), extra.end());
+      std::vector<char*> argv;
+      for (std::string& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      execv(binary.c_str(), argv.data());
       _exit(127);
     }
     for (int i = 0; i < 3000 && address_.empty(); ++i) {
@@ -108,6 +115,15 @@ class Daemon {
     return 0;
   }
   std::string log() const { return read_all(log_path_); }
+  /// CPU time of the daemon so far (all its threads, exited ones included), in s; 10 ms ticks.
+  double cpu_seconds() const {
+    std::istringstream stat(read_all("/proc/" + std::to_string(pid_) + "/stat"));
+    std::string field;
+    double ticks = 0;
+    for (int k = 1; stat >> field && k <= 15; ++k)
+      if (k >= 14) ticks += std::stod(field);  // utime, stime (the name has no spaces)
+    return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+  }
 
  private:
   std::string log_path_;
@@ -354,7 +370,176 @@ int bench_service(const std::string& out, bool no_write, int repeats) {
   return 0;
 }
 
+int bench_interactive(const std::string& out, bool no_write, const std::string& server,
+                      int request_threads, int redesign_threads) {
+  const std::string dir =
+      (fs::temp_directory_path() / ("gridshell-bench-" + std::to_string(getpid()))).string();
+  fs::create_directories(dir);
+  std::optional<Daemon> daemon;
+  std::string address = server;
+  if (address.empty()) {
+    daemon.emplace(
+        dir + "/gridshelld.log",
+        std::vector<std::string>{"--request-threads", std::to_string(request_threads),
+                                 "--redesign-threads", std::to_string(redesign_threads)});
+    address = daemon->address();
+  }
+  RemoteOptions options;
+  options.server = address;
+  RemoteClient client(options);
+  std::cerr << "bench interactive: gridshelld on " << address << "\n";
+
+  struct Timed {
+    double daemon = 0, wall = 0;
+  };
+  // One design: the daemon's own time (report.seconds: run_design, conversions included) and
+  // the client's wall time.
+  auto design = [&](const v1::DesignRequest& request, v1::DesignResult* result) {
+    const auto t0 = Clock::now();
+    *result = client.design(request);
+    return Timed{result->report().seconds(), seconds_since(t0)};
+  };
+  std::ostringstream rows;
+  const double load_start = [] {
+    std::ifstream in("/proc/loadavg");
+    double load = -1;
+    in >> load;
+    return load;
+  }();
+  constexpr int kAlphas = 10, kCounts = 5;
+  std::vector<double> all_warm;
+  std::vector<std::string> names = example_names();
+  names.resize(std::min<std::size_t>(names.size(), 7));  // the seven paper-like ones come first
+  for (const std::string& name : names) {
+    const ExampleSurface example = make_example(name);
+    v1::DesignRequest request;
+    // The mesh by name: the daemon builds it, as the web page's example list does.
+    request.mutable_mesh()->set_example(name);
+    *request.mutable_corners() = to_proto(CornerSpec::at_vertices(example.corners), "example");
+    // Connected to a daemon that has designed this example before, the cold design is a cache
+    // hit: the table says so.
+    v1::DesignResult result;
+    const Timed cold = design(request, &result);
+    const bool cold_cached = result.report().distance_maps_cached();
+    const double lo = result.design().alpha_bar_range(0), hi = result.design().alpha_bar_range(1);
+    const int g = result.report().members_g(), h = result.report().members_h();
+    std::vector<double> alpha_daemon, alpha_wall, count_daemon, count_wall, grid_s;
+    int infeasible = 0, not_cached = 0;
+    // The daemon's CPU time over the warm ᾱ designs (only for a daemon started here): unlike
+    // wall clock it does not grow with the load of the shared machine.
+    const double cpu_start = daemon ? daemon->cpu_seconds() : 0;
+    auto warm = [&](const v1::DesignRequest& changed, std::vector<double>& d,
+                    std::vector<double>& w) {
+      try {
+        v1::DesignResult r;
+        const Timed t = design(changed, &r);
+        d.push_back(t.daemon);
+        w.push_back(t.wall);
+        all_warm.push_back(t.daemon);
+        const auto& stages = r.report().stage_seconds();
+        if (stages.count("grid")) grid_s.push_back(stages.at("grid"));
+        not_cached += !r.report().distance_maps_cached();
+      } catch (const std::exception& e) {
+        ++infeasible;  // e.g. members that cross twice at this angle: the page shows the reason
+        std::cerr << "bench interactive: " << name << ": " << e.what() << "\n";
+      }
+    };
+    for (int k = 0; k < kAlphas; ++k) {
+      v1::DesignRequest changed = request;
+      char alpha[64];
+      std::snprintf(alpha, sizeof alpha, "%.17g", lo + (k + 0.5) / kAlphas * (hi - lo));
+      changed.mutable_options()->set_alpha(alpha);
+      std::cerr << "bench interactive: " << name << " alpha " << alpha << "\n";
+      warm(changed, alpha_daemon, alpha_wall);
+    }
+    const double alpha_cpu =
+        daemon && !alpha_daemon.empty()
+            ? (daemon->cpu_seconds() - cpu_start) / static_cast<double>(alpha_daemon.size())
+            : 0;
+    const std::array<std::array<int, 2>, kCounts> counts{
+        {{g - 1, h}, {g, h - 1}, {g - 1, h - 1}, {g - 2, h}, {g, h - 2}}};  // fewer always fit
+    for (const auto& [u, v] : counts) {
+      v1::DesignRequest changed = request;
+      changed.mutable_options()->set_members_u(std::max(u, 1));
+      changed.mutable_options()->set_members_v(std::max(v, 1));
+      std::cerr << "bench interactive: " << name << " members " << u << " x " << v << "\n";
+      warm(changed, count_daemon, count_wall);
+    }
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "| %s | %d | %d + %d | %.3f / %.3f%s | %.3f / %.3f | %.3f | %.3f / %.3f | %.3f | "
+                  "%.1fx | %d |\n",
+                  name.c_str(), result.report().patch_vertices(), g, h, cold.daemon, cold.wall,
+                  cold_cached ? " (cached!)" : "", median(alpha_daemon), median(alpha_wall),
+                  alpha_cpu, median(count_daemon), median(count_wall), median(grid_s),
+                  median(alpha_daemon) > 0 ? cold.daemon / median(alpha_daemon) : 0.0,
+                  infeasible + not_cached);
+    rows << line;
+    std::cerr << line;
+  }
+  const double load_end = [] {
+    std::ifstream in("/proc/loadavg");
+    double load = -1;
+    in >> load;
+    return load;
+  }();
+  std::ostringstream table;
+  char line[512];
+  table << "## Interactive redesign through gridshelld (the web page's slider)\n\n"
+        << "Measured " << today() << " on " << cpu_name() << ", "
+        << std::thread::hardware_concurrency() << " hardware threads (shared machine). "
+        << (server.empty()
+                ? "gridshelld started by the benchmark on loopback (gRPC) with "
+                  "--request-threads " +
+                      std::to_string(request_threads) + " --redesign-threads " +
+                      std::to_string(redesign_threads) + " (0 = all cores), cache 512 MiB"
+                : "gridshelld at " + server)
+        << ". Per example (default options, R = 100): one cold design (ᾱ = ᾱ_min, the patch and "
+           "its distance maps computed and cached), then ᾱ moved "
+        << kAlphas << " times across the feasible range and the member counts changed " << kCounts
+        << " times (1 or 2 fewer in one or both families) on the same patch, each a separate "
+           "Design call. *daemon* is "
+           "the daemon's own time for the request (report.seconds: conversion, design, views), "
+           "*wall* the client's, in seconds; warm values are medians. *CPU* is the daemon's CPU "
+           "time per warm ᾱ "
+           "design (mean over them, all threads: the cost without the other processes of the "
+           "shared machine; an idle machine's wall time is about CPU / threads for the parallel "
+           "member solves). *grid* is the median grid "
+           "stage of the warm designs (member solves, crossings), *cold / warm* the cold daemon "
+           "time over the median warm ᾱ daemon time. *failed* counts warm designs that were "
+           "infeasible or missed the cache (both should be 0).\n\n"
+        << "| example | patch vertices | members g + h (cold) | cold daemon / wall s | warm ᾱ "
+           "daemon / wall s | warm ᾱ CPU s | warm counts daemon / wall s | grid s | cold / warm | "
+           "failed |\n"
+        << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        << rows.str();
+  std::snprintf(line, sizeof line,
+                "\nMedian warm redesign over all examples: %.3f s daemon time (max of the "
+                "per-example medians is what the 0.1 s target is about).\n",
+                median(all_warm));
+  table << line;
+  std::snprintf(line, sizeof line,
+                "\n1-minute load average of the shared machine: %.2f at the start, %.2f at the "
+                "end.\n",
+                load_start, load_end);
+  table << line;
+  table << "\nCommand: `gridshell bench interactive"
+        << (request_threads != 1 ? " --request-threads " + std::to_string(request_threads) : "")
+        << (redesign_threads != 0 ? " --redesign-threads " + std::to_string(redesign_threads) : "")
+        << "`\n";
+  publish_section(out, "interactive", table.str(), no_write);
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+  return 0;
+}
+
 #else
+
+int bench_interactive(const std::string&, bool, const std::string&, int, int) {
+  throw InvalidInput("",
+                     "bench interactive: this gridshell was built without gRPC "
+                     "(GRIDSHELL_BUILD_SERVER=OFF)");
+}
 
 int bench_service(const std::string&, bool, int) {
   throw InvalidInput("",

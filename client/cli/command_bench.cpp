@@ -39,6 +39,9 @@ struct BenchArguments {
   bool no_write = false;
   int repeats = 3;
   std::vector<double> edges{1, 2, 3, 4};
+  std::string server;        // interactive: an existing gridshelld instead of a new one
+  int request_threads = 1;   // interactive: --request-threads of the daemon it starts
+  int redesign_threads = 0;  // interactive: --redesign-threads of the daemon it starts
 };
 
 /// CPU time of the whole process (all threads) in s.
@@ -279,9 +282,11 @@ Command add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArguments>();
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
-  sub->add_option("WHAT", args->what, "geodesic | design | simulate | resolution | service")
+  sub->add_option("WHAT", args->what,
+                  "geodesic | design | simulate | resolution | service | interactive")
       ->required()
-      ->check(CLI::IsMember({"geodesic", "design", "simulate", "resolution", "service"}));
+      ->check(CLI::IsMember(
+          {"geodesic", "design", "simulate", "resolution", "service", "interactive"}));
   sub->add_option("--edges", args->edges,
                   "rod edges per interval between crossings to compare (resolution)")
       ->delimiter(',')
@@ -297,8 +302,17 @@ Command add_bench_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--out", args->out, "markdown file to update")->capture_default_str();
   sub->add_flag("--no-write", args->no_write, "print only");
+  sub->add_option("--server", args->server,
+                  "interactive: gridshelld at HOST:PORT (default: start one on loopback)");
+  sub->add_option("--request-threads", args->request_threads,
+                  "interactive: kernel threads per request of the daemon it starts (0 = all)")
+      ->capture_default_str();
   sub->add_option("--repeats", args->repeats,
                   "runs per example (design, simulate); rounds of all client levels (service)")
+      ->capture_default_str();
+  sub->add_option(
+         "--redesign-threads", args->redesign_threads,
+         "interactive: kernel threads of a warm redesign in the daemon it starts (0 = all)")
       ->capture_default_str();
   return [args] {
     if (args->sources < 1) throw InvalidInput("--sources", "must be at least 1");
@@ -313,6 +327,14 @@ Command add_bench_command(CLI::App& app) {
       return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
     }
     if (args->what == "service") return bench_service(args->out, args->no_write, args->repeats);
+    if (args->what == "interactive") {
+      if (args->request_threads < 0 || args->request_threads > 1024)
+        throw InvalidInput("--request-threads", "must be 0..1024");
+      if (args->redesign_threads < 0 || args->redesign_threads > 1024)
+        throw InvalidInput("--redesign-threads", "must be 0..1024");
+      return bench_interactive(args->out, args->no_write, args->server, args->request_threads,
+                               args->redesign_threads);
+    }
     return args->what == "design" ? bench_design(*args) : bench_geodesic(*args);
   };
 }

@@ -75,5 +75,9 @@ Command add_health_command(CLI::App& app);
 /// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client
 /// count; the table goes to section "service" of `out`.
 int bench_service(const std::string& out, bool no_write, int repeats);
+/// `gridshell bench interactive` (bench_service.cpp): cold design then warm redesigns (ᾱ, member
+/// counts) of the seven examples through gridshelld; `server` empty = start one.
+int bench_interactive(const std::string& out, bool no_write, const std::string& server,
+                      int request_threads, int redesign_threads);
 
 }  // namespace gridshell::cli

@@ -108,8 +108,8 @@ Design design_on_patch(const PatchWork& work, const DesignOptions& options,
   design.stage_seconds["members"] = seconds_since(start);
 
   start = std::chrono::steady_clock::now();
-  design.grid =
-      build_grid(patch, solver, design.planar, g_members, h_members, options.grid, progress);
+  design.grid = build_grid(patch, solver, design.planar, g_members, h_members, options.grid,
+                           progress, work.members.get());
   design.anchors = place_anchors(patch, design.grid, options.anchors);
   design.stage_seconds["grid"] = seconds_since(start);
   return design;

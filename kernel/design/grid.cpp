@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <sstream>
 #include <unordered_map>
@@ -160,10 +161,66 @@ double refine_end(const DistanceField& field, const TriangleMesh& mesh,
 
 }  // namespace
 
+MemberMemo::Key MemberMemo::key(Family family, const MemberPosition& position,
+                                const PlanarPatch& planar, double length_tolerance) {
+  Key key;
+  key.family = static_cast<int>(family);
+  std::array<double, 12> values{position.u1, position.u2, length_tolerance, 0};
+  for (int c = 0; c < 4; ++c) {
+    values[4 + 2 * c] = planar.corners[c].x();
+    values[5 + 2 * c] = planar.corners[c].y();
+  }
+  std::memcpy(key.bits.data(), values.data(), sizeof values);
+  return key;
+}
+
+std::size_t MemberMemo::member_bytes(const Member& member) {
+  return sizeof(Member) + 64 + member.surface_path.capacity() * sizeof(SurfacePoint) +
+         member.surface.capacity() * sizeof(Vec3);
+}
+
+std::optional<Member> MemberMemo::find(const Key& key) const {
+  std::lock_guard lock(mutex_);
+  const auto it = members_.find(key);
+  if (it == members_.end()) return std::nullopt;
+  ++hits_;
+  return it->second;
+}
+
+void MemberMemo::insert(const Key& key, const Member& member) {
+  const std::size_t bytes = member_bytes(member);
+  std::lock_guard lock(mutex_);
+  if (bytes > max_bytes_ || members_.count(key)) return;
+  members_.emplace(key, member);
+  order_.push_back(key);
+  bytes_ += bytes;
+  while (bytes_ > max_bytes_ && !order_.empty()) {
+    const auto it = members_.find(order_.front());
+    bytes_ -= member_bytes(it->second);
+    members_.erase(it);
+    order_.pop_front();
+  }
+}
+
+std::size_t MemberMemo::bytes() const {
+  std::lock_guard lock(mutex_);
+  return bytes_;
+}
+
+std::size_t MemberMemo::size() const {
+  std::lock_guard lock(mutex_);
+  return members_.size();
+}
+
+std::uint64_t MemberMemo::hits() const {
+  std::lock_guard lock(mutex_);
+  return hits_;
+}
+
 Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPatch& planar,
                 const std::vector<MemberPosition>& g_members,
                 const std::vector<MemberPosition>& h_members, const GridOptions& options,
-                const Progress& progress) {
+                const Progress& progress, MemberMemo* memo) {
   const TriangleMesh& mesh = patch.mesh;
   const MeshTopology& topology = mesh.topology();
   Grid grid;
@@ -221,6 +278,15 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         const auto [f, k] = jobs[job];
         const Family family = static_cast<Family>(f);
         const MemberPosition& pos = (*positions[f])[k];
+        std::optional<MemberMemo::Key> key;
+        if (memo) {
+          key = MemberMemo::key(family, pos, planar, options.length_tolerance);
+          if (std::optional<Member> known = memo->find(*key)) {
+            known->index = k + 1;  // the same member may have another rank in another design
+            (*families[f])[k + 1] = std::move(*known);
+            return;
+          }
+        }
         Member m;
         m.family = family;
         m.index = k + 1;
@@ -235,6 +301,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         m.planar = {planar_boundary_point(planar, family, 0, m.u_start),
                     planar_boundary_point(planar, family, 1, m.u_end)};
         m.planar_length = (m.planar[1] - m.planar[0]).norm();
+        if (memo) memo->insert(*key, m);
         (*families[f])[k + 1] = std::move(m);
       },
       progress, parallel);

@@ -1,7 +1,11 @@
 #include "gridshell/patch_cache.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <vector>
+
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell {
 namespace {
@@ -66,59 +70,107 @@ PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
   return key;
 }
 
+namespace {
+
+/// Heap bytes of one allocation of `n` bytes: glibc's chunk (8 bytes of header, 16-byte
+/// alignment, 32 at least). Tens of thousands of small vectors (a vertex's faces) make this
+/// overhead a third of their size.
+std::size_t heap(std::size_t n) {
+  return n == 0 ? 0 : std::max<std::size_t>(32, (n + 8 + 15) & ~std::size_t{15});
+}
+
+template <class T>
+std::size_t heap(const std::vector<T>& v) {
+  return heap(v.capacity() * sizeof(T));
+}
+
+}  // namespace
+
 std::size_t memory_bytes(const PatchWork& work) {
   const Patch& patch = work.target.patch;
   const TriangleMesh& mesh = patch.mesh;
-  std::size_t bytes = sizeof(PatchWork);
-  bytes += mesh.vertices().capacity() * sizeof(Vec3) + mesh.faces().capacity() * sizeof(Face);
+  std::size_t bytes = heap(sizeof(PatchWork)) + 16;  // + the shared_ptr's control block
+  bytes += heap(mesh.vertices()) + heap(mesh.faces());
   const MeshTopology& topology = mesh.topology();
-  bytes += topology.face_neighbors.capacity() * sizeof(topology.face_neighbors[0]);
-  bytes += topology.is_boundary_vertex.capacity();
-  for (const auto& faces : topology.vertex_faces)
-    bytes += sizeof(faces) + faces.capacity() * sizeof(int);
-  for (const auto& loop : topology.boundary_loops)
-    bytes += sizeof(loop) + loop.capacity() * sizeof(int);
-  for (const auto& side : patch.sides) bytes += side.capacity() * sizeof(int);
-  bytes += patch.input_vertex.capacity() * sizeof(int);
+  bytes += heap(sizeof(MeshTopology)) + 16;
+  bytes += heap(topology.face_neighbors) + heap(topology.is_boundary_vertex);
+  bytes += heap(topology.vertex_faces) + heap(topology.boundary_loops);
+  for (const auto& faces : topology.vertex_faces) bytes += heap(faces);
+  for (const auto& loop : topology.boundary_loops) bytes += heap(loop);
+  for (const auto& side : patch.sides) bytes += heap(side);
+  bytes += heap(patch.input_vertex);
   for (const DistanceMap* map : {&work.maps.g, &work.maps.h})
-    bytes += static_cast<std::size_t>(map->distances.size()) * sizeof(double);
-  bytes += 64 * work.target.stage_seconds.size();
+    bytes += heap(static_cast<std::size_t>(map->distances.size()) * sizeof(double));
+  bytes += 96 * work.target.stage_seconds.size();  // map nodes with their strings
+  if (work.members) bytes += heap(sizeof(MemberMemo)) + work.members->max_bytes();  // its bound
   return bytes;
 }
 
 PatchCache::PatchCache(std::size_t max_bytes) { stats_.max_bytes = max_bytes; }
 
 std::shared_ptr<const PatchWork> PatchCache::get(const PatchKey& key,
-                                                 const std::function<PatchWork()>& make,
-                                                 bool* hit) {
-  {
-    std::lock_guard lock(mutex_);
-    const auto it = index_.find(key);
-    if (it != index_.end()) {
-      lru_.splice(lru_.begin(), lru_, it->second);  // now the most recent
-      ++stats_.hits;
-      if (hit) *hit = true;
-      return it->second->work;
+                                                 const std::function<PatchWork()>& make, bool* hit,
+                                                 const Progress& progress) {
+  using Result = std::shared_ptr<const PatchWork>;
+  for (;;) {
+    std::promise<Result> promise;
+    {
+      std::unique_lock lock(mutex_);
+      const auto it = index_.find(key);
+      if (it != index_.end()) {
+        lru_.splice(lru_.begin(), lru_, it->second);  // now the most recent
+        ++stats_.hits;
+        if (hit) *hit = true;
+        return it->second->work;
+      }
+      const auto pending = computing_.find(key);
+      if (pending != computing_.end()) {
+        // Another request computes it: wait for its result (checking our own cancellation).
+        const std::shared_future<Result> future = pending->second;
+        lock.unlock();
+        while (future.wait_for(std::chrono::milliseconds(20)) != std::future_status::ready)
+          progress.check();
+        try {
+          Result work = future.get();
+          std::lock_guard relock(mutex_);
+          ++stats_.hits;
+          if (hit) *hit = true;
+          return work;
+        } catch (const Cancelled&) {
+          continue;  // that request was cancelled, not this one: compute it here
+        }
+      }
+      ++stats_.misses;
+      computing_.emplace(key, promise.get_future().share());
     }
-    ++stats_.misses;
+    if (hit) *hit = false;
+    Result work;
+    try {
+      work = std::make_shared<const PatchWork>(make());  // outside the lock: seconds of work
+    } catch (...) {
+      std::lock_guard lock(mutex_);
+      computing_.erase(key);
+      promise.set_exception(std::current_exception());
+      throw;
+    }
+    const std::size_t bytes = memory_bytes(*work);
+    std::lock_guard lock(mutex_);
+    computing_.erase(key);
+    promise.set_value(work);
+    if (bytes > stats_.max_bytes || index_.count(key)) return work;
+    lru_.push_front({key, work, bytes});
+    index_[key] = lru_.begin();
+    stats_.bytes += bytes;
+    while (stats_.bytes > stats_.max_bytes && !lru_.empty()) {
+      const Entry& last = lru_.back();
+      stats_.bytes -= last.bytes;
+      index_.erase(last.key);
+      lru_.pop_back();
+      ++stats_.evictions;
+    }
+    stats_.entries = lru_.size();
+    return work;
   }
-  if (hit) *hit = false;
-  auto work = std::make_shared<const PatchWork>(make());  // outside the lock: seconds of work
-  const std::size_t bytes = memory_bytes(*work);
-  std::lock_guard lock(mutex_);
-  if (bytes > stats_.max_bytes || index_.count(key)) return work;
-  lru_.push_front({key, work, bytes});
-  index_[key] = lru_.begin();
-  stats_.bytes += bytes;
-  while (stats_.bytes > stats_.max_bytes && !lru_.empty()) {
-    const Entry& last = lru_.back();
-    stats_.bytes -= last.bytes;
-    index_.erase(last.key);
-    lru_.pop_back();
-    ++stats_.evictions;
-  }
-  stats_.entries = lru_.size();
-  return work;
 }
 
 PatchCache::Stats PatchCache::stats() const {

@@ -417,7 +417,7 @@ namespace {
 /// make_design with the patch work from (or into) the cache: the same design, without the
 /// patch stage and the maps when another design on this patch computed them.
 Design design_with_cache(PatchCache& cache, const DesignInputs& in, const Progress& progress,
-                         bool* cached) {
+                         int redesign_threads, bool* cached) {
   double patch_seconds = 0;
   const std::shared_ptr<const PatchWork> work = cache.get(
       patch_key(in.mesh, in.corners, in.options),
@@ -425,10 +425,19 @@ Design design_with_cache(PatchCache& cache, const DesignInputs& in, const Progre
         const auto start = std::chrono::steady_clock::now();
         TargetPatch target = make_target_patch(in.mesh, in.corners, in.options.patch, progress);
         patch_seconds = seconds_since(start);
-        return prepare_patch_work(std::move(target), in.options, progress);
+        PatchWork work = prepare_patch_work(std::move(target), in.options, progress);
+        // Room for the members of a few designs: 2 MiB (a design's members are a few hundred
+        // KB on the examples) plus a quarter of the patch mesh's bytes, since members grow with
+        // the mesh, not with the maps; counted with the entry from the start.
+        const std::size_t maps =
+            (work.maps.g.distances.size() + work.maps.h.distances.size()) * sizeof(double);
+        work.members = std::make_shared<MemberMemo>((2u << 20) + (memory_bytes(work) - maps) / 4);
+        return work;
       },
-      cached);
-  Design design = design_on_patch(*work, in.options, progress);
+      cached, progress);
+  DesignOptions options = in.options;
+  if (*cached && redesign_threads >= 0) options.grid.threads = redesign_threads;
+  Design design = design_on_patch(*work, options, progress);
   design.stage_seconds["patch"] = patch_seconds;
   design.stage_seconds["distance_maps"] = *cached ? 0.0 : work->maps_seconds;
   if (*cached)
@@ -503,7 +512,8 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     in.options.patch.coverability.threads = settings.threads;
     bool cached = false;
     const Design design = settings.patch_cache
-                              ? design_with_cache(*settings.patch_cache, in, progress, &cached)
+                              ? design_with_cache(*settings.patch_cache, in, progress,
+                                                  settings.redesign_threads, &cached)
                               : make_design(in.mesh, in.corners, in.options, progress);
     in.record.set_lamella_width(design.lamella_width);
     in.record.set_lamella_thickness(design.lamella_thickness);

@@ -244,5 +244,45 @@ TEST(Gridshelld, RefusesAnExposedAddressWithoutTls) {
   EXPECT_EQ(log.rfind("error: --listen: 0.0.0.0:0 is not a loopback address", 0), 0u) << log;
 }
 
+/// The HTTP port from the "listening" line, waiting for it up to 30 s; 0 if none.
+int http_port_of(const DaemonProcess& daemon) {
+  for (int i = 0; i < 3000; ++i) {
+    std::smatch match;
+    const std::string log = read_text(daemon.log_path);
+    if (std::regex_search(log, match, std::regex("\"http\":\"[0-9.]+:([0-9]+)\"")))
+      return std::stoi(match[1]);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return 0;
+}
+
+TEST(Gridshelld, StaticFolderFlagAndNoStatic) {
+  const std::string site = testing::temp_dir();
+  testing::write_text(site, "index.html", "<!doctype html><title>page</title>");
+  {
+    DaemonProcess daemon({"--listen", "127.0.0.1:0", "--http", "127.0.0.1:0", "--static", site});
+    const int port = http_port_of(daemon);
+    ASSERT_GT(port, 0) << read_text(daemon.log_path);
+    const auto reply = testing::http_request(port, "GET", "/");
+    EXPECT_EQ(reply.status, 200);
+    EXPECT_EQ(reply.body, "<!doctype html><title>page</title>");
+  }
+  {
+    DaemonProcess daemon(
+        {"--listen", "127.0.0.1:0", "--http", "127.0.0.1:0", "--static", site, "--no-static"});
+    const int port = http_port_of(daemon);
+    ASSERT_GT(port, 0) << read_text(daemon.log_path);
+    EXPECT_EQ(testing::http_request(port, "GET", "/").status, 404);
+    EXPECT_EQ(testing::http_request(port, "GET", "/index.html").status, 404);
+    EXPECT_EQ(testing::http_request(port, "GET", "/healthz").status, 200);
+  }
+  // An explicit folder must exist.
+  DaemonProcess missing(
+      {"--listen", "127.0.0.1:0", "--http", "127.0.0.1:0", "--static", site + "/nothing-here"});
+  EXPECT_EQ(missing.wait(), 2);
+  EXPECT_NE(read_text(missing.log_path).find("--static"), std::string::npos)
+      << read_text(missing.log_path);
+}
+
 }  // namespace
 }  // namespace gridshell

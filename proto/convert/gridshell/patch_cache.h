@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <future>
 #include <list>
 #include <map>
 #include <memory>
@@ -30,13 +31,14 @@ struct PatchKey {
 PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
                    const DesignOptions& options);
 
-/// Bytes a PatchWork holds (the patch mesh with its topology, the maps, the reports): what the
-/// cache counts against its bound.
+/// Bytes a PatchWork holds (the patch mesh with its topology, the maps, the reports, and the
+/// bound of its member memo, which fills as designs on the patch are made): what the cache counts
+/// against its bound.
 std::size_t memory_bytes(const PatchWork& work);
 
-/// A bounded least-recently-used cache of PatchWork, safe to use from many threads. Two
-/// requests for a missing key at the same time both compute it (the work is deterministic, so
-/// either result is the same); the cache keeps one.
+/// A bounded least-recently-used cache of PatchWork, safe to use from many threads. A key is
+/// computed once: requests for a key that is being computed wait for that result (a second tab on
+/// the same patch, a slider moved before the first design ended) instead of computing it again.
 class PatchCache {
  public:
   /// `max_bytes` 0 = the cache keeps nothing.
@@ -44,9 +46,12 @@ class PatchCache {
 
   /// The cached work for `key`, or the result of `make()` (then cached, evicting the least
   /// recently used entries while the total exceeds the bound; an entry larger than the bound is
-  /// returned but not kept). `*hit` says which. Exceptions of `make` pass through.
+  /// returned but not kept). `*hit` says which (true also when the work came from another
+  /// request's computation). Exceptions of `make` pass through, to the waiters too, except
+  /// Cancelled: a waiter whose computing request was cancelled computes the work itself. A
+  /// waiter checks `progress` (throws Cancelled when its own request is cancelled).
   std::shared_ptr<const PatchWork> get(const PatchKey& key, const std::function<PatchWork()>& make,
-                                       bool* hit);
+                                       bool* hit, const Progress& progress = {});
 
   struct Stats {
     std::size_t entries = 0;
@@ -65,6 +70,7 @@ class PatchCache {
   mutable std::mutex mutex_;
   std::list<Entry> lru_;  // most recent first
   std::map<PatchKey, std::list<Entry>::iterator> index_;
+  std::map<PatchKey, std::shared_future<std::shared_ptr<const PatchWork>>> computing_;
   Stats stats_;
 };
 

@@ -31,6 +31,10 @@ struct RunSettings {
   int threads = 0;
   /// Per-patch work shared by the designs of one daemon (patch_cache.h); null = none.
   PatchCache* patch_cache = nullptr;
+  /// Kernel threads of a redesign on cached patch work (its grid stage: one geodesic solve per
+  /// member), where a client waits for the answer while a slider moves; 0 = all cores, -1 = as
+  /// `threads`. Results do not depend on it.
+  int redesign_threads = -1;
 };
 
 /// The request's mesh, however it was given: packed arrays (mesh_from_arrays), the bytes of a

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <string>
 
 #include "gridshell/design/anchors.h"
@@ -52,6 +53,9 @@ struct PatchWork {
   TargetPatch target;
   DistanceMaps maps;
   double maps_seconds = 0;  ///< time the maps took
+  /// Inner members built on this patch so far, reused by later designs on it (null = none; the
+  /// daemon's cache sets one). The designs are the same with or without.
+  std::shared_ptr<MemberMemo> members;
 };
 
 /// The distance maps of `target` (options.maps, with options.patch.geodesic).

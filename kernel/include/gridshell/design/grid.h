@@ -3,13 +3,19 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <optional>
 #include <vector>
 
 #include "gridshell/design/distance_map.h"
-#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/design/members.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/design/planar_patch.h"
+#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/progress.h"
 
 namespace gridshell {
@@ -55,12 +61,49 @@ struct GridOptions {
   int threads = 0;  // 0 = hardware concurrency; the result does not depend on it
 };
 
+/// Inner members already built on one patch with one solver, for redesigns that meet the same
+/// member again: the family whose count did not change when the other's did, or an angle
+/// visited before. An inner member is a function of its family, its positions u1, u2, the planar
+/// corners and the length tolerance only (on a given patch and solver), so a member found here
+/// is, bit for bit, the one build_grid would compute. Bounded in bytes (oldest out first);
+/// thread-safe.
+class MemberMemo {
+ public:
+  explicit MemberMemo(std::size_t max_bytes) : max_bytes_(max_bytes) {}
+  /// The bit patterns of everything an inner member depends on.
+  struct Key {
+    std::array<std::uint64_t, 12> bits{};
+    int family = 0;
+    auto operator<=>(const Key&) const = default;
+  };
+  static Key key(Family family, const MemberPosition& position, const PlanarPatch& planar,
+                 double length_tolerance);
+  std::optional<Member> find(const Key& key) const;
+  void insert(const Key& key, const Member& member);
+  std::size_t max_bytes() const { return max_bytes_; }
+  std::size_t bytes() const;
+  std::size_t size() const;
+  std::uint64_t hits() const;  ///< members found so far
+  /// Heap bytes of a member's polylines (what the memo counts).
+  static std::size_t member_bytes(const Member& member);
+
+ private:
+  const std::size_t max_bytes_;
+  mutable std::mutex mutex_;
+  std::map<Key, Member> members_;
+  std::deque<Key> order_;  // oldest first
+  std::size_t bytes_ = 0;
+  mutable std::uint64_t hits_ = 0;
+};
+
 /// Builds both member families (boundary members + the placed inner members) and all crossings.
 /// Throws Infeasible if criterion (iii) fails: a g and an h do not cross exactly once on either
-/// patch, or two members of one family cross in the plane.
+/// patch, or two members of one family cross in the plane. With `memo` (kept with the patch by
+/// the daemon's cache), inner members found there are reused and the new ones added: the same
+/// grid either way.
 Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPatch& planar,
                 const std::vector<MemberPosition>& g_members,
                 const std::vector<MemberPosition>& h_members, const GridOptions& options = {},
-                const Progress& progress = {});
+                const Progress& progress = {}, MemberMemo* memo = nullptr);
 
 }  // namespace gridshell
