@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
-# Set up, build and run the whole test suite.
+# Set up, build and run the whole test suite: the C++ tests (ctest), then the web page's unit
+# and end-to-end tests (headless Chromium against a real gridshelld; tests/web).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
 ctest --test-dir build --output-on-failure -j "$(nproc)"
+bash scripts/setup-web.sh
+bash scripts/build-web.sh
+bash scripts/test-web.sh
