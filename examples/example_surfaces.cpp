@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — analytic example surfaces.
 //
 // Every example is a smooth surface S(u, v) over the unit parameter square, sampled on an

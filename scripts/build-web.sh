@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Type-checks and bundles the web page into client/web/dist (served by gridshelld at /).
 # Run scripts/setup-web.sh first.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Builds the libFuzzer targets (tests/fuzz, docs/fuzzing.md) with clang + ASan + UBSan into
 # ./build-fuzz and runs each for SECONDS (default 20) on a copy of its seed corpus, the inputs
 # that once failed (tests/fuzz/regressions) included. Fails on the first crash, sanitizer report,

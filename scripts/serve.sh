@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Starts gridshelld with the web page: builds what is missing first (the C++ daemon, the page),
 # then serves the API and the page on loopback and prints the URL. Ctrl-C stops it.
 # PORT=8080 by default; extra arguments go to gridshelld (e.g. --token-file FILE).

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Installs what the web page (client/web) and its browser tests need: Node.js and npm, and
 # Debian's Chromium, from Debian packages when missing (root, as on CI; sudo otherwise), then the
 # page's npm packages exactly as package-lock.json pins them. Idempotent: `npm ci` runs only

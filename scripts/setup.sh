@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Installs everything gridshell needs from Debian 12 packages. Idempotent: installs only what is missing.
 set -euo pipefail
 PKGS=(

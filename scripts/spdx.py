@@ -8,7 +8,7 @@
 
 Which files, and which line:
 
-  *.cpp *.h *.hpp *.cc *.proto            "// SPDX-License-Identifier: GPL-3.0-or-later", first line
+  *.cpp *.h *.hpp *.cc *.proto *.ts *.mjs "// SPDX-License-Identifier: GPL-3.0-or-later", first line
   CMakeLists.txt *.cmake *.sh *.py, and
   any other file starting with "#!"       "# SPDX-License-Identifier: GPL-3.0-or-later", first
                                           line, or right after the shebang (and after a Python
@@ -54,7 +54,7 @@ EXCLUDED = [
     "third_party/*", "*/third_party/*", "node_modules/*", "*/node_modules/*",
 ]
 
-SLASH_SUFFIXES = (".cpp", ".cc", ".cxx", ".h", ".hh", ".hpp", ".proto")
+SLASH_SUFFIXES = (".cpp", ".cc", ".cxx", ".h", ".hh", ".hpp", ".proto", ".ts", ".js", ".mjs")
 HASH_SUFFIXES = (".cmake", ".sh", ".py")
 HASH_NAMES = ("CMakeLists.txt",)
 

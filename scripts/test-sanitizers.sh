@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Builds everything with AddressSanitizer + UndefinedBehaviorSanitizer into ./build-asan and runs
 # the test suite there; any sanitizer report fails the run. The CLI and gridshelld that the tests
 # start as subprocesses are sanitized too, and inherit the options below.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # The web page's tests: unit tests of its pure code, then end-to-end tests in headless Debian
 # Chromium (playwright-core) against a real gridshelld on a free loopback port, started and
 # stopped by the tests. Needs scripts/setup-web.sh, scripts/build-web.sh and the C++ build

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Set up, build and run the whole test suite: the C++ tests (ctest), then the web page's unit
 # and end-to-end tests (headless Chromium against a real gridshelld; tests/web).
 set -euo pipefail

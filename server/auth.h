@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the bearer token every call must carry when the daemon has one (--token-file).
 #pragma once
 

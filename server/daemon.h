@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the daemon as an object: the job queue, the gRPC service (with health checking and
 // reflection) and the HTTP/JSON gateway, started and stopped together. main.cpp runs one; the
 // tests run one in-process on ephemeral loopback ports.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the gRPC transport: service gridshell.v1.Gridshell on the callback API. Every
 // method is one line that hands its entry of the RPC table (methods.h) to the generic `serve`,
 // which checks the token, queues the job, streams its progress, turns client cancellation and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the HTTP/JSON gateway (Boost.Beast on Asio) next to the gRPC service:
 //
 //   POST /v1/METHOD                      request in protobuf's JSON mapping -> result as JSON

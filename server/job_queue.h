@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the worker pool every request runs on, whichever transport brought it.
 //
 // A fixed number of workers (one per core by default) take jobs from a bounded queue; a full

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the gridshell daemon: gRPC service gridshell.v1.Gridshell (with health checking
 // and reflection) and its HTTP/JSON gateway, both on loopback unless told otherwise.
 //

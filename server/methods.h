@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — the RPC table. One RPC is one entry here: its name and its request -> kernel ->
 // result function. Queueing, streaming, cancellation, deadlines, logging and the HTTP route are
 // generic (job_queue.h, grpc_service.cpp, http_gateway.cpp) and need nothing per method.

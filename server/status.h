@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld — call outcome, independent of the transport. The codes are gRPC's (same numbers), so
 // the gRPC layer casts them and the HTTP gateway maps them to HTTP statuses (docs/api.md).
 #pragma once

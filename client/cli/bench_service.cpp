@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell bench service`: gridshelld under load. Starts the daemon next to this executable on
 // an ephemeral loopback port and measures, on a paper-like example (double vault, default
 // options):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell bench simulate`: the deployment simulation on the seven paper-like examples next
 // to the paper's Table 1 (|G_V|, RMS1, RMS2, t1, t2). Writes a table into docs/benchmarks.md.
 //

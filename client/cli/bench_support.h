@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Shared pieces of `gridshell bench`: machine description and the marked sections of
 // docs/benchmarks.md.
 #pragma once

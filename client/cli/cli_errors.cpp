@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // How the CLI shows a kernel or API error: its field in the CLI's own terms (flags, file names),
 // then the message. The kernel and the converters name request fields ("options.lamella_width",
 // "corners.vertices[2]", "mesh.indices[21]", "design.members[3]"); only this file knows that the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Shared pieces of the gridshell CLI: input meshes, progress line, JSON output.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell bench geodesic`: fast engine vs CGAL vs heat method, side by side in one run, on a
 // paper-like surface at several resolutions. Writes a table into docs/benchmarks.md.
 //

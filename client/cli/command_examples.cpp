@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell examples list` and `gridshell examples write NAME FILE`.
 #include <cstdio>
 

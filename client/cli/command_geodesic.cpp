@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell geodesic MESH --source V [--method ..] [--compare cgal] [--repeat N] [--json]`:
 // one single-source distance field, timed, optionally compared with a reference engine.
 #include <cstdio>

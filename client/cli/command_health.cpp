@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell health --server HOST:PORT`: asks a daemon whether it is serving (gRPC health check).
 #include <cstdio>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell simulate DIR/design.json --out DIR2`: the deployment simulation of paper Section 5,
 // in process or on a daemon (--server). The simulation flags are shared with `gridshell run`.
 #include <google/protobuf/util/json_util.h>

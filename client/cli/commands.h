@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Subcommands of the gridshell CLI; each registers itself on the CLI11 app and returns the
 // function that runs it (exit code).
 #pragma once

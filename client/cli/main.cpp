@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — command-line front end. Runs the kernel in-process, or on gridshelld (--server).
 //
 // Exit codes (docs/decisions.md): 0 success, 1 internal error, 2 invalid input, 3 infeasible

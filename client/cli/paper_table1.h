@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Pillwein et al. 2020, Table 1: the paper's seven models (grid design in MATLAB, simulation in
 // C++, on a Xeon E5-2687W v4). The yardstick of `gridshell bench` and of `gridshell run`'s
 // summary on the built-in paper-like examples.

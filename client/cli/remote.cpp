@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The gRPC client behind `--server`. Built only with GRIDSHELL_BUILD_SERVER (the default); without
 // it the options still parse and a remote run explains why it cannot happen.
 #include "remote.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The CLI as a client of gridshelld: `--server HOST:PORT` runs a command remotely. The requests
 // are the ones the in-process runs use (gridshell/requests.h), the results the same messages,
 // so both write the same files. No gRPC types here: only remote.cpp includes gRPC.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Vite build of the gridshell page into dist/, served by gridshelld at /. Everything the page needs
 // is in the bundle: no CDN, no web fonts, no inline script or style (the daemon's CSP forbids
 // them), relative asset URLs so the folder can be served under any path.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Cladding functions and the feasible range of the planar angle ᾱ (paper Section 4.3).
 //
 // Cladding function (cladding_function):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Distance maps between opposite patch boundaries (paper Section 4.2).
 //
 // For each family, R source points at u1_i = i/(R-1) on the first boundary get one exact

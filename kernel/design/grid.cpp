@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The grid: members on both patches and their crossings (paper 4.1, 4.4, 4.5).
 //
 // Inner members are refined on the exact distances: the member's start u1 is kept; its end u2

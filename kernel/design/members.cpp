@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Member placement along a cladding function (paper Section 4.4).
 //
 // 1. The cladding polyline F (from (0,0) to (1,1) in the (u1,u2) square) is parameterized by

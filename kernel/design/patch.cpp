@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Cutting the target patch out of a mesh along its four boundary geodesics (paper 3.2, 4.1).
 //
 // The corners are first made mesh vertices (splitting a face or an edge if needed). The four

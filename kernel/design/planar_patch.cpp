@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The planar patch P̄(ᾱ) (paper Sections 3.2, 4.2): the convex four-bar configuration with the
 // surface patch's side lengths and angle ᾱ at c0, and its planar distance maps D̄_u, D̄_v.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — geodesic front end: surface points, method names, path length and the dispatch
 // from GeodesicSolver / DistanceField to the engines (geodesic_fast.cpp, geodesic_cgal.cpp,
 // geodesic_heat.cpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — CGAL oracle for exact geodesics (GeodesicMethod::Cgal).
 //
 // CGAL::Surface_mesh_shortest_path (Xin-Wang's improved Chen-Han algorithm) on a

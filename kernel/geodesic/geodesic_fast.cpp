@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — exact polyhedral geodesics by window propagation (GeodesicMethod::Fast).
 //
 // Algorithm

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — private interfaces shared by the geodesic engines (geodesic*.cpp only).
 //
 // DistanceField::Impl and GeodesicSolver::Impl are abstract; each engine (fast window

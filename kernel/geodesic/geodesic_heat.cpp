@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — approximate geodesic distances by the heat method (GeodesicMethod::Heat).
 //
 // CGAL::Heat_method_3::Surface_mesh_geodesic_distances_3 (Crane, Weischedel, Wardetzky, "Geodesics

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — mesh reading (OBJ, OFF, PLY, STL) with repairs and a load report; OBJ writing.
 //
 // Every format is first parsed into a RawMesh (vertices and polygons in file order, plus the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "gridshell/mesh/surface_distance.h"
 
 #include <CGAL/AABB_traits.h>

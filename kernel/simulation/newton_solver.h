@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — damped Newton minimizer for sums of squared residual blocks (private header).
 //
 // Minimizes E(x) = 1/2 sum_b |r_b(x)|^2 over parameter blocks, where every residual block is a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the energy terms of the deployment simulation as residuals (private header).
 //
 // Discrete elastic rods after Bergou et al. 2008/2010 and the connection, anchor, notch-limit and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Deployment simulation (paper Section 5) with Ceres.
 //
 // Unknowns: every rod vertex (3), every rod edge's twist angle (1), and for each end of a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — block sparse Cholesky for the Newton solver (private header).
 //
 // The Newton solver's Hessians (~3000 unknowns: rod vertices in blocks of 3, twists and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Simulate and Run requests -> kernel -> results (see gridshell/requests.h).
 #include <string>
 #include <utility>

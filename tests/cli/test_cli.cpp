@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of the gridshell command: files written, JSON fields, exit codes, errors.
 #include <gtest/gtest.h>
 

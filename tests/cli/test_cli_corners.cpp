@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The CLI's --corners syntax (client/cli/cli_support.cpp) and how the CLI names request fields
 // in its error lines (client/cli/cli_errors.cpp).
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of `gridshell simulate`: files, deployment.json fields, exit codes, errors.
 #include <fcntl.h>
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The daemon's cache of per-patch work (proto/convert/patch_cache.cpp): a cached redesign gives
 // the bytes an uncached one gives, the key tells patches apart, the LRU bound holds, 0 turns it
 // off, and concurrent requests for one patch are safe.

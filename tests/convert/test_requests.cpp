@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Requests -> kernel inputs (proto/convert/requests.cpp): option parsing, field paths of errors.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Anchors (gridshell/design/anchors.h, paper 4.6): boundary_curvature on analytic curves (circle,
 // straight line, ellipse), and place_anchors on a designed grid: corners first, the other
 // anchors grid crossings on the boundary side they name, unit normals matching the surface,

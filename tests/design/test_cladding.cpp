@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Cladding functions and the feasible planar angle (paper Section 4.3): zero-set extraction on
 // synthetic maps with analytically known zero sets (graph accuracy, slope bounds, leaving the
 // square, branching, corners), the diagonal condition on flat patches, the feasible range on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Injectivity bound, gap factor eta and smoothing (paper 3.3). The discrete Gaussian curvature
 // itself is tested in tests/mesh/test_curvature.cpp.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Grid design end to end: the grid criteria of paper 4.1 on every example surface and on the
 // shared real meshes.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The design's human-readable views (gridshell/design/design_export.h), parsed back and checked
 // against the design: planar_svg (one line per member between its planar endpoints, to scale,
 // inside the viewBox; notch slots of length |s - s̄| along their member; a dot per crossing; a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Distance maps D_u, D_v (paper Section 4.2): boundary chains, points on chains, the surface maps
 // against Euclidean distances on flat patches and against the planar maps D̄ on developable
 // examples, symmetry, thread independence, cancellation and error propagation.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The grid (gridshell/design/grid.h, paper 4.1, 4.4, 4.5): build_grid's members and crossings
 // checked independently of how build_grid finds them: every g crosses every h exactly once on
 // both patches (by brute-force segment distances on the surface, segment intersection in the

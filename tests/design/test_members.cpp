@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Member placement (paper 4.4): features of C(s), the spacing rule, gap filling, counts,
 // option validation, determinism.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Target patch: corner parsing, cutting along boundary geodesics, grid criterion (iv).
 #include <gtest/gtest.h>
 

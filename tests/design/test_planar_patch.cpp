@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Planar patch P̄(ᾱ): four-bar closure, convexity interval, boundary points, planar maps.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The patch stage (gridshell/design/target_patch.h): make_target_patch resolves the corner spec
 // (vertices, points snapped to the surface, automatic), cuts, analyses and smooths; its report
 // (stage timings, corner angles, side lengths, area, coverability) must agree with the patch it

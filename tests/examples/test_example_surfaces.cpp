@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests for examples/example_surfaces.cpp: the paper's seven models (Table 1 bounding boxes and
 // vertex counts) and the analytic cases, checked for disk topology, orientation, triangle
 // quality, corners, discrete curvature sign and resolution scaling.

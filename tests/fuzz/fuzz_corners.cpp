@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target: the CLI's corner syntax (--corners: "auto", "i,j,k,l" or four points
 // "x,y,z;...") and the planar-angle syntax shared by the CLI and the API (--alpha / options.alpha:
 // "min", "max", radians, "70deg"). The first byte picks the parser.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target: the OBJ reader (read_mesh), with the loader's repairs and checks.
 #include "fuzz_support.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target: the HTTP gateway's request decoding for every RPC — protobuf JSON into the
 // request message, exactly as server/methods.h parses a body, then the request's checks and
 // conversion into kernel inputs (prepare_patch, prepare_design, ...; to_mesh reads mesh files and

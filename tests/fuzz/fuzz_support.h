@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Shared checks of the fuzz targets (tests/fuzz, docs/fuzzing.md).
 //
 // A target feeds its input to one parser and accepts two outcomes only: a result that satisfies

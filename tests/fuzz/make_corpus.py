@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Writes the fuzz targets' seed corpora (tests/fuzz/corpus/<target>/): small, valid files of
 each format and small requests of each RPC, so that fuzzing starts from inputs that reach deep
 into the parsers. Deterministic; run it again after changing it and commit the result."""

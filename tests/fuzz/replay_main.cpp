@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Runs a fuzz target's entry point once on each file given (or each file in each folder given;
 // missing paths are skipped, no input at all is a failure),
 // without libFuzzer: the seed corpus and the kept crash inputs become a ctest on every build,

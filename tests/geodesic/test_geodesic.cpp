@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests for the geodesic engines (kernel/geodesic/geodesic*.cpp).
 //
 // The fast exact engine is checked against CGAL's Surface_mesh_shortest_path (an independent

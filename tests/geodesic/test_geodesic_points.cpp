@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Geodesic distances between surface points that are not vertices: sources and targets inside
 // faces, on interior edges and on boundary edges.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Back-edge probe: the geodesic layer reaching for the design layer must not compile.
 #include "gridshell/design/patch.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Back-edge probe: mesh-layer code that declares a design-layer function by hand (no header
 // needed) must not link, because gridshell_mesh does not link gridshell_design.
 #include <array>

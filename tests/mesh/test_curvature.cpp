@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Discrete curvature (gridshell/mesh/curvature.h): Gaussian curvature against closed forms,
 // incident angle sums, mixed Voronoi and barycentric vertex areas against closed forms and the
 // surface area, and the discrete Gauss-Bonnet theorem.

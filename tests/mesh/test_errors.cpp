@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Errors as data (gridshell/mesh/errors.h): codes and their names, field paths joined as the
 // API's request paths, what() = "field: message", and rethrow_within keeping code and message
 // while prefixing the field.

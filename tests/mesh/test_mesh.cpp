@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // TriangleMesh (gridshell/mesh/mesh.h): construction errors name the element, copies share one
 // topology, positions move but faces do not; bounding_box_size and surface_area against closed
 // forms; find_edge against a brute-force search.

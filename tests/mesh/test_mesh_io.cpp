@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests for mesh reading (OBJ, OFF, PLY, STL), repairs, rejections and atomic OBJ writing.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Mesh connectivity (gridshell/mesh/mesh_topology.h): face adjacency, one-rings, boundary flags
 // and loops of build_topology against brute-force recomputations, and the problems
 // check_manifold reports with their field paths.

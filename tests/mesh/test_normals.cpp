@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Vertex normals (gridshell/mesh/normals.h): area-weighted, unit, pointing radially on a sphere
 // and along +-z on a flat mesh depending on the face orientation.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell::parallel_for (gridshell/mesh/parallel.h): every job runs exactly once, results do not
 // depend on the thread count, the first exception wins and stops the other jobs, the caller's
 // cancellation flag stops the run, and progress comes from the calling thread only.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Progress (gridshell/mesh/progress.h): report forwards to the callback and throws Cancelled
 // once the flag is set, check only checks, checker() keeps the flag but reports nowhere, and a
 // default Progress reports nowhere and never cancels.

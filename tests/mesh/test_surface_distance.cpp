@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Closest points and distances to a mesh (gridshell/mesh/surface_distance.h) against closed
 // forms (a plane, a polyhedral sphere) and an independent brute-force point-triangle distance
 // over all faces; closest() and normal_at_closest() against the distance and the face normal.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Points on a mesh (gridshell/mesh/surface_point.h): at_vertex, on_edge, position and vertex
 // with their exact-weight conventions and errors, and closest_point_on_triangle against an
 // independent exact construction and brute-force sampling of the triangle, in all seven Voronoi

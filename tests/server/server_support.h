@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Helpers for the daemon tests: an in-process gridshelld on ephemeral loopback ports, gRPC and
 // HTTP clients, requests built from the example surfaces, the bad-input set, throwaway TLS
 // certificates. Nothing here needs a network beyond loopback.

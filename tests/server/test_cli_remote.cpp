@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The CLI as a client (`--server`) writes the same files as in-process runs; `gridshell health`;
 // the gridshelld executable starts on ephemeral ports and shuts down cleanly on SIGTERM.
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshelld over gRPC, in-process on ephemeral loopback ports: results identical to in-process
 // runs, concurrency, cancellation and deadlines, the bounded queue, status codes for every bad
 // input, health checking, reflection, the log line and shutdown.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The HTTP/JSON gateway of gridshelld: the same results as gRPC in protobuf's JSON mapping,
 // Server-Sent Events, status codes (docs/api.md), limits, cancellation on disconnect and static
 // files that never leave their folder.

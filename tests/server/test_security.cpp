@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Security of gridshelld: loopback by default, TLS and a bearer token for anything else, the
 // token checked on every gRPC call (health included) and every HTTP API call.
 #include <grpcpp/generic/generic_stub.h>

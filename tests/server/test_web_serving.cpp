@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // What the web page needs from gridshelld's HTTP gateway (issue 16), over real loopback HTTP:
 // the CORS allow-list, the security headers on every kind of response, the body limit, the
 // static files at / and the per-patch cache seen from a client.

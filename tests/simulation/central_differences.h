@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Central differences of the exact (automatic) first derivatives of residual blocks, for the
 // checks of the hand-derived second-order blocks (test_rod_curvature.cpp) and of the Newton
 // solver's assembly (test_newton_solver.cpp).

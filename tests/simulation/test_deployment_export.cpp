@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Views of a deployment (gridshell/simulation/deployment_export.h), parsed back: deployed_obj
 // (a closed box per lamella with the lamella's cross-section, faces oriented outwards, 4
 // vertices per centerline vertex and two caps) and deviation_ply (header counts, the

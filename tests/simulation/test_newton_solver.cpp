@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The Newton solver's assembly (newton_solver.h) against central differences, on small random
 // problems built from the real rod terms the way Deployment::build_terms builds them: two rods
 // of four edges crossing at a sliding connection (member g with its neighbouring edge, member h

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The hand-derived second-order blocks of the deployment simulation (rod_terms.h: the geometric
 // stiffness of a rod edge, the curvatures of the friction and notch-limit log barriers) against
 // central differences of their terms' exact (automatic) Jacobians, on many random states with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The residual blocks of the deployment simulation (kernel/simulation/rod_terms.h): Jacobians against
 // central finite differences, and the discrete elastic rod against closed forms.
 #include <ceres/autodiff_cost_function.h>

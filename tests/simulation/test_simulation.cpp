@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The deployment simulation on whole grids: mechanisms, notches, solvers, bad input, and the
 // paper-like examples.
 #include <gtest/gtest.h>

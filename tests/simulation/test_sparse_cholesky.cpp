@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The Newton solver's block sparse Cholesky (kernel/simulation/sparse_cholesky.h) against Eigen's
 // SimplicialLLT, the oracle: same solutions for any block partition, the same factor with scalar
 // blocks, refactorization on the same pattern, and indefinite matrices rejected.

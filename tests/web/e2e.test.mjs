@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of the web page: a real gridshelld (started here on free loopback ports,
 // serving client/web/dist) and real headless Debian Chromium driven by playwright-core. One
 // browser page walks the whole flow in order, as a user would. Every wait is bounded; the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Unit tests of the page's pure code (client/web/src/format.ts, colormap.ts): bundled on the fly
 // with the esbuild that Vite brings (no second TypeScript toolchain), then run with node:test.
 import { test } from 'node:test';

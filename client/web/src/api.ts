@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The daemon's HTTP/JSON API (docs/api.md): POST /v1/NAME with a protobuf-JSON body, progress as
 // Server-Sent Events (Accept: text/event-stream), errors as {"error": {code, status, field,
 // message}}. Cancelling = aborting the fetch: the gateway sees the connection close and cancels

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Colour maps of the page: a diverging map for Gaussian curvature (blue < 0 < red, white at 0)
 // and a sequential one for deviations (0 = dark blue ... max = yellow), with their legends.
 // Pure functions, no DOM beyond the legend canvas.

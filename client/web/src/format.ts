@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Pure helpers of the page (no DOM): angles, the slider's feasible range, the summary text, the
 // URL state, where an error belongs. Unit-tested by tests/web/unit.test.mjs.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The gridshell page: mesh in (example or file) -> four corners -> patch -> design (live ᾱ
 // slider and counts) -> simulate, with progress, Cancel, errors next to their controls and
 // downloads of the daemon's files. One call in flight at a time: a new one aborts the previous

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The 3D view: the input mesh, four numbered corner markers, the trimmed patch with its Gaussian
 // curvature colours and boundary geodesics, the design on the surface (members, crossings,
 // anchors) and the deployed lamellas as boxes coloured by deviation or bending stress. Everything is drawn

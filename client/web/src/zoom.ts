@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Pan (drag) and zoom (wheel, about the cursor) of an image in a pane: the 2D plan (planar.svg)
 // and the distance maps (maps.svg), shown as the daemon's own SVG files.
 

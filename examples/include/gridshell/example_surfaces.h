@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — analytic example surfaces: generators for the paper's seven models (Table 1
 // proportions and roughly its vertex counts) and analytic test cases.
 #pragma once

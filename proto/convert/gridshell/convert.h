@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — conversions between kernel values and the proto messages of proto/gridshell/v1.
 // The one place where the CLI (and later the daemon) turn results into files and replies.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — conversions for the deployment simulation: design.json back into the kernel's
 // grid, and simulation results into deployment.json.
 #pragma once

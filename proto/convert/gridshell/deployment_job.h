@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the simulation as one job from proto messages to proto messages, shared by the
 // CLI (`gridshell simulate`, `gridshell run`) and the daemon (Simulate, Run): options resolved
 // and validated in one place, both runs, deployment.json and its views.

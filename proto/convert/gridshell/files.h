@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the output files of each command, made in one place from the result messages.
 //
 // `gridshell patch|design --out DIR` writes exactly these bytes, whether the result came from an

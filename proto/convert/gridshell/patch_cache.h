@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the daemon's cache of per-patch design work: the target patch and its distance
 // maps (PatchWork), which do not depend on alpha, the member counts, the lamella size or the
 // anchors. With it, moving the alpha slider or changing member counts redesigns without the patch

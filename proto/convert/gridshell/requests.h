@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the computations behind `gridshell patch|design|simulate|run|geodesic` and the
 // daemon's RPCs: request message -> checked kernel inputs -> kernel -> result message.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — anchors (paper Section 4.6): connections pinned to the target surface so the
 // elastic grid deploys into the target and not into one of its isometric deformations.
 // By default anchors are only on the boundary, as in the paper: the four corners, plus the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — cladding functions and the feasible range of the planar angle ᾱ (paper 4.3).
 //
 // F_u is the zero set of D_u - D̄_u(ᾱ) in the (u1,u2) square, a curve from (0,0) to (1,1)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — can the patch be covered by shortest geodesics? (paper Section 3.3)
 //
 // Shortest geodesics from one boundary leave gaps behind peaks of positive Gaussian curvature

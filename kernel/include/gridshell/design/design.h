@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the whole grid design (paper Section 4): patch -> distance maps -> feasible ᾱ ->
 // cladding functions -> members -> grid with crossings and notches -> anchors.
 #pragma once

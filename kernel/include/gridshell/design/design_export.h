@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — human-readable views of a design: the flat grid as SVG (to scale), the spatial grid
 // as OBJ, and the distance maps with the cladding curves as SVG.
 #pragma once

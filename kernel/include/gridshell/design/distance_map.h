@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — distance maps between opposite patch boundaries (paper Section 4.2).
 //
 // The parametrization of both families is in family.h.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the two member families of a grid and how their boundaries are parametrized.
 //
 // Conventions (used by every grid-design stage):

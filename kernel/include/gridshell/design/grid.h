@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the grid: members as exact geodesics on the surface patch and straight segments in
 // the planar patch, and all their crossings (paper Sections 4.1, 4.4, 4.5).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — member placement along the cladding functions (paper Section 4.4).
 //
 // Every point of a cladding function F (a curve from (0,0) to (1,1) in the (u1,u2) square) is a

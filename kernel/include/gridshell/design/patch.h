@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the target patch (paper Sections 3.2-3.3, 4.1 criterion (iv)): four corners on the
 // target surface, joined by exact shortest geodesics; the mesh is cut along them and the
 // outside dropped.

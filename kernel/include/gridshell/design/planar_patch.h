@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the planar patch P̄(ᾱ) (paper Sections 3.2, 4.2): the planar quadrilateral with
 // the same four side lengths as the surface patch, angle ᾱ at corner 0, in the convex
 // configuration of the four-bar linkage; and its planar distance maps D̄_u, D̄_v(ᾱ).

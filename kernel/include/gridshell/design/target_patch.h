@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the whole patch stage: corners -> cut -> convexity check -> coverability ->
 // smoothing (paper Sections 3.1-3.3). This is what `gridshell patch` and the daemon run.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — exact polyhedral geodesic distances and shortest paths on a triangle mesh.
 //
 // Paper Sections 3.3 and 4.2 need many single-source exact distance fields per design. The

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — errors as data: what every kernel function may throw.
 //
 // An error is a code, the field it concerns as a path into the caller's input, and a plain

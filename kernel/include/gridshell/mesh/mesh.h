@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the triangle mesh every kernel stage works on: positions, faces and their
 // connectivity, built once when the mesh is made.
 #pragma once

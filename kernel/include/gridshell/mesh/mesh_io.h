@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — reading target meshes (OBJ, OFF, PLY, STL) and writing OBJ, with a load report.
 #pragma once
 

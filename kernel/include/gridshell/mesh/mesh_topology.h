@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — connectivity of a manifold triangle mesh: face adjacency, one-rings, boundary loops.
 #pragma once
 

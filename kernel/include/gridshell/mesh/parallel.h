@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — the kernel's one way to go parallel: independent jobs on worker threads, with
 // cancellation and progress.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — progress reporting and cooperative cancellation for long computations.
 #pragma once
 

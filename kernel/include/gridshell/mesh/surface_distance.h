@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — closest points and distances from points to a triangle mesh (one CGAL AABB tree):
 // corners given as points, the deviation of a deployed grid from its target surface.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — points on a triangle mesh: a face and barycentric weights.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — views of a simulated deployment: the lamellas as solid boxes (OBJ) and the rod
 // centerlines coloured by their distance to the target (PLY).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // gridshell — deployment simulation (paper Section 5): every lamella a discrete elastic rod
 // (Bergou et al. 2008/2010) with anisotropic rectangular cross-section, rotating and sliding
 // connections with the lamellas' thickness offset, anchors pinned to the target, notch limits
