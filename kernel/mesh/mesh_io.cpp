@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numeric>
 #include <sstream>
 #include <string_view>
 #include <unordered_map>
@@ -877,17 +878,23 @@ struct CellHash {
   }
 };
 
-/// For each vertex, the first earlier vertex within `tolerance` (itself a representative), or
-/// itself. A hash grid with cells of the tolerance size: O(n) expected.
-std::vector<int> weld(const std::vector<Vec3>& points, double tolerance) {
+/// For each vertex with `in_range` set, the first earlier such vertex within `tolerance`
+/// (itself a representative), or itself; the others are their own. A hash grid with cells of
+/// the tolerance size: O(n) expected.
+std::vector<int> weld(const std::vector<Vec3>& points, const std::vector<char>& in_range,
+                      double tolerance) {
   const int n = static_cast<int>(points.size());
   std::vector<int> rep(n);
-  if (n == 0) return rep;
-  Vec3 lo = points[0], hi = lo;
-  for (const Vec3& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  std::iota(rep.begin(), rep.end(), 0);
+  int first = 0;
+  while (first < n && !in_range[first]) ++first;
+  if (first == n) return rep;
+  Vec3 lo = points[first], hi = lo;
+  for (int i = first; i < n; ++i)
+    if (in_range[i]) {
+      lo = lo.cwiseMin(points[i]);
+      hi = hi.cwiseMax(points[i]);
+    }
   const double extent = (hi - lo).norm();
   // Cells no smaller than 1e-15 of the extent keep the cell coordinates within int64.
   double cell = std::max(tolerance, extent * 1e-15);
@@ -895,7 +902,8 @@ std::vector<int> weld(const std::vector<Vec3>& points, double tolerance) {
   const double tolerance2 = tolerance * tolerance;
   std::unordered_map<CellKey, std::vector<int>, CellHash> grid;
   grid.reserve(points.size());
-  for (int i = 0; i < n; ++i) {
+  for (int i = first; i < n; ++i) {
+    if (!in_range[i]) continue;
     const Vec3 q = (points[i] - lo) / cell;
     const CellKey key{static_cast<std::int64_t>(std::floor(q.x())),
                       static_cast<std::int64_t>(std::floor(q.y())),
@@ -1052,14 +1060,21 @@ Triangles triangulate(const std::string& name, const RawMesh& raw, LoadReport& r
 /// options.duplicate_tolerance of the bounding-box diagonal).
 std::vector<int> weld_duplicates(const RawMesh& raw, const MeshLoadOptions& options,
                                  LoadReport& report) {
-  Vec3 lo = raw.vertices[0], hi = lo;
-  for (const Vec3& p : raw.vertices) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  // Vertices beyond kMaxCoordinate are isolated (triangulate checked the ones faces use) and
+  // dropped later; they neither weld nor scale the tolerance. One at 1e308 made the extent
+  // infinite and the cell coordinates NaN (fuzz_mesh_obj, isolated_vertex_at_1e308.obj).
+  std::vector<char> in_range(raw.vertices.size(), 0);
+  for (size_t v = 0; v < raw.vertices.size(); ++v)
+    in_range[v] = raw.vertices[v].cwiseAbs().maxCoeff() <= kMaxCoordinate;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (size_t v = 0; v < raw.vertices.size(); ++v)
+    if (in_range[v]) {
+      lo = lo.cwiseMin(raw.vertices[v]);
+      hi = hi.cwiseMax(raw.vertices[v]);
+    }
   const double diagonal = (hi - lo).norm();
   const double tolerance = std::max(0.0, options.duplicate_tolerance) * diagonal;
-  std::vector<int> rep = weld(raw.vertices, std::isfinite(tolerance) ? tolerance : 0.0);
+  std::vector<int> rep = weld(raw.vertices, in_range, std::isfinite(tolerance) ? tolerance : 0.0);
   for (size_t v = 0; v < rep.size(); ++v) report.duplicate_vertices_merged += rep[v] != int(v);
   return rep;
 }
