@@ -42,10 +42,14 @@ for t in "${targets[@]}"; do
   [ -f "tests/fuzz/dict/$t.dict" ] && dict=(-dict="tests/fuzz/dict/$t.dict")
   # The new inputs go to the work corpus (kept between runs in build-fuzz), the seeds and the
   # regressions are read only. -timeout=1: an input that takes longer is a hang.
+  # FUZZ_SEED fixes libFuzzer's random seed (CI: a gate should not turn red by luck); unset, each
+  # run takes a new seed.
+  seed=()
+  [ -n "${FUZZ_SEED:-}" ] && seed=(-seed="$FUZZ_SEED")
   inputs=("$work" "tests/fuzz/corpus/$t")
   # git keeps no empty folders: a target without kept failures has no regressions/ folder.
   [ -d "tests/fuzz/regressions/$t" ] && inputs+=("tests/fuzz/regressions/$t")
-  if ! "./build-fuzz/tests/fuzz/fuzz_$t" "${inputs[@]}" \
+  if ! "./build-fuzz/tests/fuzz/fuzz_$t" "${inputs[@]}" "${seed[@]}" \
       "${dict[@]}" -max_total_time="$seconds" -timeout=1 -rss_limit_mb=2048 -max_len=8192 \
       -print_final_stats=1 -artifact_prefix="$artifacts/" >"build-fuzz/$t.log" 2>&1; then
     echo "fuzz: $t FAILED; input in $artifacts/, log build-fuzz/$t.log:" >&2
