@@ -110,6 +110,7 @@ class Daemon:
                 self.process.kill()
                 self.process.wait(10)
         self._reader.join(10)
+        self.process.stderr.close()
         return self.process.returncode
 
     def __enter__(self):

@@ -22,6 +22,8 @@ from gridshell_client.client import encode_request
 
 # A small, quick design: the hypar example at distance map resolution 16.
 QUICK = {"resolution": 16}
+# Long enough to cancel or to pass a deadline (seconds): double-vault at the finest maps.
+SLOW = {"resolution": 1000}
 # A plane's corners as a dart: a reflex corner, so the design is infeasible (paper 4.1 (iv)).
 DART = [(-40, -30, 0), (40, -30, 0), (0, -10, 0), (-40, 30, 0)]
 
@@ -46,7 +48,8 @@ def square_grid(n=6, size=10.0, bump=1.0):
 class ClientTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.daemon = T.Daemon()
+        # No patch cache: every design computes its distance maps (and reports their progress).
+        cls.daemon = T.Daemon("--cache-mib", "0")
         cls.client = gs.Client(cls.daemon.url)
         cls.tmp = tempfile.mkdtemp(prefix="gridshell-python-")
 
@@ -62,10 +65,12 @@ class ClientTest(unittest.TestCase):
         self.assertIn("hypar", names)
 
     def test_design_streams_progress_and_returns_the_cli_bytes(self):
+        # What `gridshell design example:hypar` sends: the example by name, its suggested corners.
+        hypar = [e for e in self.client.examples()["examples"] if e["name"] == "hypar"][0]
+        mesh = dict(gs.mesh_example("hypar"), name="example:hypar")
+        corners = {"vertices": hypar["corners"], "label": "example"}
         events = []
-        result = self.client.design(
-            gs.mesh_example("hypar"), options=QUICK, files=True, progress=events.append
-        )
+        result = self.client.design(mesh, corners, options=QUICK, files=True, progress=events.append)
         self.assertTrue(events, "no progress event")
         for event in events:
             self.assertIsInstance(event, gs.Progress)
@@ -89,7 +94,7 @@ class ClientTest(unittest.TestCase):
         # The parsed result is the same message as the file.
         self.assertEqual(json.loads(files["design.json"]), result["design"])
         # Without a progress callback the call is a plain JSON POST with the same design.
-        plain = self.client.design(gs.mesh_example("hypar"), options=QUICK)
+        plain = self.client.design(mesh, corners, options=QUICK)
         self.assertEqual(plain["design"], result["design"])
 
     def test_mesh_forms_agree(self):
@@ -195,7 +200,7 @@ class ClientTest(unittest.TestCase):
             try:
                 self.client.design(
                     gs.mesh_example("double-vault"),
-                    options={"resolution": 200},
+                    options=SLOW,
                     cancel=cancel,
                     progress=seen.append,
                 )
@@ -230,7 +235,7 @@ class ClientTest(unittest.TestCase):
     def test_deadline(self):
         with self.assertRaises(gs.DeadlineExceeded) as caught:
             self.client.design(
-                gs.mesh_example("double-vault"), options={"resolution": 200}, timeout=0.3
+                gs.mesh_example("double-vault"), options=SLOW, timeout=0.3
             )
         self.assertEqual(caught.exception.status, "DEADLINE_EXCEEDED")
         entry = self.daemon.wait_for(lambda e: e.get("status") == "DEADLINE_EXCEEDED", 30)
@@ -313,7 +318,7 @@ class UnreachableTest(unittest.TestCase):
                     gs.GridshellError,
                     client.design,
                     gs.mesh_example("double-vault"),
-                    options={"resolution": 300},
+                    options=SLOW,
                     progress=started.append,
                     cancel=busy,
                 )
@@ -327,8 +332,10 @@ class UnreachableTest(unittest.TestCase):
             with self.assertRaises(gs.Unavailable) as caught:
                 client.examples()
             self.assertEqual(caught.exception.http_status, 503)
-            refused = [e for e in daemon.requests("Examples") if e["status"] == "UNAVAILABLE"]
-            self.assertEqual(len(refused), 3)  # the call and two retries
+            # The call and two retries, each logged (the log line may follow the answer).
+            refused = lambda: [e for e in daemon.requests("Examples") if e["status"] == "UNAVAILABLE"]  # noqa: E731
+            daemon.wait_for(lambda e: len(refused()) >= 3, 10)
+            self.assertEqual(len(refused()), 3)
             busy.cancel()
             thread.join(30)
 

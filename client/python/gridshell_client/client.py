@@ -81,7 +81,7 @@ class Cancel:
     def __init__(self):
         self._event = threading.Event()
         self._lock = threading.Lock()
-        self._connections = set()
+        self._lines = set()
 
     @property
     def cancelled(self):
@@ -90,29 +90,42 @@ class Cancel:
     def cancel(self):
         with self._lock:
             self._event.set()
-            connections = list(self._connections)
-        for connection in connections:
-            _shut(connection)
+            lines = list(self._lines)
+        for line in lines:
+            _shut(line)
 
     def wait(self, seconds):
         """Sleeps up to ``seconds``; True when cancelled meanwhile."""
         return self._event.wait(seconds)
 
-    def _attach(self, connection):
+    def _attach(self, line):
         with self._lock:
             if self._event.is_set():
                 return False
-            self._connections.add(connection)
+            self._lines.add(line)
             return True
 
-    def _detach(self, connection):
+    def _detach(self, line):
         with self._lock:
-            self._connections.discard(connection)
+            self._lines.discard(line)
 
 
-def _shut(connection):
-    """Ends a connection from another thread: a blocked read returns (EOF) at once."""
-    sock = getattr(connection, "sock", None)
+class _Line:
+    """The socket of one call (None until connected)."""
+
+    __slots__ = ("sock",)
+
+    def __init__(self):
+        self.sock = None
+
+    def close(self):
+        if self.sock is not None:
+            self.sock.close()
+
+
+def _shut(line):
+    """Ends a call's connection from another thread: a blocked read returns (EOF) at once."""
+    sock = line.sock
     if sock is None:
         return
     try:
@@ -408,14 +421,20 @@ class Client:
     def _attempt(self, method, body, progress, cancel, deadline):
         stream = progress is not None
         connection = self._connect(deadline)
-        if cancel is not None and not cancel._attach(connection):
+        # http.client hands the socket over to the response of a "Connection: close" answer
+        # (connection.sock becomes None): keep it here, to shut it on cancel and to close it at
+        # the end, so the daemon sees the client go at once (it cancels the work then).
+        line = _Line()
+        response = None
+        if cancel is not None and not cancel._attach(line):
             raise Cancelled("cancelled by the client", "CANCELLED")
         try:
             connection.connect()
+            line.sock = connection.sock
             if cancel is not None and cancel.cancelled:
                 raise Cancelled("cancelled by the client", "CANCELLED")
             # From here on, the deadline bounds every read (the daemon answers 504 before it).
-            connection.sock.settimeout(None if deadline is None else _remaining(deadline) + 5)
+            line.sock.settimeout(None if deadline is None else _remaining(deadline) + 5)
             headers = self._headers(deadline, stream)
             headers["Content-Type"] = "application/json"
             connection.request("POST", "%s/v1/%s" % (self._prefix, method), body, headers)
@@ -440,8 +459,11 @@ class Client:
             raise self._transport_error(e, deadline, cancel, retry=True) from None
         finally:
             if cancel is not None:
-                cancel._detach(connection)
+                cancel._detach(line)
+            if response is not None:
+                response.close()
             connection.close()
+            line.close()
 
     def _transport_error(self, e, deadline, cancel, retry=False):
         """The exception for a connection failure: Cancelled, DeadlineExceeded or Unavailable."""

@@ -6,6 +6,7 @@ deviation colour map of deviation.ply.
 """
 
 import math
+import re
 import threading
 import time
 
@@ -120,11 +121,12 @@ class ProgressPrinter:
         self._write(self._prefix + progress_text(progress))
 
 
-def error_text(error, server="", field_names=None):
+def error_text(error, server="", field_names=None, source=""):
     """One or more lines for a report: what went wrong and where, in the plugin's terms.
 
-    ``field_names`` maps request fields (``options.lamella_width``) or their prefixes
-    (``mesh``) to the names the plugin shows (``Lamella width``, ``mesh of 'Dome'``).
+    ``field_names`` maps request fields (``options.lamella_width``) or their first part
+    (``corners``) to the names the plugin shows (``Lamella width``, ``selected corner``); a
+    vertex or triangle of the mesh is named as such in ``source`` (the object's name).
     """
     names = field_names or {}
     if isinstance(error, Cancelled):
@@ -140,7 +142,7 @@ def error_text(error, server="", field_names=None):
         return ["gridshell: the deadline passed (%s)" % error.message]
     if not isinstance(error, GridshellError):
         return ["gridshell: internal error: %s: %s" % (type(error).__name__, error)]
-    where = _field_name(error.field, names)
+    where = _field_name(error.field, names, source)
     if isinstance(error, Infeasible):
         kind = "infeasible design"
     elif isinstance(error, InvalidInput):
@@ -153,11 +155,21 @@ def error_text(error, server="", field_names=None):
     return lines
 
 
-def _field_name(field, names):
+def _field_name(field, names, source=""):
     if not field:
         return ""
     if field in names:
         return "%s (%s)" % (names[field], field)
+    match = re.match(r"^(?:[a-z]+\.)?(mesh)\.(positions|indices)\[(\d+)\]", field)
+    if match:
+        what = "vertex" if match.group(2) == "positions" else "triangle"
+        return "%s %d of %s (%s)" % (what, int(match.group(3)) // 3, source or "the mesh", field)
+    match = re.match(r"^(?:[a-z]+\.)?(corners)(?:\.vertices|\.points)?\[(\d+)\]", field)
+    if match and "corners" in names:
+        index = int(match.group(2))
+        if ".points" in field:
+            index //= 3
+        return "%s %d (%s)" % (names["corners"], index + 1, field)
     head = field.split(".")[0].split("[")[0]
     if head in names:
         return "%s (%s)" % (names[head], field)
