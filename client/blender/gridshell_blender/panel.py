@@ -1,10 +1,26 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The sidebar panel of the 3D viewport (N panel, tab "gridshell")."""
+"""The sidebar panel of the 3D viewport (N panel, tab "gridshell"), with a sub-panel for the
+daemon's address and credentials (closed by default)."""
 
 import bpy
 
 from . import results
 from .operators import STATE
+
+DRAWS = [0]  # how often the panel was drawn (for tests of the UI)
+
+
+def corners_text(obj):
+    if obj is None or obj.type != "MESH":
+        return "Target: select a mesh object"
+    selected = obj.data.total_vert_sel
+    if selected == 0 or selected == len(obj.data.vertices):
+        corners = "automatic"
+    elif selected == 4:
+        corners = "the 4 selected vertices"
+    else:
+        corners = "select 4 vertices (%d are)" % selected
+    return "%s, corners %s" % (obj.name, corners)
 
 
 class VIEW3D_PT_gridshell(bpy.types.Panel):
@@ -15,21 +31,10 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
     bl_category = "gridshell"
 
     def draw(self, context):
+        DRAWS[0] += 1
         layout = self.layout
         settings = context.scene.gridshell
-        obj = context.active_object
-
-        box = layout.box()
-        box.label(text="Daemon", icon="URL")
-        box.prop(settings, "server")
-        box.prop(settings, "token")
-        box.prop(settings, "ca_file")
-        box.prop(settings, "timeout")
-
-        box = layout.box()
-        box.label(text="Target: %s" % (obj.name if obj is not None and obj.type == "MESH" else "(select a mesh)"),
-                  icon="MESH_DATA")
-        box.label(text="Corners: 4 selected vertices, in order; none: automatic")
+        layout.label(text=corners_text(context.active_object), icon="MESH_DATA")
 
         box = layout.box()
         box.label(text="Design", icon="MOD_LATTICE")
@@ -37,11 +42,12 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
         row.prop(settings, "alpha_mode", expand=True)
         if settings.alpha_mode == "value":
             box.prop(settings, "alpha_value")
-        row = box.row(align=True)
-        row.prop(settings, "members_u")
-        row.prop(settings, "members_v")
-        box.prop(settings, "lamella_width")
-        box.prop(settings, "lamella_thickness")
+        col = box.column(align=True)
+        col.prop(settings, "members_u")
+        col.prop(settings, "members_v")
+        col = box.column(align=True)
+        col.prop(settings, "lamella_width", text="Width")
+        col.prop(settings, "lamella_thickness", text="Thickness")
         box.prop(settings, "resolution")
         box.prop(settings, "interior_anchors")
 
@@ -67,14 +73,37 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
             box = layout.box()
             box.label(text="Results", icon="INFO")
             for label, value in rows:
-                split = box.split(factor=0.42)
+                split = box.split(factor=0.4)
                 split.label(text=label)
                 split.label(text=str(value))
 
 
+class VIEW3D_PT_gridshell_daemon(bpy.types.Panel):
+    bl_label = "Daemon"
+    bl_idname = "VIEW3D_PT_gridshell_daemon"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "gridshell"
+    bl_parent_id = "VIEW3D_PT_gridshell"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        settings = context.scene.gridshell
+        layout = self.layout
+        layout.prop(settings, "server")
+        layout.prop(settings, "token")
+        layout.prop(settings, "ca_file")
+        layout.prop(settings, "timeout")
+
+
+CLASSES = (VIEW3D_PT_gridshell, VIEW3D_PT_gridshell_daemon)
+
+
 def register():
-    bpy.utils.register_class(VIEW3D_PT_gridshell)
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
 
 
 def unregister():
-    bpy.utils.unregister_class(VIEW3D_PT_gridshell)
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -200,6 +200,7 @@ def show_deployment(scene, result, call_seconds):
         for d in deviation:
             rgba += gs.plugin.deviation_colour(d, top_deviation) + (1.0,)
         colours.data.foreach_set("color", rgba)
+        mesh.color_attributes.active_color = colours  # what Solid shading's "Attribute" shows
         values = mesh.attributes.new("deviation_distance", "FLOAT", "POINT")
         values.data.foreach_set("value", deviation)
         mesh.materials.append(deviation_material())
@@ -229,16 +230,17 @@ def summary(scene):
     deg = 57.29577951308232
     rows = [
         ("Source", top.get("source", "")),
-        ("α / ᾱ", "%.2f° / %.2f°" % (top["alpha"] * deg, top["alpha_bar"] * deg)),
-        ("Feasible ᾱ", "%.2f° .. %.2f°" % (top["alpha_bar_min"] * deg, top["alpha_bar_max"] * deg)),
-        ("Members", "%d (%d crossings, %d anchors)" % (top["members"], top["crossings"], top["anchors"])),
-        ("Design", "%.2f s (call %.2f s)" % (top["design_seconds"], top["design_call_seconds"])),
+        ("α, ᾱ", "%.2f°, %.2f°" % (top["alpha"] * deg, top["alpha_bar"] * deg)),
+        ("Feasible ᾱ", "%.2f° to %.2f°" % (top["alpha_bar_min"] * deg, top["alpha_bar_max"] * deg)),
+        ("Members", "%d, %d crossings" % (top["members"], top["crossings"])),
+        ("Anchors", "%d" % top["anchors"]),
+        ("Design", "%.1f s, call %.1f s" % (top["design_seconds"], top["design_call_seconds"])),
     ]
     if "rms_with_notches" in top:
-        rows.append(("RMS with notches", "%.4g" % top["rms_with_notches"]))
+        rows.append(("RMS notches", "%.4g" % top["rms_with_notches"]))
     if "rms_without_notches" in top:
-        rows.append(("RMS without", "%.4g" % top["rms_without_notches"]))
+        rows.append(("RMS plain", "%.4g" % top["rms_without_notches"]))
     if "simulate_call_seconds" in top:
         seconds = [top[k] for k in ("seconds_without_notches", "seconds_with_notches") if k in top]
-        rows.append(("Simulate", "%.2f s (call %.2f s)" % (sum(seconds), top["simulate_call_seconds"])))
+        rows.append(("Simulation", "%.1f s, call %.1f s" % (sum(seconds), top["simulate_call_seconds"])))
     return rows
