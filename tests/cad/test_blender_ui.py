@@ -183,19 +183,20 @@ def steps(daemon):
     dome = bpy.data.objects["dome"]
     dome.display_type = "WIRE"
     bpy.data.objects["gridshell patch"].hide_set(True)
-    shown = [o for name in (results.DEPLOYED, results.PLANAR) for o in bpy.data.collections[name].objects]
-    for o in shown:
-        o.select_set(True)
     dome.select_set(False)
+    shown = [o for name in (results.DEPLOYED, results.PLANAR) for o in bpy.data.collections[name].objects]
+    points = [o.matrix_world @ v.co for o in shown if o.type == "MESH" for v in o.data.vertices]
+    points += [o.matrix_world @ p.co.to_3d() for o in shown if o.type == "CURVE" for p in o.data.splines[0].points]
+    lo = [min(p[k] for p in points) for k in range(3)]
+    hi = [max(p[k] for p in points) for k in range(3)]
     window, area, region = view3d()
-    with bpy.context.temp_override(window=window, area=area, region=region):
-        bpy.ops.view3d.view_selected()
-    for o in shown:
-        o.select_set(False)
-    dome.select_set(True)
+    view = area.spaces.active.region_3d
+    view.view_location = [(a + b) / 2 for a, b in zip(lo, hi)]
+    view.view_distance = 0.75 * max(b - a for a, b in zip(lo, hi))
     yield 1.0
     screenshot("blender-result.png")
     dome.display_type = "TEXTURED"
+    dome.select_set(True)
 
     # Esc cancels a running call; the daemon stops the work; earlier results stay.
     members_before = top["members"]

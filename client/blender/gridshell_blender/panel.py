@@ -2,6 +2,8 @@
 """The sidebar panel of the 3D viewport (N panel, tab "gridshell"), with a sub-panel for the
 daemon's address and credentials (closed by default)."""
 
+from array import array
+
 import bpy
 
 from . import results
@@ -13,7 +15,11 @@ DRAWS = [0]  # how often the panel was drawn (for tests of the UI)
 def corners_text(obj):
     if obj is None or obj.type != "MESH":
         return "Target: select a mesh object"
-    selected = obj.data.total_vert_sel
+    if obj.mode == "EDIT" or len(obj.data.vertices) > 500000:
+        return "%s, corners: 4 selected vertices or none" % obj.name
+    flags = array("b", bytes(len(obj.data.vertices)))
+    obj.data.vertices.foreach_get("select", flags)
+    selected = sum(flags)
     if selected == 0 or selected == len(obj.data.vertices):
         corners = "automatic"
     elif selected == 4:
