@@ -192,7 +192,7 @@ def steps(daemon):
     window, area, region = view3d()
     view = area.spaces.active.region_3d
     view.view_location = [(a + b) / 2 for a, b in zip(lo, hi)]
-    view.view_distance = 0.75 * max(b - a for a, b in zip(lo, hi))
+    view.view_distance = 1.5 * max(b - a for a, b in zip(lo, hi))
     yield 1.0
     screenshot("blender-result.png")
     dome.display_type = "TEXTURED"

@@ -234,13 +234,4 @@ class GRIDSHELL_OT_cancel(bpy.types.Operator):
 
 
 CLASSES = (GRIDSHELL_OT_design, GRIDSHELL_OT_simulate, GRIDSHELL_OT_run, GRIDSHELL_OT_cancel)
-
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

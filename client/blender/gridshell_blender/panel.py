@@ -16,17 +16,15 @@ def corners_text(obj):
     if obj is None or obj.type != "MESH":
         return "Target: select a mesh object"
     if obj.mode == "EDIT" or len(obj.data.vertices) > 500000:
-        return "%s, corners: 4 selected vertices or none" % obj.name
+        return "%s: select 4 corners or none" % obj.name
     flags = array("b", bytes(len(obj.data.vertices)))
     obj.data.vertices.foreach_get("select", flags)
     selected = sum(flags)
     if selected == 0 or selected == len(obj.data.vertices):
-        corners = "automatic"
-    elif selected == 4:
-        corners = "the 4 selected vertices"
-    else:
-        corners = "select 4 vertices (%d are)" % selected
-    return "%s, corners %s" % (obj.name, corners)
+        return "%s: automatic corners" % obj.name
+    if selected == 4:
+        return "%s: 4 corners selected" % obj.name
+    return "%s: select 4 corners (%d are)" % (obj.name, selected)
 
 
 class VIEW3D_PT_gridshell(bpy.types.Panel):
@@ -103,13 +101,4 @@ class VIEW3D_PT_gridshell_daemon(bpy.types.Panel):
 
 
 CLASSES = (VIEW3D_PT_gridshell, VIEW3D_PT_gridshell_daemon)
-
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)
