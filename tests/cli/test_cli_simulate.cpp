@@ -72,13 +72,27 @@ TEST(CliSimulate, WritesDeploymentFilesWithBothRuns) {
   EXPECT_NE(result.out.find("with notches"), std::string::npos);
 }
 
+/// A small design (4 + 4 inner members) for tests that simulate it several times.
+const std::string& small_design() {
+  static const std::string file = [] {
+    const std::string out = testing::temp_dir() + "/small-design";
+    const auto result = run_cli(
+        "design example:double-vault --members-u 4 --members-v 4 --quiet "
+        "--out '" +
+        out + "'");
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return out + "/design.json";
+  }();
+  return file;
+}
+
 TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
   // Lime wood (the default): utilization = the largest corner stress / 60 MPa; the corner stress
   // adds both bending stresses at one vertex, so it lies between the larger of a rod's two
   // maxima and their sum; stresses are scale-free (no unit needed, the same with one).
   const std::string out = testing::temp_dir() + "/stress";
-  auto result = run_cli("simulate '" + design_dir() + "/design.json' --quiet --notches on --out '" +
-                        out + "'");
+  auto result =
+      run_cli("simulate '" + small_design() + "' --quiet --notches on --out '" + out + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const json d = json::parse(testing::read_text(out + "/deployment.json"));
   EXPECT_EQ(d["options"]["bending_strength"].get<double>(), 60e6);
@@ -105,8 +119,8 @@ TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
 
   // The same in metres: the same stresses.
   const std::string metres = testing::temp_dir() + "/stress-m";
-  result = run_cli("simulate '" + design_dir() + "/design.json' --quiet --notches on --unit m " +
-                   "--out '" + metres + "'");
+  result = run_cli("simulate '" + small_design() + "' --quiet --notches on --unit m " + "--out '" +
+                   metres + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const json m = json::parse(testing::read_text(metres + "/deployment.json"));
   EXPECT_NEAR(m["with_notches"]["max_normal_stress"].get<double>(), normal, 1e-9 * normal);
@@ -114,7 +128,7 @@ TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
   // A strength of one's own, below the stresses: every lamella above it counts, EXCEEDED shown.
   const double low = normal / 2;
   const std::string own = testing::temp_dir() + "/stress-own";
-  result = run_cli("simulate '" + design_dir() + "/design.json' --quiet --notches on " +
+  result = run_cli("simulate '" + small_design() + "' --quiet --notches on " +
                    "--bending-strength " + std::to_string(low) + " --out '" + own + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const json o = json::parse(testing::read_text(own + "/deployment.json"));
@@ -124,7 +138,7 @@ TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
 
   // A custom material (moduli without a name): strengths unknown, no utilization.
   const std::string custom = testing::temp_dir() + "/stress-custom";
-  result = run_cli("simulate '" + design_dir() + "/design.json' --quiet --notches on " +
+  result = run_cli("simulate '" + small_design() + "' --quiet --notches on " +
                    "--young 8e9 --shear 5e8 --out '" + custom + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const json c = json::parse(testing::read_text(custom + "/deployment.json"));
@@ -134,12 +148,12 @@ TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
   EXPECT_NE(result.out.find("strength unknown"), std::string::npos) << result.out;
 
   // Bad strengths name their flag.
-  result = run_cli("simulate '" + design_dir() + "/design.json' --quiet --bending-strength -3 " +
-                   "--out '" + testing::temp_dir() + "/bad'");
+  result = run_cli("simulate '" + small_design() + "' --quiet --bending-strength -3 " + "--out '" +
+                   testing::temp_dir() + "/bad'");
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.err.find("--bending-strength"), std::string::npos) << result.err;
-  result = run_cli("simulate '" + design_dir() + "/design.json' --quiet --shear-strength 1e20 " +
-                   "--out '" + testing::temp_dir() + "/bad2'");
+  result = run_cli("simulate '" + small_design() + "' --quiet --shear-strength 1e20 " + "--out '" +
+                   testing::temp_dir() + "/bad2'");
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.err.find("--shear-strength"), std::string::npos) << result.err;
 }
