@@ -29,7 +29,9 @@ timed "blender" blender -b --factory-startup --python-exit-code 1 --python tests
 timed "blender zip" blender -b --factory-startup --python-exit-code 1 --python tests/cad/test_blender_zip.py
 timed "blender window" xvfb blender --factory-startup --enable-event-simulate \
   --python tests/cad/test_blender_ui.py
-timed "freecad" quiet_freecad freecadcmd tests/cad/test_freecad.py
+# FreeCAD writes its settings into its user folder: a temporary one.
+mkdir -p "$tmp/freecadcmd"
+(export FREECAD_USER_HOME="$tmp/freecadcmd" && timed "freecad" quiet_freecad freecadcmd tests/cad/test_freecad.py)
 # The workbench as a user installs it: the zip unpacked into the user's Mod folder (a temporary
 # FreeCAD user folder here). The Start page's web view refuses to run as root without this.
 mkdir -p "$tmp/freecad/Mod"
