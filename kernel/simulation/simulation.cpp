@@ -33,6 +33,7 @@
 #include "gridshell/mesh/parallel.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "newton_solver.h"
+#include "rod_derivatives.h"
 #include "rod_terms.h"
 
 namespace gridshell {
@@ -499,21 +500,10 @@ bool Deployment::sides_changed() const {
   return false;
 }
 
+/// The connection or anchor term with its hand-derived Jacobian (rod_derivatives.h).
 template <typename Residual>
-ceres::CostFunction* pair_cost(const Residual& residual, size_t g, size_t h) {
-  using ceres::AutoDiffCostFunction;
-  using rod_terms::PairFunctor;
-  if (g == 4 && h == 4)
-    return new AutoDiffCostFunction<PairFunctor<Residual, 4, 4>, 9, 3, 3, 1, 1, 3, 3, 1, 1>(
-        new PairFunctor<Residual, 4, 4>{residual});
-  if (g == 6 && h == 4)
-    return new AutoDiffCostFunction<PairFunctor<Residual, 6, 4>, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1>(
-        new PairFunctor<Residual, 6, 4>{residual});
-  if (g == 4 && h == 6)
-    return new AutoDiffCostFunction<PairFunctor<Residual, 4, 6>, 9, 3, 3, 1, 1, 3, 3, 1, 1, 3, 1>(
-        new PairFunctor<Residual, 4, 6>{residual});
-  return new AutoDiffCostFunction<PairFunctor<Residual, 6, 6>, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1, 3,
-                                  1>(new PairFunctor<Residual, 6, 6>{residual});
+ceres::CostFunction* pair_cost(const Residual& residual) {
+  return new rod_terms::PairCost<Residual>(residual);
 }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -541,14 +531,13 @@ Deployment::Terms Deployment::build_terms() {
       auto curvature = [xa, xb, term](const double* r, Eigen::MatrixXd& H) {
         rod_terms::add_stretch_curvature(term, xa, xb, r, H);
       };
-      add(new AutoDiffCostFunction<rod_terms::Stretch, 1, 3, 3>(new rod_terms::Stretch(term)),
-          {xa, xb}, curvature);
+      add(new rod_terms::StretchCost(term), {xa, xb}, curvature);
     }
     // Uniform edges: the Voronoi length of every interior vertex is h.
     const double weak = std::sqrt(k_.EI_weak / rod.h), strong = std::sqrt(k_.EI_strong / rod.h),
                  twist = std::sqrt(k_.GJ / rod.h);
     for (int k = 1; k < rod.n; ++k)
-      add(new AutoDiffCostFunction<rod_terms::BendTwist, 3, 3, 3, 3, 1, 1>(new rod_terms::BendTwist{
+      add(new rod_terms::BendTwistCost(rod_terms::BendTwist{
               &rod.ref[k - 1], &rod.ref[k], weak, strong, twist, &rod.reference_twist[k - 1]}),
           {rod.x[k - 1].data(), rod.x[k].data(), rod.x[k + 1].data(), &rod.theta[k - 1],
            &rod.theta[k]});
@@ -595,10 +584,8 @@ Deployment::Terms Deployment::build_terms() {
     std::vector<double*> parameters = bg.parameters;
     parameters.insert(parameters.end(), bh.parameters.begin(), bh.parameters.end());
     rod_terms::ConnectionResidual connection{bg.edge, bh.edge, thickness_, position, direction};
-    add(pair_cost(connection, bg.parameters.size(), bh.parameters.size()), parameters);
-    if (joint.anchor >= 0)
-      add(pair_cost(anchor_residual(joint, bg, bh), bg.parameters.size(), bh.parameters.size()),
-          parameters);
+    add(pair_cost(connection), parameters);
+    if (joint.anchor >= 0) add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
   }
   return out;
 }
