@@ -120,6 +120,7 @@ class BendTwistCost : public ceres::SizedCostFunction<3, 3, 3, 3, 1, 1> {
  public:
   explicit BendTwistCost(const BendTwist& term) : term_(term) {}
   bool Evaluate(const double* const* p, double* r, double** jacobians) const override {
+    if (!jacobians) return term_(p[0], p[1], p[2], p[3], p[4], r);  // the value alone
     const Vec3d x0 = Eigen::Map<const Vec3d>(p[0]), x1 = Eigen::Map<const Vec3d>(p[1]),
                 x2 = Eigen::Map<const Vec3d>(p[2]);
     const double theta0 = *p[3], theta1 = *p[4];
@@ -145,7 +146,6 @@ class BendTwistCost : public ceres::SizedCostFunction<3, 3, 3, 3, 1, 1> {
     r[0] = term_.sqrt_weak * k1;
     r[1] = term_.sqrt_strong * k2;
     r[2] = term_.sqrt_twist * (theta1 - theta0 + reference_twist);
-    if (!jacobians) return true;
 
     const Mat3d dkb0 =
         (-2 * cross_matrix(e1) - kb * (f1.length * f0.t + e1).transpose()) / denominator;
@@ -260,6 +260,7 @@ class PairCost : public ceres::CostFunction {
     g_blocks_ = residual.g.neighbour ? 6 : 4;
   }
   bool Evaluate(const double* const* p, double* r, double** jacobians) const override {
+    if (!jacobians) return residual_.evaluate(p, p + g_blocks_, r);  // the value alone
     const MemberPointDerivatives a = member_point_derivatives(p, residual_.g);
     const MemberPointDerivatives b = member_point_derivatives(p + g_blocks_, residual_.h);
     // Residual rows as linear maps of (q_a, m_a) and (q_b, m_b): r = A [q_a; m_a] + B [q_b; m_b]
@@ -289,7 +290,6 @@ class PairCost : public ceres::CostFunction {
       B.block<3, 3>(6, 3) = wd * I;
     }
     Eigen::Map<Eigen::Matrix<double, 9, 1>>{r} = value;
-    if (!jacobians) return true;
     const Eigen::Matrix<double, 9, 12> ja = A * a.d, jb = B * b.d;
     static constexpr int kColumn[6] = {0, 3, 6, 7, 8, 11};  // first column of each block
     static constexpr int kSize[6] = {3, 3, 1, 1, 3, 1};
