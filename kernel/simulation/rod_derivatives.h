@@ -312,4 +312,28 @@ class PairCost : public ceres::CostFunction {
   int g_blocks_ = 4;
 };
 
+/// The direction of a lamella at an anchor (rod_terms::AnchorTangent) with its analytic
+/// Jacobian: r = w (t - t_a), t = e / |e|, D t / D x_b = (I - t t^T) / |e| = -D t / D x_a.
+class AnchorTangentCost : public ceres::SizedCostFunction<3, 3, 3> {
+ public:
+  explicit AnchorTangentCost(const AnchorTangent& term) : term_(term) {}
+  bool Evaluate(const double* const* p, double* r, double** jacobians) const override {
+    const Vec3d e = Eigen::Map<const Vec3d>(p[1]) - Eigen::Map<const Vec3d>(p[0]);
+    const double length = e.norm();
+    if (!(length > 0)) return false;
+    const Vec3d t = e / length;
+    Eigen::Map<Vec3d>{r} = term_.sqrt_weight * (t - term_.tangent);
+    if (jacobians) {
+      using RowMajor33 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+      const Mat3d dt = term_.sqrt_weight * (Mat3d::Identity() - t * t.transpose()) / length;
+      if (jacobians[0]) Eigen::Map<RowMajor33>{jacobians[0]} = -dt;
+      if (jacobians[1]) Eigen::Map<RowMajor33>{jacobians[1]} = dt;
+    }
+    return true;
+  }
+
+ private:
+  AnchorTangent term_;
+};
+
 }  // namespace gridshell::rod_terms

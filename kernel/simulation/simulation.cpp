@@ -133,6 +133,7 @@ struct Joint {
 struct AnchorTarget {
   Vec3 position = Vec3::Zero();  // scaled
   Vec3 normal = Vec3::UnitZ();
+  Vec3 tangent[2] = {Vec3::UnitX(), Vec3::UnitY()};  // of the g and h lamellas, at the start
 };
 
 struct Stiffness {
@@ -448,7 +449,14 @@ void Deployment::bind_anchors(const std::vector<Anchor>& anchors) {
                                     ") is not a crossing of the grid");
     if (joints_[found].anchor >= 0) continue;  // the same crossing anchored twice
     joints_[found].anchor = static_cast<int>(anchors_.size());
-    anchors_.push_back({a.position * scale_, a.normal.normalized()});
+    AnchorTarget target{a.position * scale_, a.normal.normalized()};
+    // The lamellas start on their geodesics: the edges' directions there are the target's.
+    for (int end = 0; end < 2; ++end) {
+      const Slider& s = joints_[found].end[end];
+      const Rod& rod = rods_[s.rod];
+      target.tangent[end] = (rod.x[s.edge + 1] - rod.x[s.edge]).normalized();
+    }
+    anchors_.push_back(target);
   }
 }
 
@@ -585,7 +593,16 @@ Deployment::Terms Deployment::build_terms() {
     parameters.insert(parameters.end(), bh.parameters.begin(), bh.parameters.end());
     rod_terms::ConnectionResidual connection{bg.edge, bh.edge, thickness_, position, direction};
     add(pair_cost(connection), parameters);
-    if (joint.anchor >= 0) add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
+    if (joint.anchor >= 0) {
+      add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
+      if (options_.anchor_tangents)
+        for (int end = 0; end < 2; ++end) {
+          const rod_terms::AnchorTangent tangent{anchors_[joint.anchor].tangent[end],
+                                                 std::sqrt(2 * w_anchor_direction_)};
+          const Binding& b = end == 0 ? bg : bh;
+          add(new rod_terms::AnchorTangentCost(tangent), {b.parameters[0], b.parameters[1]});
+        }
+    }
   }
   return out;
 }
@@ -1047,6 +1064,14 @@ DeploymentRun Deployment::results() {
           .evaluate(const_cast<const double* const*>(bg.parameters.data()),
                     const_cast<const double* const*>(bh.parameters.data()), r);
       for (double v : r) energy["anchor"] += 0.5 * v * v;
+      if (options_.anchor_tangents)
+        for (const Slider* s : {&a, &b}) {
+          const Rod& rod = rods_[s->rod];
+          rod_terms::AnchorTangent{anchors_[joint.anchor].tangent[s == &a ? 0 : 1],
+                                   std::sqrt(2 * w_anchor_direction_)}(
+              rod.x[s->edge].data(), rod.x[s->edge + 1].data(), r);
+          for (int i = 0; i < 3; ++i) energy["anchor"] += 0.5 * r[i] * r[i];
+        }
     }
     for (const Slider* s : {&a, &b}) {
       if (!s->sliding) continue;

@@ -172,6 +172,19 @@ TEST(RodTermAnalyticJacobian, BendTwistMatchesAutomaticAndDifferences) {
   }
 }
 
+TEST(RodTermAnalyticJacobian, AnchorTangentMatchesAutomaticAndDifferences) {
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Vec3 a = random_vector(rng), b = a + Vec3(1, 0.2, -0.3) + random_vector(rng, 0.4);
+    const rod_terms::AnchorTangent term{Vec3(1, 0.1, 0.2).normalized(), 3.5};
+    ceres::AutoDiffCostFunction<rod_terms::AnchorTangent, 3, 3, 3> automatic(
+        new rod_terms::AnchorTangent(term));
+    rod_terms::AnchorTangentCost analytic(term);
+    expect_same_jacobians(analytic, automatic, {v3(a), v3(b)}, 1e-12);
+    expect_jacobian_matches_differences(analytic, {v3(a), v3(b)});
+  }
+}
+
 /// Parameters of one member at a connection: edge (x_a, x_b), theta, beta [, neighbour].
 struct MemberSetup {
   std::vector<std::vector<double>> parameters;
