@@ -259,10 +259,13 @@ bool terminal(const std::string& state) {
 /// The array's tasks as accounting (sacct) has them; nullopt when sacct does not answer
 /// (a cluster without accounting).
 std::optional<std::vector<TaskState>> task_states(const std::string& job) {
+  // With the steps: a cancelled task's own record says exit code 0:0, its batch step has the
+  // signal that ended the script (scancel --signal=KILL reaches it as SIGTERM, then SIGKILL).
   const CommandOutput out =
-      run_command({"sacct", "-j", job, "-X", "-n", "-P", "-o", "JobID,State,ExitCode"});
+      run_command({"sacct", "-j", job, "-n", "-P", "-o", "JobID,State,ExitCode"});
   if (out.exit_code != 0) return std::nullopt;
   std::vector<TaskState> states;
+  std::map<std::string, std::string> batch_exit;
   std::istringstream lines(out.out);
   std::string line;
   while (std::getline(lines, line)) {
@@ -271,29 +274,17 @@ std::optional<std::vector<TaskState>> task_states(const std::string& job) {
     std::string field;
     while (std::getline(fields, field, '|')) parts.push_back(field);
     if (parts.size() < 3) continue;
+    const auto dot = parts[0].find('.');
+    if (dot != std::string::npos) {
+      if (parts[0].substr(dot + 1) == "batch") batch_exit[parts[0].substr(0, dot)] = parts[2];
+      continue;
+    }
     // "CANCELLED by 0" -> "CANCELLED"
     states.push_back({parts[0], parts[1].substr(0, parts[1].find(' ')), parts[2]});
   }
+  for (TaskState& t : states)
+    if (batch_exit.count(t.id) && batch_exit[t.id] != "0:0") t.exit_code = batch_exit[t.id];
   return states;
-}
-
-/// How many array tasks an accounting JobID stands for: "15_3" one, "15_[3-7,9%2]" six.
-int tasks_in(const std::string& id) {
-  const auto open = id.find('['), close = id.find(']');
-  if (open == std::string::npos || close == std::string::npos) return 1;
-  std::string list = id.substr(open + 1, close - open - 1);
-  list = list.substr(0, list.find('%'));
-  int count = 0;
-  std::istringstream parts(list);
-  std::string part;
-  while (std::getline(parts, part, ',')) {
-    const auto dash = part.find('-');
-    if (dash == std::string::npos)
-      ++count;
-    else
-      count += std::atoi(part.c_str() + dash + 1) - std::atoi(part.c_str()) + 1;
-  }
-  return count;
 }
 
 /// Which task claimed which row in a submission (claims/<n>/<id> holds the task's JOBID_TASK).
@@ -359,16 +350,26 @@ void wait_for_job(const std::string& dir, const Submission& s, const EngineOptio
 
 /// Prints the tasks that did not complete, as accounting saw them, with the rows they held.
 void report_tasks(const std::string& dir, const Submission& s, bool quiet) {
+  // The tasks that started: Slurm creates a task's output file when it starts it. The others
+  // were cancelled while pending (the first task that found every row taken cancels them), and
+  // accounting lists them as one record "JOB_[range]".
+  std::set<std::string> started;
+  for (int task = 0; task < s.tasks; ++task)
+    if (fs::exists(slurm_dir(dir) / ("task-" + s.job + "_" + std::to_string(task) + ".log")))
+      started.insert(s.job + "_" + std::to_string(task));
+  // Accounting learns of the last tasks' ends a moment after the controller: wait until every
+  // started task is there in a final state (bounded: 20 s).
   std::optional<std::vector<TaskState>> states;
-  // Accounting learns of the last tasks' ends a moment after the controller: wait for every task
-  // to be there and in a final state (bounded).
+  std::map<std::string, TaskState> by_task;
   for (int i = 0; i < 100; ++i) {
     states = task_states(s.job);
     if (!states) break;
-    int final_count = 0;
+    by_task.clear();
     for (const TaskState& t : *states)
-      if (terminal(t.state)) final_count += tasks_in(t.id);
-    if (final_count >= s.tasks) break;
+      if (t.id.find('[') == std::string::npos && terminal(t.state)) by_task[t.id] = t;
+    bool all = true;
+    for (const std::string& task : started) all = all && by_task.count(task);
+    if (all) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
   if (!states) {
@@ -377,34 +378,31 @@ void report_tasks(const std::string& dir, const Submission& s, bool quiet) {
     return;
   }
   std::map<std::string, int> counts;
-  for (const TaskState& t : *states) ++counts[t.state];
+  for (const auto& [task, t] : by_task) ++counts[t.state];
+  const int not_started = s.tasks - static_cast<int>(by_task.size());
   if (!quiet) {
     std::cerr << "sweep: job " << s.job << ":";
     for (const auto& [state, count] : counts) std::cerr << " " << count << " " << state;
+    if (not_started > 0)
+      std::cerr << ", " << not_started
+                << " not started (their rows were taken by tasks that ran first; cancelled "
+                   "while pending)";
     std::cerr << "\n";
   }
   const auto claims = claims_by_task(dir, s.number);
-  int unneeded = 0;
-  for (const TaskState& t : *states) {
+  for (const auto& [task, t] : by_task) {
     if (t.state == "COMPLETED") continue;
-    if (t.state == "CANCELLED" && !claims.count(t.id)) {
-      unneeded += tasks_in(t.id);  // cancelled while pending by a task that found all rows taken
-      continue;
-    }
     std::string rows;
-    if (claims.count(t.id))
-      for (const std::string& id : claims.at(t.id))
+    if (claims.count(task))
+      for (const std::string& id : claims.at(task))
         if (!finished(dir, id)) rows += " " + id;
     const auto colon = t.exit_code.find(':');
     const std::string code = t.exit_code.substr(0, colon);
     const std::string signal = colon == std::string::npos ? "0" : t.exit_code.substr(colon + 1);
-    std::cerr << "sweep: task " << t.id << " " << t.state << " (exit code " << code
+    std::cerr << "sweep: task " << task << " " << t.state << " (exit code " << code
               << (signal != "0" ? ", signal " + signal : std::string()) << ")"
               << (rows.empty() ? "" : "; rows without a result:" + rows) << "\n";
   }
-  if (unneeded && !quiet)
-    std::cerr << "sweep: " << unneeded << " array tasks were not needed (their rows were taken "
-              << "by tasks that ran earlier) and were cancelled while pending\n";
 }
 
 }  // namespace

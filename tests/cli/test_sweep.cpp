@@ -139,7 +139,7 @@ TEST(SweepManifest, EveryBadRowIsListedAndNothingStarts) {
            "line 5 (id r4), column alpha:",
            "line 6 (id r5), column members-u:",
            "line 7 (id r6), column notches:",
-           "line 8 (id r7), column corners: (corner 4): vertex index 99999 is out of range",
+           "line 8 (id r7), column corners: vertex index 99999 is out of range",
            "line 9 (id r8), column mesh:",
            "line 10 (id r9), column lamella-width:",
            "line 11 (id r10), column material:",
@@ -304,10 +304,10 @@ std::vector<pid_t> processes_with(const std::string& text) {
 TEST(SweepLocal, ASweepKilledMidRowLeavesNoPartialRowAndResumes) {
   const std::string dir = testing::temp_dir();
   const std::string out = dir + "/out";
-  // One row long enough to be caught running (the default resolution on a larger example).
+  // One row long enough to be caught running (about 2 s of CPU: archway at its defaults).
   const std::string manifest =
       testing::write_text(dir, "one.jsonl",
-                          "{\"id\": \"slow\", \"mesh\": \"example:waves-bump\"}\n"
+                          "{\"id\": \"slow\", \"mesh\": \"example:archway\"}\n"
                           "{\"id\": \"quick\", \"mesh\": \"example:double-vault\", "
                           "\"resolution\": 16, \"members-u\": 3, \"members-v\": 3}\n");
   const pid_t pid = fork();
