@@ -347,6 +347,11 @@ RowStatus run_row(const std::string& dir, const Row& row, const RowSettings& set
     // with it), and reads nothing.
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (getppid() != parent) _exit(137);
+    // A session of its own, as slurmstepd gives each array task: the terminal's Ctrl-C reaches
+    // the sweep only (which stops its rows with SIGTERM), and with the kernel's autogroup
+    // scheduling each row competes for the CPUs as one group, as a Slurm task does (sharing one
+    // group, the local engine's rows got a third of the Slurm tasks' CPU on a busy machine).
+    setsid();
     const int null = open("/dev/null", O_RDONLY);
     if (null >= 0) dup2(null, 0);
     dup2(log, 1);

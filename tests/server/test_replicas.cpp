@@ -54,6 +54,10 @@ class Replicas {
   std::string log(int i) const {
     return testing::read_text(state_ + "/r" + std::to_string(i) + ".log");
   }
+  /// Empties replica i's log (a restarted daemon appends to it).
+  void clear_log(int i) const {
+    std::ofstream(state_ + "/r" + std::to_string(i) + ".log", std::ios::trunc);
+  }
 
   static std::vector<std::string> lines(const std::string& text) {
     std::vector<std::string> out;
@@ -100,7 +104,53 @@ std::map<std::string, std::string> mapping(int port, const std::vector<std::stri
   return m;
 }
 
-TEST(Replicas, AKeyStaysOnItsReplicaAndOnlyTheLostReplicasKeysMove) {
+/// Runs the gridshell CLI with `arguments`, stdout and stderr into files of `dir`; returns the
+/// exit code, or -1 if it did not end within `seconds` (then it is killed: a hung request).
+struct Outcome {
+  int exit_code = -1;
+  std::string err;
+};
+Outcome run_bounded(const std::vector<std::string>& arguments, const std::string& dir,
+                    double seconds) {
+  fs::create_directories(dir);
+  std::vector<std::string> argv_strings{GRIDSHELL_CLI};
+  argv_strings.insert(argv_strings.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (std::string& s : argv_strings) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, (dir + "/stdout").c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, (dir + "/stderr").c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  Outcome outcome;
+  if (rc != 0) return outcome;
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::milliseconds(static_cast<long long>(seconds * 1000));
+  int status = 0;
+  for (;;) {
+    const pid_t done = waitpid(pid, &status, WNOHANG);
+    if (done == pid) {
+      outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      break;
+    }
+    if (std::chrono::steady_clock::now() > deadline) {
+      ::kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      break;  // -1: hung
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  outcome.err = testing::read_text(dir + "/stderr");
+  return outcome;
+}
+
+TEST(Replicas, AKeyStaysOnItsReplicaOnlyTheLostReplicasKeysMoveRedesignsFindTheCache) {
   REQUIRE_HAPROXY();
   Replicas replicas(3);
   ASSERT_TRUE(replicas.ok());
@@ -161,58 +211,10 @@ TEST(Replicas, AKeyStaysOnItsReplicaAndOnlyTheLostReplicasKeysMove) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   EXPECT_EQ(after, before) << "r2's keys return to it";
-}
 
-/// Runs the gridshell CLI with `arguments`, stdout and stderr into files of `dir`; returns the
-/// exit code, or -1 if it did not end within `seconds` (then it is killed: a hung request).
-struct Outcome {
-  int exit_code = -1;
-  std::string err;
-};
-Outcome run_bounded(const std::vector<std::string>& arguments, const std::string& dir,
-                    double seconds) {
-  fs::create_directories(dir);
-  std::vector<std::string> argv_strings{GRIDSHELL_CLI};
-  argv_strings.insert(argv_strings.end(), arguments.begin(), arguments.end());
-  std::vector<char*> argv;
-  for (std::string& s : argv_strings) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 1, (dir + "/stdout").c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, (dir + "/stderr").c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  Outcome outcome;
-  if (rc != 0) return outcome;
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::milliseconds(static_cast<long long>(seconds * 1000));
-  int status = 0;
-  for (;;) {
-    const pid_t done = waitpid(pid, &status, WNOHANG);
-    if (done == pid) {
-      outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      break;
-    }
-    if (std::chrono::steady_clock::now() > deadline) {
-      ::kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      break;  // -1: hung
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  outcome.err = testing::read_text(dir + "/stderr");
-  return outcome;
-}
-
-TEST(Replicas, RedesignsThroughTheProxyFindTheirPatchCached) {
-  REQUIRE_HAPROXY();
-  Replicas replicas(3);
-  ASSERT_TRUE(replicas.ok());
+  // Redesigns through the proxy find their patch cached: the key the daemon computed from the
+  // request, the one the CLI sent (the same function), and the cache of the replica that key
+  // leads to: cold first, warm after.
   const std::string dir = testing::temp_dir();
   std::string key;
   for (const char* alpha : {"min", "40deg", "45deg", "max"}) {
@@ -222,8 +224,6 @@ TEST(Replicas, RedesignsThroughTheProxyFindTheirPatchCached) {
                     dir + "/" + alpha, 120);
     ASSERT_EQ(out.exit_code, 0) << out.err;
     const json report = json::parse(testing::read_text(dir + "/" + alpha + "/report.json"));
-    // The key the daemon computed from the request, the one the CLI sent (the same function),
-    // and the cache of the replica that key leads to: cold first, warm after.
     if (key.empty()) key = report["patch_key"];
     EXPECT_EQ(report["patch_key"], key);
     EXPECT_EQ(report["distance_maps_cached"].get<bool>(), std::string(alpha) != "min") << alpha;
@@ -260,10 +260,11 @@ TEST(Replicas, FaultTestAKilledReplicaLosesNoRequestAndNoRow) {
   ASSERT_EQ(local.exit_code, 0) << local.err;
   const json local_summary = json::parse(testing::read_text(dir + "/local-sweep/summary.json"));
 
+  // One set of replicas for the three repetitions (each kills and restarts another replica).
+  Replicas replicas(3);
+  ASSERT_TRUE(replicas.ok());
   for (int repetition = 1; repetition <= 3; ++repetition) {
     SCOPED_TRACE("repetition " + std::to_string(repetition));
-    Replicas replicas(3);
-    ASSERT_TRUE(replicas.ok());
     const std::string base = dir + "/rep" + std::to_string(repetition);
     std::atomic<int> finished{0};
     std::mutex mutex;
@@ -332,6 +333,7 @@ TEST(Replicas, FaultTestAKilledReplicaLosesNoRequestAndNoRow) {
          at = log.find("\"listening\"", at + 1))
       ++starts;
     EXPECT_EQ(starts, 2u) << log;
+    replicas.clear_log(victim);
   }
 }
 
