@@ -7,7 +7,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-ctest --test-dir build --output-on-failure -j "$(nproc)"
+ctest --test-dir build --output-on-failure -j "$(nproc)" -LE cluster
+bash scripts/test-cluster.sh  # Slurm sweeps, replicas behind haproxy (starts and stops them)
 bash scripts/setup-web.sh
 bash scripts/build-web.sh
 bash scripts/test-web.sh

@@ -284,10 +284,10 @@ Command add_bench_command(CLI::App& app) {
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
   sub->add_option("WHAT", args->what,
-                  "geodesic | design | simulate | resolution | service | interactive")
+                  "geodesic | design | simulate | resolution | service | interactive | sweep")
       ->required()
       ->check(CLI::IsMember(
-          {"geodesic", "design", "simulate", "resolution", "service", "interactive"}));
+          {"geodesic", "design", "simulate", "resolution", "service", "interactive", "sweep"}));
   sub->add_option("--edges", args->edges,
                   "rod edges per interval between crossings to compare (resolution)")
       ->delimiter(',')
@@ -328,6 +328,7 @@ Command add_bench_command(CLI::App& app) {
       return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
     }
     if (args->what == "service") return bench_service(args->out, args->no_write, args->repeats);
+    if (args->what == "sweep") return bench_sweep(args->out, args->no_write, args->repeats);
     if (args->what == "interactive") {
       if (args->request_threads < 0 || args->request_threads > 1024)
         throw InvalidInput("--request-threads", "must be 0..1024");

@@ -58,7 +58,10 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
 }
 
 v1::DesignRequest design_request(const DesignFlags& flags) {
-  const InputMesh input = load_input(flags.mesh);
+  return design_request(flags, load_input(flags.mesh));
+}
+
+v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& input) {
   std::string corners_used;
   const CornerSpec spec = resolve_corners(input, flags.corners, &corners_used);
   v1::DesignRequest request;
@@ -110,7 +113,7 @@ int run_design(const DesignArguments& args) {
   const Progress progress = make_progress(args.output.quiet);
   v1::DesignResult result;
   if (args.output.remote.remote()) {
-    prepare_design(request);  // bad options fail here, before a remote call
+    // design() checks the request (prepare_design) before the call: bad options fail first.
     result = RemoteClient(args.output.remote).design(request, progress);
   } else {
     result = gridshell::run_design(request, progress, {args.output.threads});

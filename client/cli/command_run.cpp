@@ -93,7 +93,7 @@ int run_run(const RunArguments& args) {
   std::optional<RemoteClient> client;
   v1::RunResult result;
   if (remote) {
-    prepare_design(design_request_message);  // bad options fail before any work
+    // design() checks the request (prepare_design) before its call: bad options fail first.
     client.emplace(args.output.remote);
     *result.mutable_design() = client->design(design_request_message, progress);
   } else {

@@ -15,6 +15,7 @@
 namespace gridshell::cli {
 
 using Command = std::function<int()>;
+struct InputMesh;  // cli_support.h
 
 Command add_patch_command(CLI::App& app);
 Command add_geodesic_command(CLI::App& app);
@@ -53,6 +54,8 @@ struct DesignFlags {
 void add_design_flags(CLI::App* sub, DesignFlags& flags);
 /// Loads the mesh and builds the request (InvalidInput names the flag).
 v1::DesignRequest design_request(const DesignFlags& flags);
+/// The same with the mesh loaded already (`gridshell sweep` loads each mesh once for many rows).
+v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& input);
 void print_design_summary(const v1::DesignResult& result);
 
 /// Simulation flags shared by `simulate` and `run`.
@@ -73,6 +76,11 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
 void print_deployment_summary(const v1::Deployment& deployment);
 
 Command add_health_command(CLI::App& app);
+/// `gridshell bench sweep` (bench_sweep.cpp): the local and Slurm engines on 32 rows, Slurm's
+/// per-task overhead, `sweep collect` over 10 000 rows; section "sweep" of `out`.
+int bench_sweep(const std::string& out, bool no_write, int repeats);
+/// `gridshell sweep` (command_sweep.cpp, sweep.h).
+Command add_sweep_command(CLI::App& app);
 
 /// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client
 /// count; the table goes to section "service" of `out`.

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   add(cli::add_simulate_command);
   add(cli::add_run_command);
   add(cli::add_health_command);
+  add(cli::add_sweep_command);
 
   try {
     app.parse(argc, argv);

@@ -3,13 +3,16 @@
 // it the options still parse and a remote run explains why it cannot happen.
 #include "remote.h"
 
+#include <cmath>
 #include <condition_variable>
 #include <fstream>
 #include <mutex>
+#include <random>
 #include <sstream>
 #include <thread>
 
 #include "gridshell/mesh/errors.h"
+#include "gridshell/patch_routing_key.h"
 
 #ifdef GRIDSHELL_HAVE_GRPC
 #include <grpcpp/grpcpp.h>
@@ -104,13 +107,75 @@ struct RemoteClient::Impl {
 
   /// One server-streaming call: progress events go to `progress`, the result is returned. The
   /// cancellation flag is watched while the call waits, so Ctrl-C cancels on the daemon too.
+  /// `patch_key` (x-gridshell-patch-key) lets a proxy send every design on one patch to the same
+  /// replica. A call that fails with UNAVAILABLE (daemon down, restarting or shutting down; no
+  /// replica behind the proxy) is made again after a back-off: every method is idempotent.
   template <class Event, class Request>
   auto call(std::unique_ptr<grpc::ClientReader<Event>> (v1::Gridshell::Stub::*method)(
                 grpc::ClientContext*, const Request&),
-            const Request& request, const Progress& progress) {
+            const Request& request, const Progress& progress, const std::string& patch_key = "") {
     using Result = std::decay_t<decltype(std::declval<Event>().result())>;
+    const auto deadline =
+        options.timeout > 0
+            ? std::chrono::system_clock::now() +
+                  std::chrono::microseconds(static_cast<long long>(options.timeout * 1e6))
+            : std::chrono::system_clock::time_point::max();
+    for (int attempt = 1;; ++attempt) {
+      Result result;
+      bool have_result = false;
+      const grpc::Status status =
+          call_once(method, request, progress, patch_key, deadline, &result, &have_result);
+      if (progress.cancelled()) throw Cancelled();
+      if (status.ok()) {
+        if (!have_result) throw RemoteError("gridshelld at " + options.server + ": no result");
+        return result;
+      }
+      const double delay = retry_delay(status, attempt);
+      if (delay < 0 || std::chrono::system_clock::now() +
+                               std::chrono::milliseconds(static_cast<long long>(delay * 1e3)) >=
+                           deadline)
+        fail(status);
+      // Wait, still answering Ctrl-C; the progress line says why nothing moves.
+      progress.report("gridshelld unavailable, retry " + std::to_string(attempt) + " of " +
+                          std::to_string(kMaxRetries),
+                      0);
+      const auto until = std::chrono::steady_clock::now() +
+                         std::chrono::milliseconds(static_cast<long long>(delay * 1e3));
+      while (std::chrono::steady_clock::now() < until) {
+        progress.check();
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    }
+  }
+
+  /// Retries of a call the daemon did not answer: UNAVAILABLE (refused, reset, no replica up,
+  /// shutting down), or UNKNOWN / INTERNAL without the daemon's ErrorDetail, which is how gRPC
+  /// reports a stream cut under it ("Stream removed" when the replica behind haproxy died
+  /// mid-call; the daemon itself never answers UNKNOWN and details its INTERNAL errors). At most
+  /// kMaxRetries, waits 0.25 s doubling up to 4 s, each scaled by a random factor in [0.5, 1) so
+  /// that many clients do not return in step. -1: give up now.
+  static constexpr int kMaxRetries = 5;
+  static double retry_delay(const grpc::Status& status, int attempt) {
+    const grpc::StatusCode code = status.error_code();
+    const bool cut = (code == grpc::StatusCode::UNKNOWN || code == grpc::StatusCode::INTERNAL) &&
+                     status.error_details().empty();
+    if ((code != grpc::StatusCode::UNAVAILABLE && !cut) || attempt > kMaxRetries) return -1;
+    thread_local std::mt19937 random{std::random_device{}()};
+    const double base = std::min(4.0, 0.25 * std::pow(2.0, attempt - 1));
+    return base * std::uniform_real_distribution<double>(0.5, 1.0)(random);
+  }
+
+  template <class Event, class Request, class Result>
+  grpc::Status call_once(std::unique_ptr<grpc::ClientReader<Event>> (v1::Gridshell::Stub::*method)(
+                             grpc::ClientContext*, const Request&),
+                         const Request& request, const Progress& progress,
+                         const std::string& patch_key,
+                         std::chrono::system_clock::time_point deadline, Result* result,
+                         bool* have_result) {
     grpc::ClientContext context;
     prepare(context);
+    if (deadline != std::chrono::system_clock::time_point::max()) context.set_deadline(deadline);
+    if (!patch_key.empty()) context.AddMetadata("x-gridshell-patch-key", patch_key);
     std::mutex mutex;
     std::condition_variable wake;
     bool done = false;
@@ -132,16 +197,14 @@ struct RemoteClient::Impl {
       wake.notify_all();
       if (watcher.joinable()) watcher.join();
     };
-    Result result;
-    bool have_result = false;
     grpc::Status status;
     try {
       auto reader = (stub.get()->*method)(&context, request);
       Event event;
       while (reader->Read(&event)) {
         if (event.has_result()) {
-          result = std::move(*event.mutable_result());
-          have_result = true;
+          *result = std::move(*event.mutable_result());
+          *have_result = true;
         } else if (event.has_progress()) {
           try {
             progress.report(event.progress().stage(), event.progress().fraction());
@@ -156,10 +219,7 @@ struct RemoteClient::Impl {
       throw;
     }
     stop_watcher();
-    if (progress.cancelled()) throw Cancelled();
-    if (!status.ok()) fail(status);
-    if (!have_result) throw RemoteError("gridshelld at " + options.server + ": no result");
-    return result;
+    return status;
   }
 };
 
@@ -203,7 +263,9 @@ v1::PatchResult RemoteClient::patch(const v1::PatchRequest& request, const Progr
 }
 
 v1::DesignResult RemoteClient::design(const v1::DesignRequest& request, const Progress& progress) {
-  return impl_->call(&v1::Gridshell::Stub::Design, request, progress);
+  // The key checks and converts the request first (prepare_design): bad options fail here,
+  // before any call.
+  return impl_->call(&v1::Gridshell::Stub::Design, request, progress, patch_routing_key(request));
 }
 
 v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest& request,

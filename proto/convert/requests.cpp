@@ -16,6 +16,7 @@
 #include "gridshell/mesh/curvature.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/patch_cache.h"
+#include "gridshell/patch_routing_key.h"
 
 namespace gridshell {
 namespace {
@@ -533,6 +534,7 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     add_view("maps.svg", maps_svg(design));
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
     out.mutable_report()->set_distance_maps_cached(cached);
+    out.mutable_report()->set_patch_key(patch_routing_key(in.mesh, in.corners, in.options));
     if (request.files())  // the files the CLI writes, for clients that offer downloads
       for (auto& [file, content] : design_files(out))
         if (file == "design.json" || file == "report.json") add_view(file.c_str(), content);

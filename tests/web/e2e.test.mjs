@@ -39,8 +39,8 @@ async function until(predicate, ms, what) {
 }
 
 /** Starts gridshelld on free loopback ports serving the page; resolves when it listens. */
-async function startDaemon(extra) {
-  const proc = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', '127.0.0.1:0', '--static', path.join(web, 'dist'),
+async function startDaemon(extra, http = '127.0.0.1:0') {
+  const proc = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', http, '--static', path.join(web, 'dist'),
                                   '--workers', '2', ...extra], { stdio: ['ignore', 'ignore', 'pipe'] });
   let log = '';
   proc.stderr.setEncoding('utf8');
@@ -196,6 +196,33 @@ test('Design, then the ᾱ slider redesigns with the cached distance maps', asyn
   await page.mouse.wheel(0, -300); // zoom in about the cursor
   await until(async () => (await scale()) > fitted * 1.2, 5000, 'the plan zoomed in');
   await page.getByRole('button', { name: '3D' }).click();
+});
+
+test('a redesign sends the patch key the daemon computes (X-Gridshell-Patch-Key = report.patch_key)', async () => {
+  // The key routes designs of one patch to one replica behind haproxy (docs/api.md); the page
+  // computes it with WebCrypto (routing.ts), the daemon in C++, from the same bytes. The page's
+  // request is sent again without event stream, and its report names the daemon's key.
+  const seen = [];
+  const onRequest = (request) => {
+    if (request.url().endsWith('/v1/design'))
+      seen.push({ key: request.headers()['x-gridshell-patch-key'], body: request.postData() });
+  };
+  page.on('request', onRequest);
+  try {
+    const n = await designCount();
+    const slider = byId('alpha-slider');
+    const [min, max] = [Number(await slider.getAttribute('min')), Number(await slider.getAttribute('max'))];
+    await slider.fill(String(Math.round((min + 0.25 * (max - min)) * 10) / 10));
+    await until(async () => (await designCount()) === n + 1, 60000, 'the redesign');
+  } finally {
+    page.off('request', onRequest);
+  }
+  const last = seen.at(-1);
+  assert.match(last.key ?? '', /^[0-9a-f]{32}$/);
+  const reply = await (await fetch(base + 'v1/design', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: last.body,
+  })).json();
+  assert.equal(last.key, reply.report.patch_key);
 });
 
 test('the state is in the URL: a reload restores the design, a second tab is independent', async () => {
@@ -594,11 +621,32 @@ test('no console errors, no traffic off loopback', () => {
   assert.deepEqual(foreignRequests, []);
 });
 
+// After the check above: the refused connections are logged by Chromium.
+test('the daemon restarted during a call: the page retries and gets the answer (docs/api.md, Retries)', async () => {
+  await stopDaemon(daemon);
+  const restarted = new Promise((r) => setTimeout(r, 800)).then(() => startDaemon([], address));
+  let attempts = 0;
+  const count = (request) => { if (request.url().endsWith('/v1/patch')) ++attempts; };
+  page.on('request', count);
+  try {
+    await byId('corners-auto').click(); // refused at first; retried with back-off until the new daemon answers
+    ({ proc: daemon, log: daemonLog } = await restarted);
+    daemons.push(daemon);
+    await until(async () => /^patch: done/.test(await text('status')), 60000, 'the patch after the retries');
+  } finally {
+    page.off('request', count);
+  }
+  assert.ok(attempts >= 2, `${attempts} patch calls`);
+  assert.equal(await byId('error').isVisible(), false);
+  assert.match(await text('patch-info'), /η = /);
+});
+
 // Last: stopping the daemon makes Chromium log the refused connection, after the check above.
 test('the daemon gone: a message, and the page stays', async () => {
   await stopDaemon(daemon);
   await byId('corners-auto').click();
-  await until(() => byId('error').isVisible(), 10000, 'the error');
+  // After the retries (docs/api.md: 5, 3.9-7.75 s of waiting in all).
+  await until(() => byId('error').isVisible(), 30000, 'the error');
   assert.match(await text('error'), /UNAVAILABLE.*cannot be reached/);
   assert.match(await text('mesh-info'), /repairs\.obj/);
   assert.ok((await canvasCoverage()) > 0.05, 'the view is still drawn');

@@ -137,3 +137,55 @@ test('base64 both ways, also past one 32 KiB chunk', () => {
   assert.equal(text, Buffer.from(bytes).toString('base64'));
   assert.deepEqual(api.base64ToBytes(text), bytes);
 });
+
+const routing = await load('src/routing.ts');
+
+test('retries: only calls the daemon did not answer, after a bounded, jittered back-off', () => {
+  const e = (status, http) => new api.ApiError(status, '', 'x', http);
+  assert.equal(api.retryable(e('UNAVAILABLE', 0)), true);        // refused, cut stream
+  assert.equal(api.retryable(e('UNKNOWN', 502)), true);          // haproxy: the replica went away
+  assert.equal(api.retryable(e('UNKNOWN', 503)), true);          // haproxy: no replica up
+  assert.equal(api.retryable(e('UNAVAILABLE', 503)), true);      // a daemon shutting down
+  for (const [status, http] of [['INVALID_ARGUMENT', 400], ['FAILED_PRECONDITION', 422], ['CANCELLED', 0],
+                                ['DEADLINE_EXCEEDED', 504], ['RESOURCE_EXHAUSTED', 429], ['INTERNAL', 500],
+                                ['UNAUTHENTICATED', 401]])
+    assert.equal(api.retryable(e(status, http)), false, status);
+  assert.equal(api.retryable(new Error('x')), false);
+  let total = [0, 0];
+  for (let k = 1; k <= api.RETRY.attempts; ++k) {
+    const base = Math.min(api.RETRY.maxMs, api.RETRY.firstMs * 2 ** (k - 1));
+    for (let i = 0; i < 200; ++i) {
+      const d = api.retryDelayMs(k);
+      assert.ok(d >= 0.5 * base && d < base, `retry ${k}: ${d} ms`);
+    }
+    total = [total[0] + 0.5 * base, total[1] + base];
+  }
+  assert.deepEqual(total, [3875, 7750]); // docs/api.md: 3.9 to 7.75 s of waiting in all
+});
+
+test('patch key bytes: the layout of docs/api.md', () => {
+  const mesh = { positions: [0, 0, 0, 1, 0, 0, 0, 1, 0.5], indices: [0, 1, 2] };
+  const b = routing.patchKeyBytes(mesh, { vertices: [0, 1, 2, 0] }, { resolution: 16 });
+  const v = new DataView(b.buffer);
+  const magic = new TextDecoder().decode(b.subarray(0, 23));
+  assert.equal(magic, 'gridshell-patch-key-v1\n');
+  assert.equal(v.getUint32(23, true), 3);
+  assert.equal(v.getFloat64(27 + 8 * 8, true), 0.5);
+  let at = 27 + 72;
+  assert.equal(v.getUint32(at, true), 1);
+  assert.deepEqual([0, 1, 2].map((k) => v.getUint32(at + 4 + 4 * k, true)), [0, 1, 2]);
+  at += 16;
+  assert.equal(b[at], 1); // vertex corners
+  at += 1 + 16;
+  assert.equal(v.getUint32(at, true), 4);
+  assert.equal(new TextDecoder().decode(b.subarray(at + 4, at + 8)), 'fast');
+  at += 8;
+  assert.equal(v.getFloat64(at, true), 1.0015);
+  assert.equal(v.getUint32(at + 8, true), 60);
+  assert.equal(b[at + 12], 1);
+  assert.equal(v.getUint32(at + 13, true), 16);
+  assert.equal(b.length, at + 17);
+  const auto = routing.patchKeyBytes(mesh, {}, {});
+  assert.equal(auto[27 + 72 + 16], 0); // automatic corners: nothing follows the kind
+  assert.equal(new DataView(auto.buffer).getUint32(auto.length - 4, true), 100); // default resolution
+});

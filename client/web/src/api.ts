@@ -192,11 +192,12 @@ export function setToken(token: string): void {
   else sessionStorage.removeItem(TOKEN_KEY);
 }
 
-function headers(sse: boolean): Record<string, string> {
+function headers(sse: boolean, patchKey?: string | null): Record<string, string> {
   const h: Record<string, string> = { 'Content-Type': 'application/json' };
   if (sse) h['Accept'] = 'text/event-stream';
   const token = getToken();
   if (token) h['Authorization'] = `Bearer ${token}`;
+  if (patchKey) h['X-Gridshell-Patch-Key'] = patchKey; // routing.ts
   return h;
 }
 
@@ -221,16 +222,58 @@ function transportError(e: unknown, signal?: AbortSignal): ApiError {
 }
 
 /**
+ * Retries of a call the daemon could not answer (docs/api.md, "Retries"): the daemon cannot be
+ * reached, a proxy in front of replicas answers 502 or 503 (no replica up, or the one serving the
+ * call went away), the daemon is shutting down (503), or an event stream ends without its result.
+ * Every method is idempotent, so the call is simply made again: up to `attempts` more times,
+ * after 0.25 s doubling up to 4 s, each times a random factor in [0.5, 1).
+ */
+export const RETRY = { attempts: 5, firstMs: 250, maxMs: 4000 };
+
+export function retryable(e: unknown): boolean {
+  return e instanceof ApiError && e.status !== 'CANCELLED' &&
+    (e.status === 'UNAVAILABLE' || e.httpStatus === 502 || e.httpStatus === 503);
+}
+
+export function retryDelayMs(retry: number): number {
+  return Math.min(RETRY.maxMs, RETRY.firstMs * 2 ** (retry - 1)) * (0.5 + 0.5 * Math.random());
+}
+
+function sleep(ms: number, signal?: AbortSignal): Promise<void> {
+  return new Promise((resolve, reject) => {
+    if (signal?.aborted) { reject(new ApiError('CANCELLED', '', 'cancelled', 0)); return; }
+    const timer = setTimeout(() => { signal?.removeEventListener('abort', onAbort); resolve(); }, ms);
+    const onAbort = (): void => { clearTimeout(timer); reject(new ApiError('CANCELLED', '', 'cancelled', 0)); };
+    signal?.addEventListener('abort', onAbort, { once: true });
+  });
+}
+
+/**
  * One call: the result message, with progress events passed to onProgress. Rejects with ApiError
- * (status CANCELLED when `signal` aborted it).
+ * (status CANCELLED when `signal` aborted it). `patchKey` (routing.ts) routes a design to the
+ * replica that has its patch cached; calls the daemon could not answer are retried (RETRY).
  */
 export async function call<T>(method: string, request: unknown, signal?: AbortSignal,
-                              onProgress?: (p: Progress) => void): Promise<T> {
+                              onProgress?: (p: Progress) => void, patchKey?: string | null): Promise<T> {
+  for (let retry = 1; ; ++retry) {
+    try {
+      return await callOnce<T>(method, request, signal, onProgress, patchKey);
+    } catch (e) {
+      if (!retryable(e) || signal?.aborted || retry > RETRY.attempts) throw e;
+      onProgress?.({ stage: `daemon unavailable, retry ${retry} of ${RETRY.attempts}`, fraction: 0,
+                     message: (e as ApiError).message });
+      await sleep(retryDelayMs(retry), signal);
+    }
+  }
+}
+
+async function callOnce<T>(method: string, request: unknown, signal?: AbortSignal,
+                           onProgress?: (p: Progress) => void, patchKey?: string | null): Promise<T> {
   const sse = onProgress !== undefined;
   let response: Response;
   try {
     response = await fetch(`v1/${method}`, {
-      method: 'POST', headers: headers(sse), body: JSON.stringify(request), signal,
+      method: 'POST', headers: headers(sse, patchKey), body: JSON.stringify(request), signal,
       cache: 'no-store',
     });
   } catch (e) {

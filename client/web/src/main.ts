@@ -17,6 +17,7 @@ import {
 } from './format';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
+import { patchKey, type KeyCorners } from './routing';
 
 // The example list is asked for first, so the daemon answers while the WebGL context is created
 // (half a second on a software GL).
@@ -113,7 +114,7 @@ function setBusy(busy: boolean): void {
  * Runs one call with progress; aborts the call in flight. Resolves with the result, or null
  * when it was superseded or cancelled (the status line says which) or failed (the error is shown).
  */
-async function run<T>(kind: CallKind, method: string, request: unknown): Promise<T | null> {
+async function run<T>(kind: CallKind, method: string, request: unknown, patchKey?: string | null): Promise<T | null> {
   if (current) current.controller.abort();
   const job = { kind, controller: new AbortController(), byUser: false };
   current = job;
@@ -127,7 +128,7 @@ async function run<T>(kind: CallKind, method: string, request: unknown): Promise
       if (current !== job) return;
       ui.progress.value = Math.max(0, Math.min(1, p.fraction));
       ui.status.textContent = `${kind}: ${p.stage}${p.message ? ' — ' + p.message : ''} (${Math.round(100 * p.fraction)}%)`;
-    });
+    }, patchKey);
     if (current !== job) return null;
     ui.status.textContent = `${kind}: done in ${((performance.now() - t0) / 1000).toFixed(2)} s`;
     return result;
@@ -440,13 +441,24 @@ function designOptions(): Record<string, unknown> {
   return o;
 }
 
+/** The patch routing key of the designs on this mesh and corners (the slider keeps it). */
+let keyMemo: { loaded: LoadResult; corners: string; key: Promise<string | null> } | null = null;
+function designKey(loaded: LoadResult, corners: KeyCorners | undefined): Promise<string | null> {
+  const text = JSON.stringify(corners ?? null);
+  if (keyMemo?.loaded !== loaded || keyMemo.corners !== text)
+    keyMemo = { loaded, corners: text, key: patchKey(loaded.mesh, corners, {}).catch(() => null) };
+  return keyMemo.key;
+}
+
 async function computeDesign(): Promise<void> {
   if (!state.mesh || !state.patch) return;
   state.designWanted = true;
   ui.simulate.disabled = true; // simulate the design on screen, not one being replaced
+  const corners = cornersJson();
+  const key = state.loaded ? await designKey(state.loaded, corners) : null;
   const result = await run<DesignResult>('design', 'design', {
-    mesh: state.mesh, corners: cornersJson(), options: designOptions(), files: true,
-  });
+    mesh: state.mesh, corners, options: designOptions(), files: true,
+  }, key);
   if (!result) {
     if (!current) ui.simulate.disabled = !state.design; // failed or cancelled: the old one stays
     return;
