@@ -26,7 +26,7 @@ struct CompareArguments {
   std::string out;
   bool quiet = false;
   int threads = 0;
-  int icp_points = 30000;
+  int icp_points = 10000;
 };
 
 v1::Deployment read_deployment_file(const std::string& path) {

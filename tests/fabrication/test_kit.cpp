@@ -4,12 +4,17 @@
 // worse than one lamella per row), rotation onto tall sheets, errors; the lamella boxes and the
 // point-cloud checks of the scan comparison.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
 
 #include "gridshell/fabrication/compare.h"
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/fabrication/kit_export.h"
+#include "gridshell/mesh/errors.h"
 
 namespace gridshell {
 namespace {
@@ -225,6 +230,89 @@ TEST(Compare, PointCloudChecks) {
   EXPECT_NO_THROW(check_point_cloud(plane, "scan"));
   plane[7].x() = std::nan("");
   EXPECT_THROW(check_point_cloud(plane, "scan"), InvalidInput);
+}
+
+TEST(Compare, ReadsPlyXyzObjAndOff) {
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("gridshell-kit-" + std::to_string(::getpid())))
+          .string();
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + "/" + name, std::ios::binary) << text;
+    return dir + "/" + name;
+  };
+  const std::string ply_ascii =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty "
+      "float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n1 2 3 0 0 1\n"
+      "4 5 6 0 1 0\n";
+  float binary[6] = {1, 2, 3, 4, 5, 6};
+  const std::string ply_binary =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float "
+      "y\nproperty float z\nend_header\n" +
+      std::string(reinterpret_cast<const char*>(binary), sizeof binary);
+  for (const std::string& file : {write("a.ply", ply_ascii), write("b.ply", ply_binary),
+                                  write("c.xyz", "# x y z intensity\n1 2 3 7\n\n4,5,6\n"),
+                                  write("d.obj", "v 1 2 3\nvn 0 0 1\nv 4 5 6\n"),
+                                  write("e.off", "OFF\n2 0 0\n1 2 3\n4 5 6\n")}) {
+    const std::vector<Vec3> points = read_point_cloud(file);
+    ASSERT_EQ(points.size(), 2u) << file;
+    EXPECT_EQ(points[0], Vec3(1, 2, 3)) << file;
+    EXPECT_EQ(points[1], Vec3(4, 5, 6)) << file;
+  }
+  EXPECT_THROW(read_point_cloud(write("f.xyz", "1 2\n")), InvalidInput);
+  EXPECT_THROW(read_point_cloud(write("g.xyz", "1 2 inf\n")), InvalidInput);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Compare, RegistersASmallScanUnderAnyMotion) {
+  // Three bent lamellas in an asymmetric layout; a scan of 4000 points with noise, moved.
+  std::vector<SimulatedLamella> lamellas(3);
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i <= 20; ++i) {
+      const double t = i / 20.0;
+      const Vec3 p = k == 0   ? Vec3(10 * t, 0, 2 * t * t)
+                     : k == 1 ? Vec3(3, 8 * t, 1 - t)
+                              : Vec3(7 + t, 5 * t, 3 * t * (1 - t));
+      lamellas[k].centerline.push_back(p);
+      lamellas[k].normals.push_back(Vec3(0.1 * k, -0.2 * t, 1).normalized());
+    }
+  const auto triangles = lamella_surface(lamellas, 0.5, 0.1);
+  std::mt19937_64 random(3);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  std::normal_distribution<double> gauss(0, 0.005);
+  std::vector<double> cumulative;
+  double area = 0;
+  for (const auto& t : triangles)
+    cumulative.push_back(area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm());
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(2.2, Vec3(0.3, -0.5, 0.8).normalized()).toRotationMatrix();
+  const Vec3 shift(40, -12, 7);
+  std::vector<Vec3> scan;
+  for (int i = 0; i < 4000; ++i) {
+    const size_t f =
+        std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * area) -
+        cumulative.begin();
+    const auto& t = triangles[std::min(f, triangles.size() - 1)];
+    double a = uniform(random), b = uniform(random);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    const Vec3 p = t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]);
+    scan.push_back(R * (p + Vec3(gauss(random), gauss(random), gauss(random))) + shift);
+  }
+  // The target patch: a plane under the lamellas (only its distances are reported).
+  const TriangleMesh target({Vec3(-1, -1, 0), Vec3(12, -1, 0), Vec3(12, 10, 0), Vec3(-1, 10, 0)},
+                            {{0, 1, 2}, {0, 2, 3}});
+  CompareOptions options;
+  options.reference_samples = 20000;
+  options.icp_points = 2000;
+  const ScanComparison c = compare_scan(scan, triangles, target, options);
+  double worst = 0;
+  for (const auto& l : lamellas)
+    for (const Vec3& p : l.centerline)
+      worst = std::max(worst, (c.rotation * (R * p + shift) + c.translation - p).norm());
+  EXPECT_LT(worst, 0.01) << c.coarse;  // the model is about 12 long
+  EXPECT_NEAR(c.deployment.rms, 0.005, 0.001);
+  EXPECT_EQ(c.used + c.rejected, 4000);
+  EXPECT_EQ(c.deployment.histogram_counts.size(), 20u);
 }
 
 }  // namespace

@@ -38,7 +38,7 @@ void check_point_cloud(const std::vector<Vec3>& points, const std::string& name)
 
 struct CompareOptions {
   int max_iterations = 60;         ///< ICP iterations of the final refinement
-  int icp_points = 30000;          ///< scan points used by ICP (a fixed random subset)
+  int icp_points = 10000;          ///< scan points used by ICP (a fixed random subset)
   int reference_samples = 200000;  ///< points sampled on the reference surface for ICP
   int histogram_bins = 20;
   int threads = 0;    ///< distance evaluation; 0 = all cores
