@@ -73,7 +73,8 @@ SheetDrawing sheet_drawing(const Kit& kit, int sheet) {
     drawing.polylines.push_back(outline);
     // Holes and slots shrunk by half the kerf; obstacles for the labels along x.
     std::vector<std::pair<double, double>> taken;
-    for (const PartFeature& f : part.features) {
+    for (size_t i = 0; i < part.features.size(); ++i) {
+      const PartFeature& f = part.features[i];
       if (f.kind == FeatureKind::Hole) {
         drawing.circles.push_back({SheetLayer::Cut, at(f.x0, 0), r});
       } else {
@@ -82,10 +83,16 @@ SheetDrawing sheet_drawing(const Kit& kit, int sheet) {
         slot.bulges = {0, 1, 0, 1};  // half circles, counter-clockwise, around the slot's ends
         drawing.polylines.push_back(slot);
       }
-      // The partner's name beside the hole or slot, on the side towards the part's middle.
+      // The partner's name beside the hole or slot: after it where it fits before the next
+      // feature (or the part's end), else before it where there is more room.
       const std::string label = member_name(f.partner_family, f.partner);
       const double length = text_length(label, th_partner), gap = 0.4 * th_partner;
-      const bool before = 0.5 * (f.x0 + f.x1) > 0.5 * part.length;
+      const double half_d = 0.5 * f.diameter;
+      const double room_after =
+          (i + 1 < part.features.size() ? part.features[i + 1].x0 - half_d : part.length) -
+          (f.x1 + half_d);
+      const double room_before = f.x0 - half_d - (i > 0 ? part.features[i - 1].x1 + half_d : 0);
+      const bool before = room_after < length + 2 * gap && room_before > room_after;
       const double x =
           before ? f.x0 - 0.5 * f.diameter - gap - length : f.x1 + 0.5 * f.diameter + gap;
       drawing.texts.push_back(
