@@ -38,105 +38,127 @@ struct NewtonSolver::Impl {
   std::vector<int> block_offset;        // per block: its first unknown
   std::vector<double> limits;           // per block, 0 = unlimited
   Eigen::SparseMatrix<double> hessian;  // upper triangle
+  Eigen::SparseMatrix<double> damped;   // step(): hessian + lambda D (same pattern)
   std::vector<int> diagonal;            // value index of each diagonal entry
   Eigen::VectorXd gradient;
   // The unknowns are numbered in a fill-reducing order already (see the constructor).
   BlockCholesky cholesky;
   int threads = 1;
-  std::vector<std::vector<double>> chunk_values;  // evaluate(): per-chunk Hessian values
-  std::vector<Eigen::VectorXd> chunk_gradients;
+  /// Scratch of one term's evaluation (per worker, reused across terms and evaluations).
+  struct Scratch {
+    std::vector<double> residuals, jacobian_storage, rr, js;
+    std::vector<double*> jacobians, jp;
+    std::vector<std::vector<double>> copies;
+    std::vector<const double*> pointers;
+    Eigen::MatrixXd J, H, C;
+    Eigen::VectorXd g, g0, gk;
+    double cost = 0;
+  };
+  std::vector<Scratch> scratch;  // one per worker
+  // With several workers, every term's local Hessian, gradient and cost are kept until they are
+  // added up in term order (the same order as with one worker: the sums do not depend on the
+  // thread count).
+  std::vector<size_t> term_offset;  // per term: start of its local Hessian in term_hessian
+  std::vector<double> term_hessian, term_gradient, term_cost;
+  std::vector<size_t> term_gradient_offset;
 
   bool exact_hessian = false;
   bool refresh_curvature = true;
   int evaluations = 0;
 
-  void accumulate(size_t begin, size_t end, double* values, double* gradient_out, double* cost_out,
-                  bool* ok_out) const {
-    std::vector<double> residuals, jacobian_storage;
-    std::vector<double*> jacobians;
-    Eigen::MatrixXd J, H;
-    double cost = 0;
-    bool ok = true;
-    for (size_t t = begin; t < end; ++t) {
-      const Term& term = terms[t];
-      const TermLayout& l = layout[t];
-      const auto& sizes = term.cost->parameter_block_sizes();
-      residuals.assign(l.residuals, 0.0);
-      jacobian_storage.assign(static_cast<size_t>(l.residuals) * l.free_size, 0.0);
-      jacobians.assign(sizes.size(), nullptr);
-      for (size_t p = 0; p < sizes.size(); ++p)
-        if (l.offset[p] >= 0)
-          jacobians[p] = jacobian_storage.data() + static_cast<size_t>(l.residuals) * l.local[p];
-      if (!term.cost->Evaluate(term.parameters.data(), residuals.data(), jacobians.data())) {
-        ok = false;
-        break;
-      }
-      // Each block's Jacobian is row-major residuals x size; gather into J (residuals x m).
-      J.resize(l.residuals, l.free_size);
-      for (size_t p = 0; p < sizes.size(); ++p) {
-        if (l.offset[p] < 0) continue;
-        const double* block = jacobians[p];
-        for (int r = 0; r < l.residuals; ++r)
-          for (int c = 0; c < sizes[p]; ++c) J(r, l.local[p] + c) = block[r * sizes[p] + c];
-      }
-      const Eigen::Map<const Eigen::VectorXd> r(residuals.data(), l.residuals);
-      for (double v : residuals) cost += 0.5 * v * v;
-      H.noalias() = J.transpose() * J;
-      if (term.curvature) {
-        term.curvature(residuals.data(), H);
-      } else if (exact_hessian && term.numeric_curvature && !refresh_curvature &&
-                 l.curvature.rows() == l.free_size) {
-        H += l.curvature;  // lagged: from the last refresh
-      } else if (exact_hessian && term.numeric_curvature) {
-        // sum_i r_i Hess(r_i) = Hess(rbar . r) at rbar = r, by forward differences of the exact
-        // (automatic) gradient J(x + e_k h)^T rbar, symmetrized.
-        const Eigen::VectorXd g0 = J.transpose() * r;
-        Eigen::MatrixXd C(l.free_size, l.free_size);
-        // Perturb private copies: other threads read the shared blocks meanwhile.
-        std::vector<std::vector<double>> copies(sizes.size());
-        std::vector<const double*> pointers(sizes.size());
-        for (size_t p = 0; p < sizes.size(); ++p) {
-          copies[p].assign(term.parameters[p], term.parameters[p] + sizes[p]);
-          pointers[p] = copies[p].data();
-        }
-        std::vector<double> rr(l.residuals), js(jacobian_storage.size());
-        std::vector<double*> jp(sizes.size(), nullptr);
-        for (size_t p = 0; p < sizes.size(); ++p)
-          if (l.offset[p] >= 0) jp[p] = js.data() + static_cast<size_t>(l.residuals) * l.local[p];
-        for (size_t p = 0; p < sizes.size(); ++p) {
-          if (l.offset[p] < 0) continue;
-          for (int c = 0; c < sizes[p]; ++c) {
-            double& v = copies[p][c];
-            const double keep = v, h = 1e-7 * std::max(1.0, std::abs(keep));
-            v = keep + h;
-            const double step = v - keep;  // exactly representable
-            term.cost->Evaluate(pointers.data(), rr.data(), jp.data());
-            v = keep;
-            Eigen::VectorXd gk = Eigen::VectorXd::Zero(l.free_size);
-            for (size_t q = 0; q < sizes.size(); ++q) {
-              if (l.offset[q] < 0) continue;
-              for (int r2 = 0; r2 < l.residuals; ++r2)
-                for (int b = 0; b < sizes[q]; ++b)
-                  gk[l.local[q] + b] += jp[q][r2 * sizes[q] + b] * residuals[r2];
-            }
-            C.col(l.local[p] + c) = (gk - g0) / step;
-          }
-        }
-        l.curvature = 0.5 * (C + C.transpose());
-        H += l.curvature;
-      }
-      const Eigen::VectorXd g = J.transpose() * r;
-      for (size_t p = 0; p < sizes.size(); ++p) {
-        if (l.offset[p] < 0) continue;
-        for (int a = 0; a < sizes[p]; ++a) gradient_out[l.offset[p] + a] += g[l.local[p] + a];
-      }
-      size_t k = 0;
-      for (int p = 0; p < l.free_size; ++p)
-        for (int q = 0; q < l.free_size; ++q, ++k)
-          if (l.value_index[k] >= 0) values[l.value_index[k]] += H(p, q);
+  /// Cost, gradient and local Hessian (J^T J plus the curvature correction) of term t into
+  /// `s` (s.H: free x free in local order, s.g: free). False if the term cannot be evaluated.
+  bool evaluate_term(size_t t, Scratch& s) const {
+    const Term& term = terms[t];
+    const TermLayout& l = layout[t];
+    const auto& sizes = term.cost->parameter_block_sizes();
+    s.residuals.assign(l.residuals, 0.0);
+    s.jacobian_storage.assign(static_cast<size_t>(l.residuals) * l.free_size, 0.0);
+    s.jacobians.assign(sizes.size(), nullptr);
+    for (size_t p = 0; p < sizes.size(); ++p)
+      if (l.offset[p] >= 0)
+        s.jacobians[p] = s.jacobian_storage.data() + static_cast<size_t>(l.residuals) * l.local[p];
+    if (!term.cost->Evaluate(term.parameters.data(), s.residuals.data(), s.jacobians.data()))
+      return false;
+    // Each block's Jacobian is row-major residuals x size; gather into J (residuals x m).
+    Eigen::MatrixXd& J = s.J;
+    J.resize(l.residuals, l.free_size);
+    for (size_t p = 0; p < sizes.size(); ++p) {
+      if (l.offset[p] < 0) continue;
+      const double* block = s.jacobians[p];
+      for (int r = 0; r < l.residuals; ++r)
+        for (int c = 0; c < sizes[p]; ++c) J(r, l.local[p] + c) = block[r * sizes[p] + c];
     }
-    *cost_out = cost;
-    *ok_out = ok;
+    const Eigen::Map<const Eigen::VectorXd> r(s.residuals.data(), l.residuals);
+    s.cost = 0;
+    for (double v : s.residuals) s.cost += 0.5 * v * v;
+    Eigen::MatrixXd& H = s.H;
+    H.noalias() = J.transpose() * J;
+    s.g.noalias() = J.transpose() * r;
+    if (term.curvature) {
+      term.curvature(s.residuals.data(), H);
+    } else if (exact_hessian && term.numeric_curvature && !refresh_curvature &&
+               l.curvature.rows() == l.free_size) {
+      H += l.curvature;  // lagged: from the last refresh
+    } else if (exact_hessian && term.numeric_curvature) {
+      // sum_i r_i Hess(r_i) = Hess(rbar . r) at rbar = r, by forward differences of the exact
+      // gradient J(x + e_k h)^T rbar, symmetrized.
+      Eigen::MatrixXd& C = s.C;
+      C.resize(l.free_size, l.free_size);
+      // Perturb private copies: other threads read the shared blocks meanwhile.
+      s.copies.resize(sizes.size());
+      s.pointers.resize(sizes.size());
+      for (size_t p = 0; p < sizes.size(); ++p) {
+        s.copies[p].assign(term.parameters[p], term.parameters[p] + sizes[p]);
+        s.pointers[p] = s.copies[p].data();
+      }
+      s.rr.resize(l.residuals);
+      s.js.resize(s.jacobian_storage.size());
+      s.jp.assign(sizes.size(), nullptr);
+      for (size_t p = 0; p < sizes.size(); ++p)
+        if (l.offset[p] >= 0) s.jp[p] = s.js.data() + static_cast<size_t>(l.residuals) * l.local[p];
+      for (size_t p = 0; p < sizes.size(); ++p) {
+        if (l.offset[p] < 0) continue;
+        for (int c = 0; c < sizes[p]; ++c) {
+          double& v = s.copies[p][c];
+          const double keep = v, h = 1e-7 * std::max(1.0, std::abs(keep));
+          v = keep + h;
+          const double step = v - keep;  // exactly representable
+          term.cost->Evaluate(s.pointers.data(), s.rr.data(), s.jp.data());
+          v = keep;
+          s.gk.setZero(l.free_size);
+          for (size_t q = 0; q < sizes.size(); ++q) {
+            if (l.offset[q] < 0) continue;
+            for (int r2 = 0; r2 < l.residuals; ++r2)
+              for (int b = 0; b < sizes[q]; ++b)
+                s.gk[l.local[q] + b] += s.jp[q][r2 * sizes[q] + b] * s.residuals[r2];
+          }
+          C.col(l.local[p] + c) = (s.gk - s.g) / step;
+        }
+      }
+      l.curvature = 0.5 * (C + C.transpose());
+      H += l.curvature;
+    }
+    return true;
+  }
+
+  /// Adds a term's local Hessian (free x free, column-major), gradient and cost to the totals.
+  void scatter(size_t t, const double* H, const double* g, double cost, double* values,
+               double* cost_out) {
+    const Term& term = terms[t];
+    const TermLayout& l = layout[t];
+    const auto& sizes = term.cost->parameter_block_sizes();
+    for (size_t p = 0; p < sizes.size(); ++p) {
+      if (l.offset[p] < 0) continue;
+      for (int a = 0; a < sizes[p]; ++a) gradient[l.offset[p] + a] += g[l.local[p] + a];
+    }
+    const int m = l.free_size;
+    for (int p = 0; p < m; ++p)
+      for (int q = 0; q < m; ++q) {
+        const int index = l.value_index[static_cast<size_t>(p) * m + q];
+        if (index >= 0) values[index] += H[static_cast<size_t>(q) * m + p];
+      }
+    *cost_out += cost;
   }
 };
 
@@ -300,45 +322,61 @@ bool NewtonSolver::evaluate() {
   // The numeric curvature changes slowly; refresh it every options_.curvature_refresh calls.
   m.refresh_curvature = m.evaluations % std::max(1, options_.curvature_refresh) == 0;
   if (m.exact_hessian) ++m.evaluations;
-  // A fixed number of chunks summed in a fixed order: the result does not depend on the thread
-  // count.
-  constexpr int kChunks = 8;
   const size_t count = m.terms.size();
   const int nnz = static_cast<int>(m.hessian.nonZeros());
-  // Per-chunk sums, kept for the next evaluation (fresh pages for them on every call were
-  // a measurable share of an evaluation).
-  auto& values = m.chunk_values;
-  auto& gradients = m.chunk_gradients;
-  values.resize(kChunks);
-  gradients.resize(kChunks);
-  for (int c = 0; c < kChunks; ++c) {
-    values[c].assign(nnz, 0.0);
-    gradients[c].setZero(m.unknowns);
+  double* values = m.hessian.valuePtr();
+  std::fill(values, values + nnz, 0.0);
+  m.gradient.setZero(m.unknowns);
+  double cost = 0;
+  const int workers = std::max(1, std::min<int>(m.threads, static_cast<int>(count)));
+  m.scratch.resize(workers);
+  if (workers == 1) {
+    // Term by term, added up as they come (the same order as below).
+    Impl::Scratch& s = m.scratch[0];
+    for (size_t t = 0; t < count; ++t) {
+      if (!m.evaluate_term(t, s)) return false;
+      m.scatter(t, s.H.data(), s.g.data(), s.cost, values, &cost);
+    }
+  } else {
+    if (m.term_offset.size() != count + 1) {
+      m.term_offset.assign(count + 1, 0);
+      m.term_gradient_offset.assign(count + 1, 0);
+      for (size_t t = 0; t < count; ++t) {
+        const size_t free = static_cast<size_t>(m.layout[t].free_size);
+        m.term_offset[t + 1] = m.term_offset[t] + free * free;
+        m.term_gradient_offset[t + 1] = m.term_gradient_offset[t] + free;
+      }
+      m.term_hessian.resize(m.term_offset[count]);
+      m.term_gradient.resize(m.term_gradient_offset[count]);
+      m.term_cost.resize(count);
+    }
+    std::vector<char> oks(workers, 1);
+    ParallelOptions parallel;
+    parallel.threads = workers;
+    parallel_for(
+        workers,
+        [&](std::size_t w, const Progress&) {
+          Impl::Scratch& s = m.scratch[w];
+          for (size_t t = count * w / workers; t < count * (w + 1) / workers; ++t) {
+            if (!m.evaluate_term(t, s)) {
+              oks[w] = 0;
+              return;
+            }
+            std::copy(s.H.data(), s.H.data() + s.H.size(),
+                      m.term_hessian.data() + m.term_offset[t]);
+            std::copy(s.g.data(), s.g.data() + s.g.size(),
+                      m.term_gradient.data() + m.term_gradient_offset[t]);
+            m.term_cost[t] = s.cost;
+          }
+        },
+        {}, parallel);
+    for (char ok : oks)
+      if (!ok) return false;
+    for (size_t t = 0; t < count; ++t)
+      m.scatter(t, m.term_hessian.data() + m.term_offset[t],
+                m.term_gradient.data() + m.term_gradient_offset[t], m.term_cost[t], values, &cost);
   }
-  std::vector<double> costs(kChunks, 0.0);
-  std::vector<char> oks(kChunks, 1);
-  ParallelOptions parallel;
-  parallel.threads = std::max(1, m.threads);
-  parallel_for(
-      kChunks,
-      [&](std::size_t c, const Progress&) {
-        const size_t begin = count * c / kChunks, end = count * (c + 1) / kChunks;
-        bool ok = true;
-        m.accumulate(begin, end, values[c].data(), gradients[c].data(), &costs[c], &ok);
-        oks[c] = ok;
-      },
-      {}, parallel);
-  for (char ok : oks)
-    if (!ok) return false;
-  double* out = m.hessian.valuePtr();
-  std::copy(values[0].begin(), values[0].end(), out);
-  m.gradient = gradients[0];
-  cost_ = costs[0];
-  for (int c = 1; c < kChunks; ++c) {
-    for (int k = 0; k < nnz; ++k) out[k] += values[c][k];
-    m.gradient += gradients[c];
-    cost_ += costs[c];
-  }
+  cost_ = cost;
   return true;
 }
 
@@ -461,7 +499,8 @@ NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
   Impl& m = *impl_;
   StepResult result;
   const Eigen::VectorXd x0 = read();
-  Eigen::SparseMatrix<double> A = m.hessian;
+  if (m.damped.nonZeros() != m.hessian.nonZeros()) m.damped = m.hessian;
+  Eigen::SparseMatrix<double>& A = m.damped;
   const double* h = m.hessian.valuePtr();
   double max_diagonal = 0;
   for (int i : m.diagonal) max_diagonal = std::max(max_diagonal, std::abs(h[i]));

@@ -11,8 +11,8 @@
 // Gauss-Newton Hessian of each block plus a per-block second-order correction supplied by the
 // caller (the geometric stiffness, the exact curvature of the log barriers), damps it
 // Levenberg-Marquardt style (which also handles the indefiniteness of compressed edges), and
-// solves with a block sparse Cholesky factorization (kernel/simulation/sparse_cholesky.h; AMD order of
-// the parameter blocks, pattern analysed once per structure).
+// solves with a block sparse Cholesky factorization (kernel/simulation/sparse_cholesky.h; AMD order
+// of the parameter blocks, pattern analysed once per structure).
 #pragma once
 
 #include <ceres/cost_function.h>

@@ -336,4 +336,21 @@ inline void add_notch_limit_curvature(const NotchLimit& term, const double* beta
   H(0, 0) += -r[0] * cw / (gap * gap);
 }
 
+/// The direction of a lamella at an anchor: its edge's unit tangent pinned to the target's
+/// (the member's geodesic direction there), so that a support holds the lamella's orientation
+/// about the surface normal as well as the normal itself (paper 4.6 and 6.1: the supports
+/// "provide correct orientation for the lamellas by inclined contact areas"):
+///   E = w |t - t_a|^2,  t = (x_b - x_a) / |x_b - x_a|  (|t - t_a| = 2 sin(angle / 2)).
+/// Three residuals with the sqrt(2 w) convention; parameters x_a, x_b.
+struct AnchorTangent {
+  Eigen::Vector3d tangent = Eigen::Vector3d::UnitX();
+  double sqrt_weight = 1;
+  template <typename T>
+  bool operator()(const T* xa, const T* xb, T* r) const {
+    const V3<T> e = load(xb) - load(xa);
+    store<T>(T(sqrt_weight) * (e / e.norm() - tangent.cast<T>()), r);
+    return true;
+  }
+};
+
 }  // namespace gridshell::rod_terms

@@ -33,20 +33,22 @@
 #include "gridshell/mesh/parallel.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "newton_solver.h"
+#include "rod_derivatives.h"
 #include "rod_terms.h"
 
 namespace gridshell {
 
 const std::vector<Material>& material_presets() {
-  // Reference values along the grain / fibres (approximate; see docs/decisions.md).
+  // Reference values along the grain / fibres (approximate; see docs/decisions.md): E, G,
+  // bending strength, shear strength.
   static const std::vector<Material> presets{
-      {"lime-wood", 7.4e9, 0.46e9},      // Tilia, the paper's lamellas
-      {"birch-plywood", 9.0e9, 0.62e9},  // face grain direction
-      {"beech-wood", 14.0e9, 1.08e9},    //
-      {"gfrp", 25.0e9, 3.5e9},           // pultruded glass fibre
-      {"aluminium", 70.0e9, 26.0e9},     //
-      {"steel", 210.0e9, 81.0e9},        //
-      {"hdpe", 0.9e9, 0.31e9},           // high-density polyethylene
+      {"lime-wood", 7.4e9, 0.46e9, 60e6, 6.8e6},      // Tilia, the paper's lamellas
+      {"birch-plywood", 9.0e9, 0.62e9, 50e6, 9.0e6},  // face grain direction
+      {"beech-wood", 14.0e9, 1.08e9, 103e6, 13.9e6},  //
+      {"gfrp", 25.0e9, 3.5e9, 240e6, 25e6},           // pultruded glass fibre (EN 13706 E23)
+      {"aluminium", 70.0e9, 26.0e9, 276e6, 159e6},    // 6061-T6, yield
+      {"steel", 210.0e9, 81.0e9, 235e6, 136e6},       // S235, yield
+      {"hdpe", 0.9e9, 0.31e9, 25e6, 14e6},            // high-density polyethylene, yield
   };
   return presets;
 }
@@ -132,6 +134,7 @@ struct Joint {
 struct AnchorTarget {
   Vec3 position = Vec3::Zero();  // scaled
   Vec3 normal = Vec3::UnitZ();
+  Vec3 tangent[2] = {Vec3::UnitX(), Vec3::UnitY()};  // of the g and h lamellas, at the start
 };
 
 struct Stiffness {
@@ -447,7 +450,14 @@ void Deployment::bind_anchors(const std::vector<Anchor>& anchors) {
                                     ") is not a crossing of the grid");
     if (joints_[found].anchor >= 0) continue;  // the same crossing anchored twice
     joints_[found].anchor = static_cast<int>(anchors_.size());
-    anchors_.push_back({a.position * scale_, a.normal.normalized()});
+    AnchorTarget target{a.position * scale_, a.normal.normalized()};
+    // The lamellas start on their geodesics: the edges' directions there are the target's.
+    for (int end = 0; end < 2; ++end) {
+      const Slider& s = joints_[found].end[end];
+      const Rod& rod = rods_[s.rod];
+      target.tangent[end] = (rod.x[s.edge + 1] - rod.x[s.edge]).normalized();
+    }
+    anchors_.push_back(target);
   }
 }
 
@@ -499,21 +509,10 @@ bool Deployment::sides_changed() const {
   return false;
 }
 
+/// The connection or anchor term with its hand-derived Jacobian (rod_derivatives.h).
 template <typename Residual>
-ceres::CostFunction* pair_cost(const Residual& residual, size_t g, size_t h) {
-  using ceres::AutoDiffCostFunction;
-  using rod_terms::PairFunctor;
-  if (g == 4 && h == 4)
-    return new AutoDiffCostFunction<PairFunctor<Residual, 4, 4>, 9, 3, 3, 1, 1, 3, 3, 1, 1>(
-        new PairFunctor<Residual, 4, 4>{residual});
-  if (g == 6 && h == 4)
-    return new AutoDiffCostFunction<PairFunctor<Residual, 6, 4>, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1>(
-        new PairFunctor<Residual, 6, 4>{residual});
-  if (g == 4 && h == 6)
-    return new AutoDiffCostFunction<PairFunctor<Residual, 4, 6>, 9, 3, 3, 1, 1, 3, 3, 1, 1, 3, 1>(
-        new PairFunctor<Residual, 4, 6>{residual});
-  return new AutoDiffCostFunction<PairFunctor<Residual, 6, 6>, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1, 3,
-                                  1>(new PairFunctor<Residual, 6, 6>{residual});
+ceres::CostFunction* pair_cost(const Residual& residual) {
+  return new rod_terms::PairCost<Residual>(residual);
 }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -541,14 +540,13 @@ Deployment::Terms Deployment::build_terms() {
       auto curvature = [xa, xb, term](const double* r, Eigen::MatrixXd& H) {
         rod_terms::add_stretch_curvature(term, xa, xb, r, H);
       };
-      add(new AutoDiffCostFunction<rod_terms::Stretch, 1, 3, 3>(new rod_terms::Stretch(term)),
-          {xa, xb}, curvature);
+      add(new rod_terms::StretchCost(term), {xa, xb}, curvature);
     }
     // Uniform edges: the Voronoi length of every interior vertex is h.
     const double weak = std::sqrt(k_.EI_weak / rod.h), strong = std::sqrt(k_.EI_strong / rod.h),
                  twist = std::sqrt(k_.GJ / rod.h);
     for (int k = 1; k < rod.n; ++k)
-      add(new AutoDiffCostFunction<rod_terms::BendTwist, 3, 3, 3, 3, 1, 1>(new rod_terms::BendTwist{
+      add(new rod_terms::BendTwistCost(rod_terms::BendTwist{
               &rod.ref[k - 1], &rod.ref[k], weak, strong, twist, &rod.reference_twist[k - 1]}),
           {rod.x[k - 1].data(), rod.x[k].data(), rod.x[k + 1].data(), &rod.theta[k - 1],
            &rod.theta[k]});
@@ -595,10 +593,17 @@ Deployment::Terms Deployment::build_terms() {
     std::vector<double*> parameters = bg.parameters;
     parameters.insert(parameters.end(), bh.parameters.begin(), bh.parameters.end());
     rod_terms::ConnectionResidual connection{bg.edge, bh.edge, thickness_, position, direction};
-    add(pair_cost(connection, bg.parameters.size(), bh.parameters.size()), parameters);
-    if (joint.anchor >= 0)
-      add(pair_cost(anchor_residual(joint, bg, bh), bg.parameters.size(), bh.parameters.size()),
-          parameters);
+    add(pair_cost(connection), parameters);
+    if (joint.anchor >= 0) {
+      add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
+      if (options_.anchor_tangents)
+        for (int end = 0; end < 2; ++end) {
+          const rod_terms::AnchorTangent tangent{anchors_[joint.anchor].tangent[end],
+                                                 std::sqrt(2 * w_anchor_direction_)};
+          const Binding& b = end == 0 ? bg : bh;
+          add(new rod_terms::AnchorTangentCost(tangent), {b.parameters[0], b.parameters[1]});
+        }
+    }
   }
   return out;
 }
@@ -1025,6 +1030,8 @@ DeploymentRun Deployment::results() {
           std::max(lamella.max_strong_bending_stress, E * k_strong * width_ / 2);
       lamella.max_torsion_stress =
           std::max(lamella.max_torsion_stress, G * twist_rate * thickness_);
+      lamella.max_normal_stress =
+          std::max(lamella.max_normal_stress, E * (k_weak * thickness_ + k_strong * width_) / 2);
     }
     run.lamellas.push_back(std::move(lamella));
     run.grid_vertices += rod.n + 1;
@@ -1060,6 +1067,14 @@ DeploymentRun Deployment::results() {
           .evaluate(const_cast<const double* const*>(bg.parameters.data()),
                     const_cast<const double* const*>(bh.parameters.data()), r);
       for (double v : r) energy["anchor"] += 0.5 * v * v;
+      if (options_.anchor_tangents)
+        for (const Slider* s : {&a, &b}) {
+          const Rod& rod = rods_[s->rod];
+          rod_terms::AnchorTangent{anchors_[joint.anchor].tangent[s == &a ? 0 : 1],
+                                   std::sqrt(2 * w_anchor_direction_)}(
+              rod.x[s->edge].data(), rod.x[s->edge + 1].data(), r);
+          for (int i = 0; i < 3; ++i) energy["anchor"] += 0.5 * r[i] * r[i];
+        }
     }
     for (const Slider* s : {&a, &b}) {
       if (!s->sliding) continue;

@@ -1,0 +1,164 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The add-on's settings, kept with the scene: ``bpy.context.scene.gridshell``."""
+
+import math
+import os
+
+import bpy
+from bpy.props import EnumProperty, FloatProperty, IntProperty, StringProperty
+
+DEFAULT_SERVER = "http://127.0.0.1:8080"
+
+MATERIALS = [
+    ("lime-wood", "Lime wood", "E 7.4 GPa (the paper's material)"),
+    ("birch-plywood", "Birch plywood", ""),
+    ("beech-wood", "Beech wood", ""),
+    ("gfrp", "GFRP", "glass-fibre reinforced plastic"),
+    ("aluminium", "Aluminium", ""),
+    ("steel", "Steel", ""),
+    ("hdpe", "HDPE", "high-density polyethylene"),
+]
+
+UNITS = [
+    ("SCENE", "Scene", "The scene's unit system and scale (Scene > Units); none when it has none"),
+    ("NONE", "None", "Unknown unit: energies and stresses are scaled, not physical"),
+    ("mm", "mm", ""),
+    ("cm", "cm", ""),
+    ("m", "m", ""),
+    ("in", "in", ""),
+    ("ft", "ft", ""),
+]
+
+# Request fields -> the labels the panel shows (error reports name the field this way).
+FIELD_LABELS = {
+    "options.alpha": "Planar angle",
+    "options.members_u": "Members u",
+    "options.members_v": "Members v",
+    "options.lamella_width": "Lamella width",
+    "options.lamella_thickness": "Lamella thickness",
+    "options.resolution": "Map resolution",
+    "options.interior_anchors": "Inner anchors",
+    "simulation.material": "Material",
+    "options.material": "Material",
+    "simulation.notches": "Notches",
+    "options.notches": "Notches",
+    "corners": "selected corner",
+}
+
+
+def default_server():
+    return os.environ.get("GRIDSHELL_SERVER", "").strip() or DEFAULT_SERVER
+
+
+class GridshellSettings(bpy.types.PropertyGroup):
+    server: StringProperty(
+        name="Server",
+        description="gridshelld's HTTP address (default: $GRIDSHELL_SERVER, else loopback)",
+        default=default_server(),  # read when the add-on loads
+    )
+    token: StringProperty(
+        name="Token", description="Bearer token of the daemon, if it has one", subtype="PASSWORD"
+    )
+    ca_file: StringProperty(
+        name="CA file",
+        description="PEM file of the CA to verify an https:// daemon against (default: system roots)",
+        subtype="FILE_PATH",
+    )
+    timeout: FloatProperty(
+        name="Timeout", description="Deadline of a call in seconds (0 = none)", default=0, min=0
+    )
+    alpha_mode: EnumProperty(
+        name="Planar angle",
+        description="The planar grid's corner angle ᾱ",
+        items=[
+            ("min", "Min", "The smallest feasible ᾱ (the paper's default)"),
+            ("max", "Max", "The largest feasible ᾱ"),
+            ("value", "Value", "This angle"),
+        ],
+        default="min",
+    )
+    alpha_value: FloatProperty(
+        name="ᾱ", subtype="ANGLE", default=math.radians(70), min=0.01, max=math.pi - 0.01
+    )
+    members_u: IntProperty(name="Members u", description="Inner g-members (0 = automatic)", min=0, max=1000)
+    members_v: IntProperty(name="Members v", description="Inner h-members (0 = automatic)", min=0, max=1000)
+    lamella_width: FloatProperty(
+        name="Lamella width",
+        description="Width of the lamellas (0 = 1% of the longest patch side)",
+        subtype="DISTANCE",
+        min=0,
+        precision=4,
+    )
+    lamella_thickness: FloatProperty(
+        name="Lamella thickness",
+        description="Thickness of the lamellas (0 = width / 10)",
+        subtype="DISTANCE",
+        min=0,
+        precision=4,
+    )
+    resolution: IntProperty(
+        name="Map resolution",
+        description="Resolution R of the distance maps (0 = adaptive)",
+        default=100,
+        min=0,
+        max=1000,
+    )
+    interior_anchors: IntProperty(
+        name="Inner anchors",
+        description="Also pin up to N inner crossings at the target's bumps and dips",
+        min=0,
+        max=100,
+    )
+    unit: EnumProperty(name="Unit", description="Length unit of the model", items=UNITS, default="SCENE")
+    material: EnumProperty(name="Material", items=MATERIALS, default="lime-wood")
+    notches: EnumProperty(
+        name="Notches",
+        description="Simulate the grid with notched crossings, without, or both",
+        items=[("both", "Both", ""), ("on", "On", ""), ("off", "Off", "")],
+        default="both",
+    )
+
+    def client(self):
+        from .remote import gs
+
+        return gs.Client(
+            self.server,
+            token=self.token or None,
+            ca_file=bpy.path.abspath(self.ca_file) if self.ca_file else None,
+            timeout=self.timeout or None,
+        )
+
+    def design_options(self):
+        """DesignRequest.Options: only what differs from the API's defaults is sent."""
+        options = {}
+        if self.alpha_mode == "value":
+            options["alpha"] = repr(float(self.alpha_value))
+        elif self.alpha_mode == "max":
+            options["alpha"] = "max"
+        for name in ("members_u", "members_v", "lamella_width", "lamella_thickness", "interior_anchors"):
+            value = getattr(self, name)
+            if value:
+                options[name] = value
+        if self.resolution != 100:
+            options["resolution"] = self.resolution
+        return options
+
+    def simulation_options(self, scene):
+        options = {"notches": self.notches, "material": self.material}
+        if self.unit == "SCENE":
+            units = scene.unit_settings
+            if units.system != "NONE":
+                options["unit_in_meters"] = float(units.scale_length)
+        elif self.unit != "NONE":
+            options["unit"] = self.unit
+        return options
+
+
+def register():
+    bpy.utils.register_class(GridshellSettings)
+    bpy.types.Scene.gridshell = bpy.props.PointerProperty(type=GridshellSettings)
+
+
+def unregister():
+    del bpy.types.Scene.gridshell
+    bpy.utils.unregister_class(GridshellSettings)

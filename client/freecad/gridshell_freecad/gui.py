@@ -1,0 +1,258 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The workbench's GUI: commands Design, Simulate and Run, each opening a task panel with the
+server and the options; the call runs on a background thread while FreeCAD stays responsive
+(progress in the panel and the status bar, Cancel stops the daemon's work), and the results are
+built in the document when the answer is in. Errors go to the panel and the report view."""
+
+import time
+
+import FreeCAD
+import FreeCADGui
+from PySide2 import QtCore, QtWidgets
+
+from . import core
+from .remote import gs
+
+COMMANDS = ["Gridshell_Design", "Gridshell_Simulate", "Gridshell_Run"]
+
+
+def picked_target():
+    """(Mesh object, picked points or None) from the selection: the first selected Mesh object,
+    and the points picked on it (in picking order) when there are any."""
+    for selection in FreeCADGui.Selection.getSelectionEx():
+        obj = selection.Object
+        if hasattr(obj, "Mesh"):
+            points = [FreeCAD.Vector(p) for p in selection.PickedPoints]
+            return obj, (points or None)
+    return None, None
+
+
+class TaskPanel:
+    """Options, progress and errors of one call (mode "design", "simulate" or "run")."""
+
+    current = None  # the open panel (for scripts and tests)
+
+    def __init__(self, mode):
+        TaskPanel.current = self
+        self.mode = mode
+        self.doc = FreeCAD.ActiveDocument
+        self.obj, self.points = picked_target()
+        self.settings = core.Settings.load()
+        self.call = None
+        self.finish = None
+        self.timer = QtCore.QTimer()
+        self.timer.setInterval(100)
+        self.timer.timeout.connect(self.poll)
+        self.form = self._build_form()
+
+    def _build_form(self):
+        s = self.settings
+        form = QtWidgets.QWidget()
+        form.setWindowTitle("gridshell " + self.mode)
+        layout = QtWidgets.QFormLayout(form)
+        if self.mode == "simulate":
+            target = "the design in the group 'gridshell'"
+        elif self.obj is None:
+            target = "(select a Mesh object)"
+        else:
+            target = "%s, corners %s" % (
+                self.obj.Label,
+                "%d picked points" % len(self.points) if self.points else "automatic",
+            )
+        layout.addRow("Target", QtWidgets.QLabel(target))
+        self.server = QtWidgets.QLineEdit(s.server)
+        layout.addRow("Server", self.server)
+        self.token = QtWidgets.QLineEdit(s.token)
+        self.token.setEchoMode(QtWidgets.QLineEdit.Password)
+        layout.addRow("Token", self.token)
+        self.fields = {}
+        if self.mode in ("design", "run"):
+            self.alpha = QtWidgets.QComboBox()
+            self.alpha.addItems(["min", "max", "value"])
+            self.alpha_value = QtWidgets.QDoubleSpinBox()
+            self.alpha_value.setRange(1, 179)
+            self.alpha_value.setSuffix(" °")
+            self.alpha_value.setValue(70)
+            if s.alpha in ("min", "max"):
+                self.alpha.setCurrentText(s.alpha)
+            else:
+                self.alpha.setCurrentText("value")
+                self.alpha_value.setValue(float(str(s.alpha).replace("deg", "") or 70))
+            self.alpha_value.setEnabled(self.alpha.currentText() == "value")
+            self.alpha.currentTextChanged.connect(lambda text: self.alpha_value.setEnabled(text == "value"))
+            row = QtWidgets.QHBoxLayout()
+            row.addWidget(self.alpha)
+            row.addWidget(self.alpha_value)
+            layout.addRow("Planar angle", row)
+            for name, label, maximum in (
+                ("members_u", "Members u (0 = auto)", 1000),
+                ("members_v", "Members v (0 = auto)", 1000),
+                ("resolution", "Map resolution", 1000),
+                ("interior_anchors", "Inner anchors", 100),
+            ):
+                box = QtWidgets.QSpinBox()
+                box.setRange(0, maximum)
+                box.setValue(int(getattr(s, name)))
+                layout.addRow(label, box)
+                self.fields[name] = box
+            for name, label in (("lamella_width", "Lamella width (0 = auto)"),
+                                ("lamella_thickness", "Lamella thickness (0 = auto)")):
+                box = QtWidgets.QDoubleSpinBox()
+                box.setRange(0, 1e9)
+                box.setDecimals(3)
+                box.setSuffix(" mm")
+                box.setValue(float(getattr(s, name)))
+                layout.addRow(label, box)
+                self.fields[name] = box
+        if self.mode in ("simulate", "run"):
+            self.material = QtWidgets.QComboBox()
+            self.material.addItems(list(core.MATERIALS))
+            self.material.setCurrentText(s.material)
+            layout.addRow("Material", self.material)
+            self.notches = QtWidgets.QComboBox()
+            self.notches.addItems(["both", "on", "off"])
+            self.notches.setCurrentText(s.notches)
+            layout.addRow("Notches", self.notches)
+        self.progress = QtWidgets.QProgressBar()
+        self.progress.setRange(0, 1000)
+        self.progress.setValue(0)
+        layout.addRow("Progress", self.progress)
+        self.status = QtWidgets.QLabel("Press OK to start; Cancel stops a running call.")
+        self.status.setWordWrap(True)
+        layout.addRow(self.status)
+        return form
+
+    def _read_form(self):
+        s = self.settings
+        s.server = self.server.text().strip()
+        s.token = self.token.text().strip()
+        if self.mode in ("design", "run"):
+            mode = self.alpha.currentText()
+            s.alpha = mode if mode != "value" else "%gdeg" % self.alpha_value.value()
+            for name, box in self.fields.items():
+                setattr(s, name, box.value())
+        if self.mode in ("simulate", "run"):
+            s.material = self.material.currentText()
+            s.notches = self.notches.currentText()
+        s.save()
+
+    def getStandardButtons(self):
+        return int(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
+
+    def accept(self):
+        if self.call is not None:
+            return False
+        self._read_form()
+        try:
+            if self.mode == "design":
+                work, self.finish = core.prepare_design(self.doc, self.obj, self.settings, self.points)
+            elif self.mode == "simulate":
+                work, self.finish = core.prepare_simulate(self.doc, self.settings)
+            else:
+                work, self.finish = core.prepare_run(self.doc, self.obj, self.settings, self.points)
+        except (core.InputError, gs.GridshellError) as e:
+            self._error(e)
+            return False
+        self.call = gs.plugin.BackgroundCall(work)
+        self.status.setText("starting")
+        self.timer.start()
+        return False  # the panel stays open until the answer is in
+
+    def reject(self):
+        if self.call is not None:
+            self.call.cancel()
+            self.status.setText("cancelling")
+            return False
+        FreeCADGui.Control.closeDialog()
+        return True
+
+    def poll(self):
+        call = self.call
+        if call is None:
+            return
+        text = gs.plugin.progress_text(call.progress, time.monotonic() - call.started)
+        if call.progress is not None:
+            self.progress.setValue(int(1000 * min(max(call.progress.fraction, 0.0), 1.0)))
+        if call.cancelled:
+            text = "cancelling"
+        self.status.setText(text)
+        FreeCADGui.getMainWindow().statusBar().showMessage("gridshell %s: %s" % (self.mode, text))
+        if not call.done:
+            return
+        self.timer.stop()
+        self.call = None
+        FreeCADGui.getMainWindow().statusBar().clearMessage()
+        try:
+            result = call.result()
+            self.finish(result, call.finished - call.started)
+        except Exception as e:  # every failure is shown, never a traceback
+            self._error(e)
+            return
+        FreeCAD.Console.PrintMessage("gridshell: %s done in %.1f s\n" % (self.mode, call.finished - call.started))
+        colour_by_deviation(self.doc)
+        FreeCADGui.Control.closeDialog()
+        FreeCADGui.SendMsgToActiveView("ViewFit")
+
+    def _error(self, error):
+        message = core.error_message(error, self.settings, self.obj.Label if self.obj is not None else "")
+        self.status.setText(message)
+        self.status.setStyleSheet("color: #b00020")
+        FreeCAD.Console.PrintError(message + "\n")
+
+
+def colour_by_deviation(doc, bins=12):
+    """Colours the deployed lamellas' facets by their deviation from the target: deviation.ply's
+    map, blue at 0 to red at the largest, in ``bins`` steps (mesh segments)."""
+    group = doc.getObject(core.DEPLOYED.replace(" ", "_"))
+    for obj in group.Group if group is not None else []:
+        values = getattr(obj, "FacetDeviation", None)
+        if not values or obj.ViewObject is None:
+            continue
+        top = max(values) or 1.0
+        segments = [[] for _ in range(bins)]
+        for facet, value in enumerate(values):
+            segments[min(bins - 1, int(bins * value / top))].append(facet)
+        mesh = obj.Mesh.copy()
+        colours = []
+        for k, facets in enumerate(segments):
+            if facets:
+                mesh.addSegment(facets)
+                colours.append(gs.plugin.deviation_colour((k + 0.5) / bins, 1.0))
+        obj.Mesh = mesh
+        obj.ViewObject.highlightSegments(colours)
+
+
+class _Command:
+    mode = ""
+    text = ""
+    tip = ""
+
+    def GetResources(self):
+        return {"MenuText": self.text, "ToolTip": self.tip}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and FreeCADGui.Control.activeDialog() is False
+
+    def Activated(self):
+        FreeCADGui.Control.showDialog(TaskPanel(self.mode))
+
+
+class DesignCommand(_Command):
+    mode, text = "design", "Design"
+    tip = "Design the planar grid for the selected Mesh (4 picked points as corners; none: automatic)"
+
+
+class SimulateCommand(_Command):
+    mode, text = "simulate", "Simulate"
+    tip = "Simulate the deployment of the design in the group 'gridshell'"
+
+
+class RunCommand(_Command):
+    mode, text = "run", "Design + Simulate"
+    tip = "Design and simulate the selected Mesh in one call"
+
+
+def register():
+    FreeCADGui.addCommand("Gridshell_Design", DesignCommand())
+    FreeCADGui.addCommand("Gridshell_Simulate", SimulateCommand())
+    FreeCADGui.addCommand("Gridshell_Run", RunCommand())

@@ -1,0 +1,302 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Tests of the Blender add-on (client/blender/gridshell_blender) in real Blender against a real
+gridshelld on loopback (started and stopped here):
+
+    blender -b --factory-startup --python-exit-code 1 --python tests/cad/test_blender.py
+
+A dome (a primitive grid displaced, moved, rotated and scaled) with four selected corners and a
+shared mesh imported with Blender's own OBJ importer go through design and simulation; the tests
+check the objects made (member counts as in design.json, the world frame, the deviation colours,
+the RMS on the collection as the daemon computes it), that the add-on, the CLI and curl get the
+same design.json byte for byte from the same request, and the error reports.
+"""
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import bmesh
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+sys.path.insert(0, os.path.join(ROOT, "client", "blender"))
+
+import gridshell_testing as T  # noqa: E402,N812
+
+import gridshell_blender  # noqa: E402
+from gridshell_blender import mesh_input, results  # noqa: E402
+from gridshell_blender.remote import gs  # noqa: E402
+from gridshell_client.client import encode_request  # noqa: E402
+
+RESOLUTION = 24  # distance maps: small and quick; the comparison with the CLI uses the same
+
+
+def dome(name, n=14, size=10.0, height=2.5):
+    """A grid primitive displaced into a dome, then moved, rotated and scaled (a world transform
+    that the add-on must apply). Returns the object; its corner vertices are 0, n, last, last-n."""
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=n, y_subdivisions=n, size=size)
+    obj = bpy.context.active_object
+    obj.name = name
+    half = size / 2
+    for v in obj.data.vertices:
+        x, y = v.co.x / half, v.co.y / half
+        v.co.z = height * (1 - 0.5 * (x * x + y * y))
+    obj.location = (3.0, -2.0, 1.5)
+    obj.rotation_euler = (0.3, -0.2, 0.9)
+    obj.scale = (1.5, 1.5, 1.5)
+    bpy.context.view_layer.update()
+    return obj
+
+
+def grid_corners(obj):
+    """The grid's four corner vertices in boundary order (by position in the object's frame)."""
+    vs = obj.data.vertices
+    pick = lambda key: max(range(len(vs)), key=lambda i: key(vs[i].co))  # noqa: E731
+    return [
+        pick(lambda c: -c.x - c.y),
+        pick(lambda c: c.x - c.y),
+        pick(lambda c: c.x + c.y),
+        pick(lambda c: -c.x + c.y),
+    ]
+
+
+def select(obj, vertices):
+    """Selects exactly ``vertices`` of ``obj``, in this order (Blender's selection history)."""
+    bpy.context.view_layer.objects.active = obj
+    for other in bpy.context.view_layer.objects:
+        other.select_set(other == obj)
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    for v in bm.verts:
+        v.select = False
+    for e in bm.edges:
+        e.select = False
+    for f in bm.faces:
+        f.select = False
+    bm.select_history.clear()
+    for i in vertices:
+        bm.verts[i].select = True
+        bm.select_history.add(bm.verts[i])
+    bm.to_mesh(obj.data)
+    bm.free()
+    obj.data.update()
+
+
+def world(obj, index):
+    """A vertex in world coordinates, computed here in double precision."""
+    m = obj.matrix_world
+    co = obj.data.vertices[index].co
+    return [
+        sum(float(m[r][c]) * float(co[c]) for c in range(3)) + float(m[r][3]) for r in range(3)
+    ]
+
+
+def design_of_scene():
+    return json.loads(results.design_json(bpy.context))
+
+
+def member_objects(name=results.MEMBERS):
+    return [o for o in bpy.data.collections[name].objects if o.type == "CURVE"]
+
+
+class BlenderAddonTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.daemon = T.Daemon()
+        gridshell_blender.register()
+        cls.settings = bpy.context.scene.gridshell
+        cls.settings.server = cls.daemon.url
+        cls.tmp = tempfile.mkdtemp(prefix="gridshell-blender-")
+        cls.client = gs.Client(cls.daemon.url)
+
+    @classmethod
+    def tearDownClass(cls):
+        gridshell_blender.unregister()
+        cls.daemon.stop()
+
+    def setUp(self):
+        s = self.settings
+        s.server = self.daemon.url
+        s.resolution = RESOLUTION
+        s.notches = "on"
+        s.material = "lime-wood"
+        s.unit = "SCENE"
+        s.lamella_width = 0
+
+    def test_dome_design_then_simulate(self):
+        obj = dome("dome.obj")
+        corners = grid_corners(obj)
+        select(obj, corners)
+        mesh, sent_corners, _ = mesh_input.request_mesh_for_scene(bpy.context)
+        self.assertEqual(sent_corners, {"vertices": corners})
+
+        self.assertEqual(bpy.ops.gridshell.design(), {"FINISHED"})
+        design = design_of_scene()
+        top = bpy.data.collections[results.COLLECTION]
+        # One curve per member, on the surface and in the plane; anchors as empties.
+        self.assertEqual(len(member_objects()), len(design["members"]))
+        self.assertEqual(len(member_objects(results.PLANAR)), len(design["members"]))
+        self.assertEqual(
+            sorted(o.name for o in member_objects()),
+            sorted("%s %d" % (m["family"], m["index"]) for m in design["members"]),
+        )
+        anchors = bpy.data.collections[results.ANCHORS].objects
+        self.assertEqual(len(anchors), len(design["anchors"]))
+        self.assertGreater(len(design["members"]), 8)
+        self.assertEqual(top["members"], len(design["members"]))
+        self.assertEqual(top["alpha_bar"], design["alpha_bar"])
+        # The world frame: the patch's corners are the selected vertices, transformed.
+        patch = design["patch"]
+        for k, v in enumerate(corners):
+            got = patch["vertices"][patch["corners"][k]]
+            want = world(obj, v)
+            for a, b in zip(got, want):
+                self.assertAlmostEqual(a, b, delta=1e-9 * 20)
+        # ... and a member curve's points are the design's surface points.
+        member = design["members"][1]
+        curve = bpy.data.objects["%s %d" % (member["family"], member["index"])]
+        points = [tuple(p.co)[:3] for p in curve.data.splines[0].points]
+        self.assertEqual(len(points), len(member["surface"]))
+        for p, q in zip(points, member["surface"]):
+            for a, b in zip(p, q):
+                self.assertAlmostEqual(a, b, delta=1e-5)  # curve points are float32
+
+        # The same request from curl and from the CLI gives the same design.json, byte for byte.
+        ours = results.design_json(bpy.context).encode("utf-8")
+        request = {"mesh": mesh, "corners": sent_corners, "options": self.settings.design_options(), "files": True}
+        path = os.path.join(self.tmp, "request.json")
+        with open(path, "wb") as f:
+            f.write(encode_request(request))
+        curl = subprocess.run(
+            ["curl", "-sS", "--fail-with-body", "-X", "POST", "-H", "Content-Type: application/json",
+             "--data-binary", "@" + path, self.daemon.url + "/v1/design"],
+            capture_output=True, check=True,
+        )
+        self.assertEqual(gs.files_of(json.loads(curl.stdout))["design.json"], ours)
+        obj_file = os.path.join(self.tmp, "dome.obj")
+        T.write_obj(obj_file, mesh["positions"], mesh["indices"])
+        out = os.path.join(self.tmp, "dome-cli")
+        cli = T.cli("design", obj_file, "--corners", ",".join(map(str, corners)),
+                    "--resolution", RESOLUTION, "--out", out, "--quiet")
+        self.assertEqual(cli.returncode, 0, cli.stderr)
+        with open(os.path.join(out, "design.json"), "rb") as f:
+            self.assertEqual(f.read(), ours)
+
+        # Simulate the design kept in the text: the deployed lamellas with their deviation.
+        self.assertEqual(bpy.ops.gridshell.simulate(), {"FINISHED"})
+        deployed = bpy.data.collections[results.DEPLOYED]
+        lamellas = [o for o in deployed.objects if o.type == "MESH"]
+        self.assertEqual(len(lamellas), 1)  # notches "on": one run
+        lamella = lamellas[0]
+        self.assertIn("deviation", lamella.data.color_attributes)
+        # The daemon's own answer to the same simulation request.
+        answer = self.client.simulate(
+            ours, self.settings.simulation_options(bpy.context.scene), design_name=results.DESIGN_TEXT
+        )
+        deployment = answer["deployment"]
+        self.assertEqual(top["rms_with_notches"], deployment["rms_with_notches"])
+        self.assertNotIn("rms_without_notches", top)
+        self.assertEqual(lamella["rms"], deployment["with_notches"]["rms"])
+        # Four box corners per rod vertex, coloured by its deviation (blue 0 .. red at the max).
+        deviation = [d for rod in deployment["rods"] for d in rod["deviation"] for _ in range(4)]
+        self.assertEqual(len(lamella.data.vertices), len(deviation))
+        values = lamella.data.attributes["deviation_distance"].data
+        worst = max(range(len(deviation)), key=deviation.__getitem__)
+        self.assertAlmostEqual(values[worst].value, deviation[worst], delta=1e-6 * max(deviation))
+        colours = lamella.data.color_attributes["deviation"].data
+        self.assertEqual(tuple(colours[worst].color), (1.0, 0.0, 0.0, 1.0))
+        best = min(range(len(deviation)), key=deviation.__getitem__)
+        self.assertGreater(colours[best].color[2], colours[best].color[0])
+        self.assertEqual(lamella.material_slots[0].material.name, results.MATERIAL)
+        # The lamellas lie in the world frame too: near the transformed dome's corner.
+        c0 = world(obj, corners[0])
+        nearest = min(
+            math.dist(c0, tuple(v.co)) for v in lamella.data.vertices
+        )
+        self.assertLess(nearest, 0.05 * 15)
+
+    def test_shared_mesh_imported_and_run(self):
+        path = os.path.join(T.SHARED, "meshes", "knet1.obj")
+        self.assertTrue(os.path.exists(path), path)
+        bpy.ops.object.select_all(action="DESELECT")
+        bpy.ops.wm.obj_import(filepath=path)
+        obj = bpy.context.selected_objects[0]
+        bpy.context.view_layer.objects.active = obj
+        select(obj, [])  # no corners selected: automatic
+        mesh, corners, _ = mesh_input.request_mesh_for_scene(bpy.context)
+        self.assertIsNone(corners)
+        self.assertEqual(len(mesh["positions"]), 3 * 441)
+        self.settings.notches = "both"
+        self.assertEqual(bpy.ops.gridshell.run(), {"FINISHED"})
+        design = design_of_scene()
+        self.assertEqual(design["options"]["corners"], "auto")
+        self.assertEqual(len(member_objects()), len(design["members"]))
+        top = bpy.data.collections[results.COLLECTION]
+        answer = self.client.run(
+            mesh, None, self.settings.design_options(),
+            self.settings.simulation_options(bpy.context.scene),
+        )
+        self.assertEqual(answer["design"]["design"], design)
+        deployment = answer["simulation"]["deployment"]
+        self.assertEqual(top["rms_with_notches"], deployment["rms_with_notches"])
+        self.assertEqual(top["rms_without_notches"], deployment["rms_without_notches"])
+        lamellas = [o for o in bpy.data.collections[results.DEPLOYED].objects]
+        self.assertEqual(sorted(o["notches"] for o in lamellas), [False, True])
+
+    def test_errors_are_reports(self):
+        grid = dome("flat.obj", n=8, height=0.0)
+        vs = grid_corners(grid)
+        # Three corners.
+        select(grid, vs[:3])
+        with self.assertRaisesRegex(RuntimeError, "select 4 corner vertices of flat.obj in order"):
+            bpy.ops.gridshell.design()
+        # A dart: the third corner inside the square, towards the first, is a reflex corner.
+        n = 8
+        inside = (n // 2 - 1) * (n + 1) + n // 2 - 1
+        select(grid, [vs[0], vs[1], inside, vs[3]])
+        with self.assertRaisesRegex(
+            RuntimeError, r"infeasible design: selected corner 3 \(corners\[2\]\): .*criterion iv"
+        ):
+            bpy.ops.gridshell.design()
+        # An option out of range names the panel's field.
+        select(grid, vs)
+        self.settings.lamella_width = 1e9
+        with self.assertRaisesRegex(RuntimeError, r"invalid input: Lamella width \(options.lamella_width\)"):
+            bpy.ops.gridshell.design()
+        self.settings.lamella_width = 0
+        # An invalid mesh: a vertex at NaN, named as Blender numbers it.
+        grid.data.vertices[5].co.x = float("nan")
+        with self.assertRaisesRegex(
+            RuntimeError, r"invalid input: vertex 5 of flat.obj \(mesh.positions\[15\]\): NaN"
+        ):
+            bpy.ops.gridshell.design()
+        # No daemon there.
+        self.settings.server = "http://127.0.0.1:%d" % T.free_port()
+        with self.assertRaisesRegex(RuntimeError, "cannot reach the daemon at http://127.0.0.1"):
+            bpy.ops.gridshell.design()
+        self.settings.server = self.daemon.url
+        # Not a mesh.
+        bpy.ops.object.empty_add()
+        with self.assertRaisesRegex(RuntimeError, "select a mesh object"):
+            bpy.ops.gridshell.design()
+        # The daemon kept serving throughout.
+        self.assertEqual(self.client.health(), "SERVING")
+
+
+def main():
+    suite = unittest.defaultTestLoader.loadTestsFromTestCase(BlenderAddonTest)
+    result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
+    failed = len(result.failures) + len(result.errors)
+    print("blender: %d passed, %d failed" % (result.testsRun - failed, failed))
+    if failed:
+        raise SystemExit(1)
+
+
+main()

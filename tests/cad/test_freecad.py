@@ -1,0 +1,256 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Tests of the FreeCAD workbench's non-GUI part (client/freecad/gridshell_freecad/core.py) in real
+FreeCAD against a real gridshelld on loopback (started and stopped here):
+
+    freecadcmd tests/cad/test_freecad.py
+
+(freecadcmd exits 0 after an uncaught exception, so this script exits 1 itself on a failure.)
+A dome Mesh object with a Placement, corners as vertices and as picked points, and a shared mesh
+read by FreeCAD's own Mesh module go through design and simulation; the tests check the document
+objects (member wires as in design.json, the global frame, the deployed lamellas and their
+deviation, RMS as the daemon computes it), design.json byte for byte as the CLI writes it, progress
+and cancellation, and the error messages.
+"""
+
+import json
+import os
+import sys
+import tempfile
+import threading
+import time
+import traceback
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+sys.path.insert(0, os.path.join(ROOT, "client", "freecad"))
+
+import FreeCAD  # noqa: E402
+import Mesh  # noqa: E402
+import Part  # noqa: E402
+from FreeCAD import Placement, Rotation, Vector  # noqa: E402
+
+import gridshell_testing as T  # noqa: E402,N812
+
+from gridshell_freecad import core  # noqa: E402
+from gridshell_freecad.remote import gs  # noqa: E402
+
+RESOLUTION = 24
+
+
+def dome_arrays(n=12, size=10.0, height=2.5):
+    positions, indices = [], []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x, y = size * (i / n - 0.5), size * (j / n - 0.5)
+            u, v = 2 * i / n - 1, 2 * j / n - 1
+            positions += [x, y, height * (1 - 0.5 * (u * u + v * v))]
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            indices += [a, a + 1, a + n + 2, a, a + n + 2, a + n + 1]
+    return positions, indices, [0, n, (n + 1) * (n + 1) - 1, n * (n + 1)]
+
+
+def mesh_feature(doc, name, positions, indices, placement=None):
+    points = [Vector(*positions[3 * i : 3 * i + 3]) for i in indices]
+    obj = doc.addObject("Mesh::Feature", name)
+    obj.Label = name
+    obj.Mesh = Mesh.Mesh(points)
+    if placement is not None:
+        obj.Placement = placement
+    doc.recompute()
+    return obj
+
+
+def members_of(doc, group):
+    return [o for o in doc.getObject(group.replace(" ", "_")).Group if o.TypeId == "Part::Feature"]
+
+
+class FreeCADWorkbenchTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.daemon = T.Daemon()
+        cls.client = gs.Client(cls.daemon.url)
+        cls.tmp = tempfile.mkdtemp(prefix="gridshell-freecad-")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.daemon.stop()
+
+    def setUp(self):
+        self.doc = FreeCAD.newDocument("gridshell_test")
+        self.settings = core.Settings(server=self.daemon.url, resolution=RESOLUTION, notches="on")
+
+    def tearDown(self):
+        FreeCAD.closeDocument(self.doc.Name)
+
+    def test_dome_design_then_simulate(self):
+        positions, indices, corners = dome_arrays()
+        placement = Placement(Vector(3, -2, 1.5), Rotation(Vector(0.3, -0.2, 0.9), 40))
+        obj = mesh_feature(self.doc, "dome.obj", positions, indices, placement)
+        # FreeCAD keeps the points in first-use order: corners by index into its own points.
+        points, _ = obj.Mesh.Topology
+        want = [placement.multVec(Vector(*positions[3 * c : 3 * c + 3])) for c in corners]
+        index = [min(range(len(points)), key=lambda k: (points[k] - w).Length) for w in want]
+        stages = []
+        top = core.design(self.doc, obj, self.settings, corners=index, progress=lambda p: stages.append(p.stage))
+        self.assertIn("distance maps", stages)
+        design = json.loads(top.DesignJson)
+        self.assertEqual(len(members_of(self.doc, core.MEMBERS)), len(design["members"]))
+        self.assertEqual(len(members_of(self.doc, core.PLANAR)), len(design["members"]))
+        self.assertEqual(len(members_of(self.doc, core.ANCHORS)), len(design["anchors"]))
+        self.assertEqual(top.Members, len(design["members"]))
+        self.assertEqual(top.AlphaBarRadians, design["alpha_bar"])
+        # Member wires run through the design's surface points; the patch corners are the
+        # object's corner vertices with its Placement applied.
+        member = design["members"][2]
+        wire = [o for o in members_of(self.doc, core.MEMBERS)
+                if o.Family == member["family"] and o.Index == member["index"]][0]
+        self.assertEqual(len(wire.Shape.Vertexes), len(member["surface"]))
+        for vertex, p in zip(wire.Shape.Vertexes, member["surface"]):
+            self.assertLess((vertex.Point - Vector(*p)).Length, 1e-9 * 20)
+        patch = design["patch"]
+        for k in range(4):
+            got = Vector(*patch["vertices"][patch["corners"][k]])
+            self.assertLess((got - want[k]).Length, 1e-5)  # FreeCAD stores float32 points
+        # The CLI on the same arrays (written with 17 digits) writes the same design.json.
+        mesh, _ = core.target(obj, index)
+        path = os.path.join(self.tmp, "dome.obj")
+        T.write_obj(path, mesh["positions"], mesh["indices"])
+        out = os.path.join(self.tmp, "dome-cli")
+        cli = T.cli("design", path, "--corners", ",".join(map(str, index)), "--resolution", RESOLUTION,
+                    "--out", out, "--quiet")
+        self.assertEqual(cli.returncode, 0, cli.stderr)
+        with open(os.path.join(out, "design.json"), "rb") as f:
+            self.assertEqual(f.read(), top.DesignJson.encode("utf-8"))
+
+        deployed = core.simulate(self.doc, self.settings)
+        answer = self.client.simulate(top.DesignJson, self.settings.simulation_options(), design_name="design.json")
+        deployment = answer["deployment"]
+        self.assertEqual(top.RmsWithNotches, deployment["rms_with_notches"])
+        self.assertNotIn("RmsWithoutNotches", top.PropertiesList)
+        lamellas = [o for o in deployed.Group if o.TypeId == "Mesh::Feature"]
+        self.assertEqual(len(lamellas), 1)
+        lamella = lamellas[0]
+        deviation = [d for rod in deployment["rods"] for d in rod["deviation"] for _ in range(4)]
+        self.assertEqual(len(lamella.Deviation), len(deviation))
+        for a, b in zip(lamella.Deviation, deviation):
+            self.assertAlmostEqual(a, b, delta=1e-12 + 1e-12 * abs(b))
+        self.assertEqual(lamella.Rms, deployment["with_notches"]["rms"])
+        self.assertGreater(lamella.Mesh.CountFacets, 0)
+        self.assertEqual(answer["deployment"]["options"]["unit"], "mm")
+
+    def test_picked_points_and_cancel(self):
+        positions, indices, corners = dome_arrays(n=10)
+        obj = mesh_feature(self.doc, "dome", positions, indices)
+        # Picked a little off the surface, along the normal of the corner's faces: the daemon
+        # snaps each point to the closest surface point, the corner vertex itself.
+        exact = [Vector(*positions[3 * c : 3 * c + 3]) for c in corners]
+        picked = []
+        for c, p in zip(corners, exact):
+            normal = Vector()
+            for k in range(0, len(indices), 3):
+                if c in indices[k : k + 3]:
+                    a, b, d = (Vector(*positions[3 * i : 3 * i + 3]) for i in indices[k : k + 3])
+                    normal += (b - a).cross(d - a).normalize()
+            picked.append(p + normal.normalize() * 0.05)
+        top = core.design(self.doc, obj, self.settings, corners=picked)
+        design = json.loads(top.DesignJson)
+        patch = design["patch"]
+        for k in range(4):
+            got = Vector(*patch["vertices"][patch["corners"][k]])
+            self.assertLess((got - exact[k]).Length, 1e-6)
+        self.assertIn(";", design["options"]["corners"])  # recorded as points
+        # Cancel from another thread while the design runs.
+        cancel = gs.Cancel()
+        seen = threading.Event()
+        outcome = {}
+        slow = core.Settings(server=self.daemon.url, resolution=1000)
+
+        def work():
+            try:
+                core.design(self.doc, obj, slow, progress=lambda p: seen.set(), cancel=cancel)
+                outcome["done"] = True
+            except gs.GridshellError as e:
+                outcome["error"] = e
+
+        thread = threading.Thread(target=work)
+        thread.start()
+        self.assertTrue(seen.wait(60))
+        cancel.cancel()
+        thread.join(30)
+        self.assertIsInstance(outcome.get("error"), gs.Cancelled, outcome)
+        self.assertIsNotNone(
+            self.daemon.wait_for(lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30)
+        )
+        # The earlier results are still there.
+        self.assertEqual(json.loads(top.DesignJson), design)
+
+    def test_shared_mesh_read_by_freecad_and_run(self):
+        path = os.path.join(T.SHARED, "meshes", "knet1.obj")
+        self.assertTrue(os.path.exists(path), path)
+        obj = self.doc.addObject("Mesh::Feature", "knet1")
+        obj.Mesh = Mesh.read(path)
+        self.doc.recompute()
+        self.settings.notches = "both"
+        top = core.run(self.doc, obj, self.settings)
+        design = json.loads(top.DesignJson)
+        self.assertEqual(design["options"]["corners"], "auto")
+        self.assertEqual(len(members_of(self.doc, core.MEMBERS)), len(design["members"]))
+        mesh, _ = core.target(obj)
+        answer = self.client.run(mesh, None, self.settings.design_options(), self.settings.simulation_options())
+        self.assertEqual(answer["design"]["design"], design)
+        deployment = answer["simulation"]["deployment"]
+        self.assertEqual(top.RmsWithNotches, deployment["rms_with_notches"])
+        self.assertEqual(top.RmsWithoutNotches, deployment["rms_without_notches"])
+        deployed = self.doc.getObject(core.DEPLOYED.replace(" ", "_"))
+        self.assertEqual(sorted(o.Notches for o in deployed.Group), [False, True])
+
+    def test_errors(self):
+        positions, indices, corners = dome_arrays(n=8, height=0.0)
+        obj = mesh_feature(self.doc, "flat", positions, indices)
+        box = self.doc.addObject("Part::Box", "Box")
+        self.doc.recompute()
+        with self.assertRaises(core.InputError) as caught:
+            core.design(self.doc, box, self.settings)
+        self.assertIn("select a Mesh object", core.error_message(caught.exception, self.settings))
+        with self.assertRaises(core.InputError) as caught:
+            core.design(self.doc, obj, self.settings, corners=[Vector(0, 0, 0)] * 3)
+        self.assertIn("pick 4 corner points on flat", str(caught.exception))
+        with self.assertRaises(core.InputError):
+            core.simulate(self.doc, self.settings)  # no design yet
+        # A dart: a reflex corner, infeasible.
+        dart = [Vector(-5, -5, 0), Vector(5, -5, 0), Vector(0, -1, 0), Vector(-5, 5, 0)]
+        with self.assertRaises(gs.Infeasible) as caught:
+            core.design(self.doc, obj, self.settings, corners=dart)
+        text = core.error_message(caught.exception, self.settings, "flat")
+        self.assertRegex(text, "^gridshell: infeasible design: .*criterion iv")
+        # An option out of range names the panel's field.
+        wide = core.Settings(server=self.daemon.url, resolution=RESOLUTION, lamella_width=1e9)
+        with self.assertRaises(gs.InvalidInput) as caught:
+            core.design(self.doc, obj, wide)
+        self.assertIn("Lamella width (options.lamella_width)", core.error_message(caught.exception, wide))
+        away = core.Settings(server="http://127.0.0.1:%d" % T.free_port())
+        with self.assertRaises(gs.Unavailable) as caught:
+            core.design(self.doc, obj, away)
+        self.assertIn("cannot reach the daemon at http://127.0.0.1", core.error_message(caught.exception, away))
+        self.assertEqual(self.client.health(), "SERVING")
+
+
+def main():
+    try:
+        suite = unittest.defaultTestLoader.loadTestsFromTestCase(FreeCADWorkbenchTest)
+        result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
+        failed = len(result.failures) + len(result.errors)
+        print("freecad: %d passed, %d failed" % (result.testsRun - failed, failed))
+    except BaseException:
+        traceback.print_exc()
+        failed = 1
+    sys.stdout.flush()
+    os._exit(1 if failed else 0)  # freecadcmd would exit 0 after an exception
+
+
+started = time.monotonic()
+main()
