@@ -15,6 +15,7 @@ import {
   alphaOption, decodeState, deploymentSummary, designSummary, encodeState, errorSlot, maxDeviation,
   patchSummary, sliderRange, stress, type UrlState,
 } from './format';
+import { appendSuggestions } from './suggestions';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
 
@@ -171,6 +172,7 @@ function showError(kind: CallKind, e: unknown): void {
   if (err.status === 'UNAUTHENTICATED') ui.tokenBox.hidden = false;
   ui.error.hidden = false;
   ui.error.textContent = `${kind} failed (${err.status}): ${err.describe()}`;
+  appendSuggestions(ui.error, err.suggestions);
   ui.status.textContent = `${kind}: failed`;
   const slot = document.querySelector<HTMLElement>(`.field-error[data-for="${errorSlot(kind, err.field)}"]`);
   if (slot) slot.textContent = err.describe();
