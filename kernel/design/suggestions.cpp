@@ -66,6 +66,7 @@ struct Search {
   const Progress& progress;
   std::vector<DesignSuggestion> found;
   int designs = 0;
+  int screens = 0;
 
   bool budget() const { return designs < limits.max_designs; }
 
@@ -175,10 +176,25 @@ struct Search {
           std::array<int, 4> moved = base;
           moved[i] = nearest_input(p);
           if (moved[i] == base[i]) continue;
-          ++designs;
+          if (screens >= limits.max_corner_screens) return;
+          ++screens;
           try {
+            // Screened on coarse maps (R = 32, a third of the solves) first; only a move that
+            // is feasible there gets the design's maps and a complete design.
             TargetPatch target = make_target_patch(mesh, CornerSpec::at_vertices(moved),
                                                    patch_options(options), progress.checker());
+            {
+              const GeodesicSolver solver(target.patch.mesh, options.patch.geodesic);
+              DistanceMapOptions coarse = options.maps;
+              coarse.resolution =
+                  std::min(32, options.maps.resolution > 0 ? options.maps.resolution : 32);
+              PatchWork screen;
+              screen.target.patch = target.patch;
+              screen.maps = compute_distance_maps(target.patch, solver, coarse, progress.checker());
+              AlphaRange coarse_range;
+              if (!alpha_feasible(screen, options.cladding, &coarse_range, progress)) continue;
+            }
+            ++designs;
             const PatchWork other =
                 prepare_patch_work(std::move(target), options, progress.checker());
             AlphaRange range;
@@ -211,7 +227,7 @@ struct Search {
                h = failure.field() == "options.members_v";
     if (!width && !g && !h) return;
     const LamellaSize size = lamella_size(work.target.patch, options.members);
-    for (double f : {0.8, 0.6, 0.4, 0.25}) {
+    for (double f : {0.8, 0.6, 0.4, 0.25, 0.15, 0.1}) {
       if (!budget()) return;
       progress.check();
       DesignOptions changed = options;

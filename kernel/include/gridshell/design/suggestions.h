@@ -8,7 +8,8 @@
 //     gives a feasible planar angle range on the same maps (refined by bisection, rounded
 //     outwards to 3 significant digits);
 //   - corners: each corner moved along its two patch sides by 5 % and 10 % of the side's length
-//     (snapped to the input mesh's nearest vertex; a new patch, its maps and its design);
+//     (snapped to the input mesh's nearest vertex), screened on coarse maps (R = 32), and a
+//     complete design on the design's maps for those that pass the screen;
 //   - members: narrower lamellas, or fewer explicit members, when members are what fails.
 // Nothing is guessed: every suggestion carries the feasible planar angle range of the design
 // that was actually computed with it. The work is bounded (SuggestionOptions) and cancellable.
@@ -36,8 +37,9 @@ struct DesignSuggestion {
 };
 
 struct SuggestionOptions {
-  int count = 3;         // suggestions wanted (the best this many are returned)
-  int max_designs = 12;  // complete designs (new patch or grid) tried at most
+  int count = 3;               // suggestions wanted (the best this many are returned)
+  int max_designs = 12;        // complete designs (new patch or grid) tried at most
+  int max_corner_screens = 8;  // moved-corner patches screened on coarse maps at most
 };
 
 /// "slope_bounds" | "corners" | "members" | "lamella_width".
