@@ -38,7 +38,9 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:abort_on_error=1"
 # factor (tests/support.h, time_scale).
 export GRIDSHELL_TEST_TIME_SCALE="${GRIDSHELL_TEST_TIME_SCALE:-5}"
 
-subset=(-E 'ExampleDeployment\..*/(sphere|waves|torus_wide|waves_bump|mesh_knet1_obj|mesh_pillow_1_obj)( |$)')
+# Also left out: the automatic corners' search on all eleven examples (issue 18; the search runs
+# under the sanitizers on the helicoid, sphere, annulus and shared meshes in the same binary).
+subset=(-E 'ExampleDeployment\..*/(sphere|waves|torus_wide|waves_bump|mesh_knet1_obj|mesh_pillow_1_obj)( |$)|AutoCorners\.ExamplesAreAtLeastAsLargeAsTheFormerRule')
 [ "${GRIDSHELL_SANITIZE_FULL:-0}" = 1 ] && subset=()
 
 status=0
