@@ -6,8 +6,8 @@
 #include <numbers>
 #include <random>
 
-#include "gridshell/design/planar_patch.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/design/planar_patch.h"
 
 namespace gridshell {
 namespace {
