@@ -63,6 +63,7 @@ struct SimulationFlags {
   std::string notches = "both";
   std::string material;  // empty: lime-wood, or custom when --young/--shear are given
   std::optional<double> young, shear;
+  std::optional<double> bending_strength, shear_strength;  // Pa; default: the material's
   std::string unit;
   double mu = 0.1;
   double edges_per_interval = 2;

@@ -11,12 +11,15 @@
 // are final, since little of the patch lies beyond that boundary.
 #include "gridshell/design/grid.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 
@@ -106,10 +109,13 @@ std::string member_name(Family family, int index) {
   return std::string(family == Family::G ? "g" : "h") + std::to_string(index);
 }
 
-// Refines u2 so that surface and planar lengths agree; returns the refined u2.
-double refine_end(const DistanceField& field, const TriangleMesh& mesh,
-                  const std::vector<int>& second_boundary, const PlanarPatch& planar, Family family,
-                  double u1, double u2, double tolerance, int index) {
+// Refines u2 so that surface and planar lengths agree: the root of phi in [lo, hi], searched by
+// widening a bracket around u2 (steps of 0.005, doubled), then Illinois regula falsi. Returns
+// nothing if no sign change lies within [lo, hi].
+std::optional<double> refine_end(const DistanceField& field, const TriangleMesh& mesh,
+                                 const std::vector<int>& second_boundary, const PlanarPatch& planar,
+                                 Family family, double u1, double u2, double tolerance,
+                                 double lo_limit, double hi_limit) {
   const Vec2 start = planar_boundary_point(planar, family, 0, u1);
   auto phi = [&](double t) {
     const double surface = field.distance_to(point_on_chain(mesh, second_boundary, t));
@@ -122,8 +128,8 @@ double refine_end(const DistanceField& field, const TriangleMesh& mesh,
   // Bracket a sign change around u2, widening step by step.
   double lo = u2, hi = u2, flo = f2, fhi = f2;
   bool bracketed = false;
-  for (double step = 0.005; step <= 1.0 && !bracketed; step *= 2) {
-    const double a = std::max(1e-9, u2 - step), b = std::min(1 - 1e-9, u2 + step);
+  for (double step = 0.005; !bracketed; step *= 2) {
+    const double a = std::max(lo_limit, u2 - step), b = std::min(hi_limit, u2 + step);
     const double fa = phi(a), fb = phi(b);
     if ((fa < 0) != (f2 < 0)) {
       lo = a, flo = fa, hi = u2, fhi = f2;
@@ -132,14 +138,9 @@ double refine_end(const DistanceField& field, const TriangleMesh& mesh,
       lo = u2, flo = f2, hi = b, fhi = fb;
       bracketed = true;
     }
+    if (a == lo_limit && b == hi_limit) break;
   }
-  if (!bracketed) {
-    std::ostringstream msg;
-    msg << "member " << member_name(family, index) << " (u1 = " << u1
-        << "): no end point on the opposite boundary has equal surface and planar length "
-           "(criterion i)";
-    throw Infeasible(family == Family::G ? "options.members_u" : "options.members_v", msg.str());
-  }
+  if (!bracketed) return std::nullopt;
   // Illinois-modified regula falsi with bisection fallback: superlinear and always bracketed.
   int side = 0;
   for (int iteration = 0; iteration < 200; ++iteration) {
@@ -160,13 +161,59 @@ double refine_end(const DistanceField& field, const TriangleMesh& mesh,
   return 0.5 * (lo + hi);
 }
 
+// Half-width, in u2, of the piece of the opposite boundary where a member's end is searched
+// first (with goal pruning). The refined ends of the examples' members lie within 2.8e-3 of the
+// cladding function's u2 (p95 1e-3); the bracket search's first two steps stay inside.
+constexpr double kEndWindow = 0.01;
+constexpr double kEndLimit = 1e-9;  // member ends stay this far inside (0, 1)
+
+// Options of a member's solve: exact only where its end can be, the piece [lo, hi] of the
+// opposite boundary, for distances up to the longest planar length there (the planar length is
+// convex in u2 along a straight planar side, so it is largest at an end of the piece), plus the
+// length tolerance the root may be off by.
+SolveOptions end_goal(const TriangleMesh& mesh, const std::vector<int>& second,
+                      const PlanarPatch& planar, Family family, double u1, double lo, double hi,
+                      double tolerance) {
+  std::vector<Vec3> points{point_on_chain(mesh, second, lo).position(mesh)};
+  const double total = chain_length(mesh, second);
+  double s = 0;
+  for (size_t k = 0; k + 1 < second.size(); ++k) {
+    s += (mesh.vertices()[second[k + 1]] - mesh.vertices()[second[k]]).norm();
+    const double t = total > 0 ? s / total : 0;
+    if (t > lo && t < hi) points.push_back(mesh.vertices()[second[k + 1]]);
+  }
+  points.push_back(point_on_chain(mesh, second, hi).position(mesh));
+  Eigen::AlignedBox3d box;
+  for (const Vec3& p : points) box.extend(p);
+  SolveOptions options;
+  options.goal.center = box.center();
+  double radius = 0;
+  for (const Vec3& p : points) radius = std::max(radius, (p - options.goal.center).norm());
+  options.goal.radius = radius * (1 + 1e-12);
+  const Vec2 start = planar_boundary_point(planar, family, 0, u1);
+  const double longest = std::max((planar_boundary_point(planar, family, 1, lo) - start).norm(),
+                                  (planar_boundary_point(planar, family, 1, hi) - start).norm());
+  options.goal.bound = longest * (1 + 2 * tolerance) + 1e-9 * longest;
+  return options;
+}
+
+Infeasible no_end(Family family, int index, double u1) {
+  std::ostringstream msg;
+  msg << "member " << member_name(family, index) << " (u1 = " << u1
+      << "): no end point on the opposite boundary has equal surface and planar length "
+         "(criterion i)";
+  return Infeasible(family == Family::G ? "options.members_u" : "options.members_v", msg.str());
+}
+
 }  // namespace
 
 MemberMemo::Key MemberMemo::key(Family family, const MemberPosition& position,
-                                const PlanarPatch& planar, double length_tolerance) {
+                                const PlanarPatch& planar, double length_tolerance,
+                                bool goal_pruning) {
   Key key;
   key.family = static_cast<int>(family);
-  std::array<double, 12> values{position.u1, position.u2, length_tolerance, 0};
+  std::array<double, 12> values{position.u1, position.u2, length_tolerance,
+                                goal_pruning ? 1.0 : 0.0};
   for (int c = 0; c < 4; ++c) {
     values[4 + 2 * c] = planar.corners[c].x();
     values[5 + 2 * c] = planar.corners[c].y();
@@ -271,6 +318,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
                                               family_boundary(patch, Family::H, 0)};
   const std::array<std::vector<int>, 2> second{family_boundary(patch, Family::G, 1),
                                                family_boundary(patch, Family::H, 1)};
+  std::atomic<int> complete_solves{0};
   ParallelOptions parallel;
   parallel.threads = options.threads;
   parallel_for(
@@ -281,7 +329,8 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         const MemberPosition& pos = (*positions[f])[k];
         std::optional<MemberMemo::Key> key;
         if (memo) {
-          key = MemberMemo::key(family, pos, planar, options.length_tolerance);
+          key =
+              MemberMemo::key(family, pos, planar, options.length_tolerance, options.goal_pruning);
           if (std::optional<Member> known = memo->find(*key)) {
             known->index = k + 1;  // the same member may have another rank in another design
             (*families[f])[k + 1] = std::move(*known);
@@ -293,9 +342,27 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         m.index = k + 1;
         m.u_start = pos.u1;
         const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
-        const DistanceField field = solver.solve(start, inner);
-        m.u_end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
-                             options.length_tolerance, m.index);
+        // First a solve that is exact only near the expected end (goal pruning, about a third of
+        // the work); if the end is not within that piece of the boundary, a complete one.
+        const double window = options.goal_pruning ? kEndWindow : 1.0;
+        const double lo = std::max(kEndLimit, pos.u2 - window);
+        const double hi = std::min(1 - kEndLimit, pos.u2 + window);
+        DistanceField field = options.goal_pruning
+                                  ? solver.solve(start,
+                                                 end_goal(mesh, second[f], planar, family, pos.u1,
+                                                          lo, hi, options.length_tolerance),
+                                                 inner)
+                                  : solver.solve(start, inner);
+        std::optional<double> end = refine_end(field, mesh, second[f], planar, family, pos.u1,
+                                               pos.u2, options.length_tolerance, lo, hi);
+        if (!end && options.goal_pruning) {
+          ++complete_solves;
+          field = solver.solve(start, inner);
+          end = refine_end(field, mesh, second[f], planar, family, pos.u1, pos.u2,
+                           options.length_tolerance, kEndLimit, 1 - kEndLimit);
+        }
+        if (!end) throw no_end(family, m.index, pos.u1);
+        m.u_end = *end;
         m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
         for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
         m.length = path_length(mesh, m.surface_path);
@@ -306,6 +373,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         (*families[f])[k + 1] = std::move(m);
       },
       progress, parallel);
+  grid.complete_member_solves = complete_solves.load();
   progress.report("grid: members", 1.0);
 
   // Crossings. Boundary crossings lie at member ends and follow from the parameters.

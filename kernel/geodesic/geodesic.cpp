@@ -128,6 +128,12 @@ DistanceField GeodesicSolver::solve(const SurfacePoint& source, const SolveOptio
   const SurfacePoint s = geodesic_detail::normalize_surface_point(impl_->mesh, source, "source");
   if (options.stop_at_targets && options.targets.empty())
     throw InvalidInput("options.stop_at_targets", "needs at least one target");
+  const SolveOptions::Goal& goal = options.goal;
+  if (!goal.center.allFinite()) throw InvalidInput("options.goal.center", "must be a finite point");
+  if (!(goal.radius >= 0) || !std::isfinite(goal.radius))
+    throw InvalidInput("options.goal.radius", "must be finite and >= 0");
+  if (!(goal.bound >= 0))
+    throw InvalidInput("options.goal.bound", "must be >= 0 (+inf: no pruning)");
   SolveOptions checked = options;
   for (SurfacePoint& t : checked.targets)
     t = geodesic_detail::normalize_surface_point(

@@ -90,6 +90,17 @@
 // targets' closed faces (max corner distance + longest edge): every window or vertex event that
 // could still lower a distance there has a key below that distance, so it has already been
 // processed (its children exist).
+//
+// Goal pruning (SolveOptions::goal: a ball B and a bound U). A window is not created when
+// sigma + dist(I, [b0,b1]) + dist([b0,b1], B) > U + margin: every path through its interval is
+// at least that long before it reaches B (the straight 3D distance is a lower bound of any
+// surface path). For a point x in B with d(x) <= U, every point y of its shortest path has
+// d(y) + |y x| = d(x) <= U, so every window and pseudo-source on that path survives and x's
+// distance and path are the same as in a complete solve; all rules still compare with real
+// paths only, so what is left are upper bounds. This is A* with the Euclidean distance as the
+// heuristic, applied to windows. Grid members use it (design/grid.cpp): the ball around the piece
+// of the opposite boundary where the member's end is searched, the bound its longest planar
+// length; measured on the examples' warm redesigns: <one third of the windows of a complete field.
 #include "geodesic_fast.h"
 
 #include <sys/mman.h>  // madvise (huge pages for window storage)
@@ -652,6 +663,12 @@ struct BatchEntry {
 
 /// Per-thread scratch memory of a solve (reused by the next solve on the same thread, so that
 /// repeated solves do not pay for fresh pages).
+/// The goal ball's centre in cylinder coordinates about a half-edge's line: its projection
+/// along A -> B (p) and its squared distance from the line (h2).
+struct GoalCoordinates {
+  double p, h2;
+};
+
 struct Scratch {
   std::vector<char> emitted;
   std::vector<CornerRecord> corner;
@@ -669,6 +686,7 @@ struct Scratch {
   std::vector<int> free;               ///< recycled window slots
   WindowVector target_copies;          ///< windows that entered a target face
   std::vector<double> incoming;        ///< per vertex: rule S's incoming direction
+  std::vector<GoalCoordinates> goal;   ///< per half-edge: the goal ball's centre (goal pruning)
 };
 
 /// Scratch memory is kept for the next solve on the thread, unless it grew large (a big mesh).
@@ -706,6 +724,7 @@ class Propagator {
         free_(scratch.free),
         target_copies_(scratch.target_copies),
         incoming_(scratch.incoming),
+        goal_coordinates_(scratch.goal),
         margin_(m.margin) {
     const int nv = m.mesh.vertex_count();
     dist_.assign(nv, kInf);
@@ -729,6 +748,19 @@ class Propagator {
       target_copies_.clear();
       incoming_.assign(nv, -1.0);
       reemit_.clear();
+    }
+    goal_ = options.goal.bound < kInf;
+    if (goal_) {
+      goal_bound_ = options.goal.bound + margin_;
+      goal_radius_ = options.goal.radius;
+      const auto& P = m.mesh.vertices();
+      goal_coordinates_.resize(m.half.size());
+      for (std::size_t h = 0; h < m.half.size(); ++h) {
+        const HalfEdge& e = m.half[h];
+        const Vec3 d = options.goal.center - P[e.va];
+        const double p = d.dot(P[e.vb] - P[e.va]) / e.len;
+        goal_coordinates_[h] = {p, std::max(0.0, d.squaredNorm() - p * p)};
+      }
     }
     // Windows entering the targets' faces are collected when the field keeps no index of them.
     track_targets_ = !options.targets.empty() && !options.keep_windows;
@@ -784,6 +816,16 @@ class Propagator {
   void propagate_batch(const Window& w, int id, double x, double corner);
   void push_child(int he, double len, double b0, double b1, double sx, double sy, double sigma,
                   int parent, int root, std::int8_t exit);
+  /// Goal pruning: true if no path through the window can reach the goal ball within the bound.
+  bool beyond_goal(int he, double b0, double b1, double sx, double sy, double sigma) const {
+    const double near = std::clamp(sx, b0, b1);
+    const double reach = sigma + std::sqrt((near - sx) * (near - sx) + sy * sy);
+    if (reach > goal_bound_) return true;
+    const GoalCoordinates& g = goal_coordinates_[he];
+    const double t = std::clamp(g.p, b0, b1);
+    const double to_ball = std::sqrt((t - g.p) * (t - g.p) + g.h2) - goal_radius_;
+    return to_ball > 0 && reach + to_ball > goal_bound_;
+  }
   void process_list(int h);
   void edges_ready(int v);
   void drain();
@@ -831,7 +873,10 @@ class Propagator {
   WindowVector& target_copies_;
   std::vector<double>& incoming_;
   std::vector<int> reemit_;
+  std::vector<GoalCoordinates>& goal_coordinates_;
   const double margin_;
+  bool goal_ = false;  ///< goal pruning (SolveOptions::goal)
+  double goal_bound_ = kInf, goal_radius_ = 0;
   bool batch_ = false;    ///< batch propagation (see run_batch)
   bool recycle_ = false;  ///< batch propagation without keeping windows: slots are reused
   bool track_targets_ = false;
@@ -904,6 +949,7 @@ void Propagator::insert(Window& w) {
     append_pending(w);
     return;
   }
+  if (goal_ && beyond_goal(w.he, w.b0, w.b1, w.sx, w.sy, w.sigma)) return;
   const double yy = w.sy * w.sy;
   double f0 = w.sigma + std::sqrt((w.b0 - w.sx) * (w.b0 - w.sx) + yy);
   double f1 = w.sigma + std::sqrt((w.b1 - w.sx) * (w.b1 - w.sx) + yy);
@@ -1332,6 +1378,7 @@ void Propagator::append_pending(const Window& w) {
   if (b0 < 0) b0 = 0;
   if (b1 > len) b1 = len;
   if (!(b1 > b0)) return;
+  if (goal_ && beyond_goal(he, b0, b1, sx, sy, sigma)) return;
   int id;
   if (!free_.empty()) {
     id = free_.back();

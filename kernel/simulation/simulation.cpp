@@ -38,15 +38,16 @@
 namespace gridshell {
 
 const std::vector<Material>& material_presets() {
-  // Reference values along the grain / fibres (approximate; see docs/decisions.md).
+  // Reference values along the grain / fibres (approximate; see docs/decisions.md): E, G,
+  // bending strength, shear strength.
   static const std::vector<Material> presets{
-      {"lime-wood", 7.4e9, 0.46e9},      // Tilia, the paper's lamellas
-      {"birch-plywood", 9.0e9, 0.62e9},  // face grain direction
-      {"beech-wood", 14.0e9, 1.08e9},    //
-      {"gfrp", 25.0e9, 3.5e9},           // pultruded glass fibre
-      {"aluminium", 70.0e9, 26.0e9},     //
-      {"steel", 210.0e9, 81.0e9},        //
-      {"hdpe", 0.9e9, 0.31e9},           // high-density polyethylene
+      {"lime-wood", 7.4e9, 0.46e9, 60e6, 6.8e6},      // Tilia, the paper's lamellas
+      {"birch-plywood", 9.0e9, 0.62e9, 50e6, 9.0e6},  // face grain direction
+      {"beech-wood", 14.0e9, 1.08e9, 103e6, 13.9e6},  //
+      {"gfrp", 25.0e9, 3.5e9, 240e6, 25e6},           // pultruded glass fibre (EN 13706 E23)
+      {"aluminium", 70.0e9, 26.0e9, 276e6, 159e6},    // 6061-T6, yield
+      {"steel", 210.0e9, 81.0e9, 235e6, 136e6},       // S235, yield
+      {"hdpe", 0.9e9, 0.31e9, 25e6, 14e6},            // high-density polyethylene, yield
   };
   return presets;
 }
@@ -1025,6 +1026,8 @@ DeploymentRun Deployment::results() {
           std::max(lamella.max_strong_bending_stress, E * k_strong * width_ / 2);
       lamella.max_torsion_stress =
           std::max(lamella.max_torsion_stress, G * twist_rate * thickness_);
+      lamella.max_normal_stress =
+          std::max(lamella.max_normal_stress, E * (k_weak * thickness_ + k_strong * width_) / 2);
     }
     run.lamellas.push_back(std::move(lamella));
     run.grid_vertices += rod.n + 1;

@@ -69,10 +69,37 @@ void fill_lamellas(const DeploymentRun& run, google::protobuf::RepeatedPtrField<
     lamella->set_max_bending_stress(l.max_bending_stress);
     lamella->set_max_strong_bending_stress(l.max_strong_bending_stress);
     lamella->set_max_torsion_stress(l.max_torsion_stress);
+    lamella->set_max_normal_stress(l.max_normal_stress);
   }
 }
 
-void fill_run(const DeploymentRun& run, v1::SimulationRun* out) {
+// The run's largest stresses and, where the material's strengths are known, how close they
+// come to them: the normal stress at a cross-section's corner against the bending strength, the
+// torsion shear stress against the shear strength.
+void fill_stresses(const DeploymentRun& run, const v1::SimulationOptions& options,
+                   v1::SimulationRun* out) {
+  double bending = 0, normal = 0, torsion = 0;
+  for (const SimulatedLamella& l : run.lamellas) {
+    bending = std::max(bending, l.max_bending_stress);
+    normal = std::max(normal, l.max_normal_stress);
+    torsion = std::max(torsion, l.max_torsion_stress);
+  }
+  out->set_max_bending_stress(bending);
+  out->set_max_normal_stress(normal);
+  out->set_max_torsion_stress(torsion);
+  if (options.bending_strength() > 0) {
+    out->set_bending_utilization(normal / options.bending_strength());
+    int over = 0;
+    for (const SimulatedLamella& l : run.lamellas)
+      over += l.max_normal_stress > options.bending_strength() ||
+              (options.shear_strength() > 0 && l.max_torsion_stress > options.shear_strength());
+    out->set_overstressed_lamellas(over);
+  }
+  if (options.shear_strength() > 0) out->set_shear_utilization(torsion / options.shear_strength());
+}
+
+void fill_run(const DeploymentRun& run, const v1::SimulationOptions& options,
+              v1::SimulationRun* out) {
   out->set_notches(run.notches);
   out->set_rms(run.rms);
   out->set_max_deviation(run.max_deviation);
@@ -88,6 +115,7 @@ void fill_run(const DeploymentRun& run, v1::SimulationRun* out) {
   out->set_seconds(run.seconds);
   for (const auto& [term, value] : run.energies) (*out->mutable_energies())[term] = value;
   out->set_energy_unit(run.energy_unit);
+  fill_stresses(run, options, out);
   for (const SimulatedConnection& c : run.connections) {
     v1::Connection* connection = out->add_connections();
     connection->set_g(c.g);
@@ -237,7 +265,7 @@ v1::Deployment to_proto(const DeploymentRun* without_notches, const DeploymentRu
     iterations += without_notches->iterations;
     out.set_grid_vertices(without_notches->grid_vertices);
     fill_lamellas(*without_notches, out.mutable_rods_without_notches());
-    fill_run(*without_notches, out.mutable_without_notches());
+    fill_run(*without_notches, options, out.mutable_without_notches());
   }
   if (with_notches) {
     out.set_rms_with_notches(with_notches->rms);
@@ -246,7 +274,7 @@ v1::Deployment to_proto(const DeploymentRun* without_notches, const DeploymentRu
     iterations += with_notches->iterations;
     out.set_grid_vertices(with_notches->grid_vertices);
     fill_lamellas(*with_notches, out.mutable_rods());
-    fill_run(*with_notches, out.mutable_with_notches());
+    fill_run(*with_notches, options, out.mutable_with_notches());
   }
   out.set_converged(converged);
   out.set_iterations(iterations);

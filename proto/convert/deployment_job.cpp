@@ -59,6 +59,12 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
     }
     if (o.young_modulus() == 0) o.set_young_modulus(preset.young_modulus);
     if (o.shear_modulus() == 0) o.set_shear_modulus(preset.shear_modulus);
+    // A preset's strengths go with its name: moduli given without a name make a custom
+    // material, whose strengths are unknown unless given too.
+    if (!(o.material().empty() && overridden)) {
+      if (o.bending_strength() == 0) o.set_bending_strength(preset.bending_strength);
+      if (o.shear_strength() == 0) o.set_shear_strength(preset.shear_strength);
+    }
     o.set_material(o.material().empty() && overridden ? "custom" : preset.name);
   }
   // 1 kPa (soft foam) to 10 TPa (beyond diamond): outside, energies and stresses overflow.
@@ -67,6 +73,10 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
   require(within(o.shear_modulus(), 1e3, 1e13), "shear_modulus",
           "must be a number of pascals between 1e3 and 1e13; give it with the Young's modulus or "
           "pick a material");
+  for (const auto& [value, name] : {std::pair{o.bending_strength(), "bending_strength"},
+                                    std::pair{o.shear_strength(), "shear_strength"}})
+    require(value == 0 || within(value, 1e3, 1e11), name,
+            "must be a number of pascals between 1e3 and 1e11 (or 0: unknown)");
   auto fill = [](double value, double fallback) { return value == 0 ? fallback : value; };
   o.set_friction_mu(fill(o.friction_mu(), defaults.friction_mu));
   o.set_friction_epsilon(fill(o.friction_epsilon(), defaults.friction_epsilon));
@@ -110,7 +120,8 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
 
 SimulationOptions kernel_simulation_options(const v1::SimulationOptions& o, bool notches) {
   SimulationOptions k;
-  k.material = {o.material(), o.young_modulus(), o.shear_modulus()};
+  k.material = {o.material(), o.young_modulus(), o.shear_modulus(), o.bending_strength(),
+                o.shear_strength()};
   k.notches = notches;
   k.solver = o.solver() == "ceres" ? SimulationSolver::Ceres : SimulationSolver::Newton;
   k.friction_mu = o.friction_mu();

@@ -72,6 +72,92 @@ TEST(CliSimulate, WritesDeploymentFilesWithBothRuns) {
   EXPECT_NE(result.out.find("with notches"), std::string::npos);
 }
 
+/// A small design (4 + 4 inner members) for tests that simulate it several times.
+const std::string& small_design() {
+  static const std::string file = [] {
+    const std::string out = testing::temp_dir() + "/small-design";
+    const auto result = run_cli(
+        "design example:double-vault --members-u 4 --members-v 4 --quiet "
+        "--out '" +
+        out + "'");
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return out + "/design.json";
+  }();
+  return file;
+}
+
+TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
+  // Lime wood (the default): utilization = the largest corner stress / 60 MPa; the corner stress
+  // adds both bending stresses at one vertex, so it lies between the larger of a rod's two
+  // maxima and their sum; stresses are scale-free (no unit needed, the same with one).
+  const std::string out = testing::temp_dir() + "/stress";
+  auto result =
+      run_cli("simulate '" + small_design() + "' --quiet --notches on --out '" + out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json d = json::parse(testing::read_text(out + "/deployment.json"));
+  EXPECT_EQ(d["options"]["bending_strength"].get<double>(), 60e6);
+  EXPECT_EQ(d["options"]["shear_strength"].get<double>(), 6.8e6);
+  double normal = 0, torsion = 0, bending = 0;
+  int over = 0;
+  for (const auto& rod : d["rods"]) {
+    const double n = rod["max_normal_stress"], b = rod["max_bending_stress"],
+                 st = rod["max_strong_bending_stress"], t = rod["max_torsion_stress"];
+    EXPECT_GE(n, std::max(b, st) * (1 - 1e-12));
+    EXPECT_LE(n, (b + st) * (1 + 1e-12));
+    normal = std::max(normal, n), torsion = std::max(torsion, t), bending = std::max(bending, b);
+    over += n > 60e6 || t > 6.8e6;
+  }
+  const json& run = d["with_notches"];
+  EXPECT_EQ(run["max_normal_stress"].get<double>(), normal);
+  EXPECT_EQ(run["max_torsion_stress"].get<double>(), torsion);
+  EXPECT_EQ(run["max_bending_stress"].get<double>(), bending);
+  EXPECT_GT(normal, 1e5);
+  EXPECT_DOUBLE_EQ(run["bending_utilization"].get<double>(), normal / 60e6);
+  EXPECT_DOUBLE_EQ(run["shear_utilization"].get<double>(), torsion / 6.8e6);
+  EXPECT_EQ(run["overstressed_lamellas"].get<int>(), over);
+  EXPECT_NE(result.out.find("% of 60 MPa"), std::string::npos) << result.out;
+
+  // The same in metres: the same stresses.
+  const std::string metres = testing::temp_dir() + "/stress-m";
+  result = run_cli("simulate '" + small_design() + "' --quiet --notches on --unit m " + "--out '" +
+                   metres + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json m = json::parse(testing::read_text(metres + "/deployment.json"));
+  EXPECT_NEAR(m["with_notches"]["max_normal_stress"].get<double>(), normal, 1e-9 * normal);
+
+  // A strength of one's own, below the stresses: every lamella above it counts, EXCEEDED shown.
+  const double low = normal / 2;
+  const std::string own = testing::temp_dir() + "/stress-own";
+  result = run_cli("simulate '" + small_design() + "' --quiet --notches on " +
+                   "--bending-strength " + std::to_string(low) + " --out '" + own + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json o = json::parse(testing::read_text(own + "/deployment.json"));
+  EXPECT_NEAR(o["with_notches"]["bending_utilization"].get<double>(), 2.0, 1e-6);
+  EXPECT_GE(o["with_notches"]["overstressed_lamellas"].get<int>(), 1);
+  EXPECT_NE(result.out.find("EXCEEDED"), std::string::npos) << result.out;
+
+  // A custom material (moduli without a name): strengths unknown, no utilization.
+  const std::string custom = testing::temp_dir() + "/stress-custom";
+  result = run_cli("simulate '" + small_design() + "' --quiet --notches on " +
+                   "--young 8e9 --shear 5e8 --out '" + custom + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json c = json::parse(testing::read_text(custom + "/deployment.json"));
+  EXPECT_EQ(c["options"]["material"], "custom");
+  EXPECT_EQ(c["options"]["bending_strength"].get<double>(), 0.0);
+  EXPECT_FALSE(c["with_notches"].contains("bending_utilization"));
+  EXPECT_NE(result.out.find("strength unknown"), std::string::npos) << result.out;
+
+  // Bad strengths name their flag.
+  result = run_cli("simulate '" + small_design() + "' --quiet --bending-strength -3 " + "--out '" +
+                   testing::temp_dir() + "/bad'");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--bending-strength"), std::string::npos) << result.err;
+  result = run_cli("simulate '" + small_design() + "' --quiet --shear-strength 1e20 " + "--out '" +
+                   testing::temp_dir() + "/bad2'");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--shear-strength"), std::string::npos) << result.err;
+}
+
 TEST(CliSimulate, OneRunOnly) {
   const std::string out = testing::temp_dir() + "/off";
   const auto result = run_cli("simulate '" + design_dir() +

@@ -291,6 +291,47 @@ TEST(BuildGrid, RebuildingFromTheDesignsPositionsGivesTheSameGrid) {
   }
 }
 
+TEST(BuildGrid, GoalPrunedMemberSolvesGiveTheMembersOfCompleteSolves) {
+  // Each member's first solve is exact only near its expected end; where the end lies outside
+  // that piece of the opposite boundary, a complete solve follows. Both ways must give the
+  // members complete solves give: start positions moved a little (the root stays inside the
+  // searched piece) and moved far (it does not: the complete solve runs).
+  const Design& d = double_vault();
+  const GeodesicSolver solver(d.target.patch.mesh);
+  for (const double shift : {0.003, -0.004, 0.03}) {
+    std::vector<MemberPosition> g = positions(d.grid.g), h = positions(d.grid.h);
+    for (std::vector<MemberPosition>* family : {&g, &h})
+      for (MemberPosition& p : *family) p.u2 = std::clamp(p.u2 + shift, 1e-6, 1 - 1e-6);
+    GridOptions pruned, complete;
+    pruned.threads = complete.threads = 2;
+    complete.goal_pruning = false;
+    const Grid a = build_grid(d.target.patch, solver, d.planar, g, h, pruned);
+    const Grid b = build_grid(d.target.patch, solver, d.planar, g, h, complete);
+    EXPECT_EQ(b.complete_member_solves, 0);
+    if (shift > 0.02)
+      EXPECT_GT(a.complete_member_solves, 0) << "the far start must need complete solves";
+    else
+      EXPECT_EQ(a.complete_member_solves, 0) << shift;
+    for (const auto& [fa, fb] : {std::pair{&a.g, &b.g}, std::pair{&a.h, &b.h}}) {
+      ASSERT_EQ(fa->size(), fb->size());
+      for (std::size_t k = 0; k < fa->size(); ++k) {
+        const Member& ma = (*fa)[k];
+        const Member& mb = (*fb)[k];
+        EXPECT_NEAR(ma.u_end, mb.u_end, 1e-9) << shift << " member " << k;
+        EXPECT_NEAR(ma.length, mb.length, 1e-9 * mb.length) << shift << " member " << k;
+        EXPECT_NEAR(ma.length, ma.planar_length, 1e-9 * ma.planar_length);
+        ASSERT_FALSE(ma.surface.empty());
+        EXPECT_LE((ma.surface.back() - mb.surface.back()).norm(), 1e-8 * mb.length);
+      }
+    }
+    ASSERT_EQ(a.crossings.size(), b.crossings.size());
+    for (std::size_t k = 0; k < a.crossings.size(); ++k) {
+      EXPECT_NEAR(a.crossings[k].s_g, b.crossings[k].s_g, 1e-8 * d.grid.g.front().length);
+      EXPECT_NEAR(a.crossings[k].s_h, b.crossings[k].s_h, 1e-8 * d.grid.h.front().length);
+    }
+  }
+}
+
 TEST(BuildGrid, RejectsPositionsOutsideTheOpenIntervalOrNotIncreasing) {
   const Design& d = double_vault();
   const GeodesicSolver solver(d.target.patch.mesh);

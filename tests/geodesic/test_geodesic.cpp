@@ -1020,6 +1020,87 @@ TEST(GeodesicSolveOptions, StopAtTargetsIsExactOnTheTargetsFaces) {
   }
 }
 
+TEST(GeodesicSolveOptions, GoalPruningIsExactInsideTheBallWithinTheBound) {
+  // A* on windows: every window whose paths cannot reach the goal ball within the bound is
+  // dropped. Inside the ball, for distances up to the bound, distances and paths must equal the
+  // complete field's; elsewhere values are upper bounds (lengths of real paths) or +inf. Checked
+  // on meshes with saddles, boundaries and a reflex corner (paths through pseudo-sources), on
+  // an example surface, with balls near and far from the source and bounds above and below the
+  // ball's distance.
+  std::vector<TriangleMesh> meshes{bump_saddle_mesh(), irregular_mesh(), nonconvex_mesh(),
+                                   make_example("waves-bump", 0.5).mesh};
+  int checked = 0, pruned_solves = 0;
+  for (const TriangleMesh& mesh : meshes) {
+    const MeshTopology& top = mesh.topology();
+    const GeodesicSolver solver(mesh);
+    const double floor = 1e-12 * diagonal(mesh);
+    std::mt19937 rng(33);
+    for (const auto& [kind, source] : test_sources(mesh, top)) {
+      const DistanceField full = solver.solve(source);
+      double farthest = 0;
+      for (double d : full.vertex_distances())
+        if (std::isfinite(d)) farthest = std::max(farthest, d);
+      for (int trial = 0; trial < 3; ++trial) {
+        // A ball around a random surface point, of a radius between 2 % and 15 % of the mesh.
+        const SurfacePoint centre = random_face_point(mesh, rng);
+        SolveOptions options;
+        options.goal.center = centre.position(mesh);
+        options.goal.radius = (0.02 + 0.13 * trial / 2.0) * diagonal(mesh);
+        // Bounds: generous, tight (the farthest point of the ball is beyond it), and tiny.
+        const double d_centre = full.distance_to(centre);
+        for (const double bound :
+             {1.2 * farthest, d_centre + 0.5 * options.goal.radius, 0.5 * d_centre}) {
+          options.goal.bound = bound;
+          const DistanceField field = solver.solve(source, options);
+          ++pruned_solves;
+          // Upper bounds everywhere (never below the exact distance).
+          for (int v = 0; v < mesh.vertex_count(); ++v)
+            EXPECT_GE(field.vertex_distances()[v], full.vertex_distances()[v] * (1 - 1e-13) - floor)
+                << kind << " vertex " << v;
+          // Exact, with a valid shortest path, inside the ball within the bound.
+          for (int f = 0; f < mesh.face_count(); ++f)
+            for (int k = 0; k < 2; ++k) {
+              SurfacePoint q;
+              q.face = f;
+              q.barycentric = k == 0 ? Vec3(1, 1, 1) / 3 : Vec3(0.7, 0.2, 0.1);
+              if ((q.position(mesh) - options.goal.center).norm() > options.goal.radius) continue;
+              const double exact = full.distance_to(q);
+              if (!(exact <= bound)) continue;
+              ++checked;
+              EXPECT_LE(rel_error(field.distance_to(q), exact, floor), 1e-12)
+                  << kind << " face " << f << " bound " << bound;
+              const std::vector<SurfacePoint> path = field.path_to(q);
+              expect_valid_path(mesh, top, path, source, q, "goal-pruned solve");
+              EXPECT_LE(rel_error(path_length(mesh, path), exact, floor), 1e-11);
+            }
+        }
+      }
+    }
+  }
+  EXPECT_GT(pruned_solves, 50);
+  EXPECT_GT(checked, 500);
+}
+
+TEST(GeodesicSolveOptions, GoalPruningDropsWork) {
+  // A small ball far from the source within a tight bound: most of the surface cannot lead
+  // there, so most vertices keep an upper bound only (the pruning does prune).
+  const TriangleMesh mesh = make_example("waves-bump", 0.5).mesh;
+  const GeodesicSolver solver(mesh);
+  const SurfacePoint source = SurfacePoint::at_vertex(mesh, 0);
+  const DistanceField full = solver.solve(source);
+  const int target = mesh.vertex_count() / 2 + 5;
+  SolveOptions options;
+  options.goal.center = mesh.vertices()[target];
+  options.goal.radius = 0.02 * diagonal(mesh);
+  options.goal.bound = full.vertex_distances()[target] + options.goal.radius;
+  const DistanceField field = solver.solve(source, options);
+  int larger = 0;
+  for (int v = 0; v < mesh.vertex_count(); ++v)
+    larger += field.vertex_distances()[v] > full.vertex_distances()[v] * (1 + 1e-9);
+  EXPECT_GT(larger, mesh.vertex_count() / 4);
+  EXPECT_DOUBLE_EQ(field.vertex_distances()[target], full.vertex_distances()[target]);
+}
+
 TEST(GeodesicSolveOptions, EveryEngineReportsTargetDistances) {
   const TriangleMesh mesh = bump_saddle_mesh();
   SolveOptions options;
@@ -1046,6 +1127,15 @@ TEST(GeodesicSolveOptions, RejectsInvalidOptions) {
   EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), bad), InvalidInput);
   bad.targets = {face_point(0, 0.9, 0.9)};
   EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), bad), InvalidInput);
+  SolveOptions goal;
+  goal.goal.bound = -1;
+  EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), goal), InvalidInput);
+  goal.goal.bound = 1;
+  goal.goal.radius = std::nan("");
+  EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), goal), InvalidInput);
+  goal.goal.radius = 1;
+  goal.goal.center = Vec3(0, std::numeric_limits<double>::infinity(), 0);
+  EXPECT_THROW(solver.solve(SurfacePoint::at_vertex(mesh, 0), goal), InvalidInput);
 }
 
 // ---------------------------------------------------------------------------------------------

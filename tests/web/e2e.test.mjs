@@ -326,12 +326,20 @@ test('Simulate: deployment with RMS, deployment.json downloads', async () => {
   const summary = await text('summary');
   assert.match(summary, /with notches: RMS \d/);
   assert.match(summary, /without notches: RMS \d/);
-  assert.match(summary, /max bending stress \d.* MPa.*unit cm/s);
+  assert.match(summary, /max normal stress \d.* MPa = \d+% of 60 MPa.*unit cm/s);
   assert.ok(await byId('deviation-legend').isVisible());
   const { name, bytes } = await downloadJson('download-deployment');
   assert.equal(name, 'deployment.json');
   const dep = JSON.parse(bytes.toString('utf8'));
   assert.ok(dep.rods.length > 0 && Number.isFinite(dep.rms_with_notches));
+  // The summary's percentage is the file's utilization: the largest corner stress over lime
+  // wood's bending strength.
+  const run = dep.with_notches;
+  assert.equal(dep.options.bending_strength, 60e6);
+  const largest = Math.max(...dep.rods.map((r) => r.max_normal_stress));
+  assert.equal(run.max_normal_stress, largest);
+  assert.ok(Math.abs(run.bending_utilization - largest / 60e6) < 1e-12);
+  assert.ok(summary.includes(`= ${Math.round(100 * run.bending_utilization)}% of 60 MPa`));
   mkdirSync(outDir, { recursive: true });
   await page.screenshot({ path: path.join(outDir, 'deployment.png') });
   assert.ok((await canvasCoverage()) > 0.05, 'deployment drawn');

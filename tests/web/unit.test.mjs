@@ -37,9 +37,28 @@ test('alpha option is degrees with the deg suffix', () => {
   assert.equal(f.alphaOption(70.123456), '70.1235deg');
 });
 
-test('stresses: MPa with a unit, marked scaled without one', () => {
-  assert.equal(f.stress(18.6e6, { options: { unit: 'm' } }), '18.6 MPa');
-  assert.equal(f.stress(0.5, { options: { unit: '' } }), '0.5 (scaled: unit unknown)');
+test('stresses: MPa (scale-free), against the strength when it is known', () => {
+  assert.equal(f.stress(18.6e6), '18.6 MPa');
+  assert.equal(f.stressAgainst(30e6, 60e6, 0.5), '30 MPa = 50% of 60 MPa');
+  assert.equal(f.stressAgainst(90e6, 60e6, 1.5), '90 MPa = 150% of 60 MPa EXCEEDED');
+  assert.equal(f.stressAgainst(30e6, 0, undefined), '30 MPa (strength unknown)');
+});
+
+test('deployment summary: each run with its stresses against the material', () => {
+  const run = { rms: 0.2, max_deviation: 0.5, iterations: 12, converged: true, seconds: 0.4,
+                termination: '', max_normal_stress: 45e6, max_torsion_stress: 2e6,
+                bending_utilization: 0.75, shear_utilization: 2e6 / 6.8e6, overstressed_lamellas: 0 };
+  const dep = { options: { material: 'lime-wood', unit: '', young_modulus: 7.4e9,
+                           bending_strength: 60e6, shear_strength: 6.8e6 },
+                rms_with_notches: 0.2, seconds_with_notches: 0.4, converged: true, iterations: 12,
+                grid_vertices: 100, rods: [], rods_without_notches: [], with_notches: run };
+  const text = f.deploymentSummary(dep);
+  assert.match(text, /max normal stress 45 MPa = 75% of 60 MPa, max torsion stress 2 MPa = 29% of 6\.8 MPa/);
+  assert.match(text, /material lime-wood: E = 7\.4 GPa, bending strength 60 MPa, shear strength 6\.8 MPa/);
+  assert.doesNotMatch(text, /EXCEEDED|overstressed/);
+  const over = f.deploymentSummary({ ...dep, with_notches: { ...run, bending_utilization: 1.2,
+                                                             overstressed_lamellas: 3 } });
+  assert.match(over, /= 120% of 60 MPa EXCEEDED.*3 lamellas overstressed/);
 });
 
 test('errors go next to the control their field names', () => {

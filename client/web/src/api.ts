@@ -155,6 +155,7 @@ export interface Lamella {
   deviation: number[];
   max_bending_stress: number;
   max_torsion_stress: number;
+  max_normal_stress: number;
 }
 
 export interface SimulationRun {
@@ -164,10 +165,21 @@ export interface SimulationRun {
   converged: boolean;
   seconds: number;
   termination: string;
+  max_normal_stress: number;
+  max_torsion_stress: number;
+  bending_utilization?: number; // max_normal_stress / options.bending_strength (absent: unknown)
+  shear_utilization?: number;
+  overstressed_lamellas: number;
 }
 
 export interface Deployment {
-  options: { material: string; unit: string; young_modulus: number };
+  options: {
+    material: string;
+    unit: string;
+    young_modulus: number;
+    bending_strength: number; // Pa, 0 = unknown
+    shear_strength: number;
+  };
   rms_without_notches?: number;
   rms_with_notches?: number;
   seconds_without_notches?: number;

@@ -50,9 +50,16 @@ export function designSummary(d: DesignResult): string {
   ].join('\n');
 }
 
-/** A stress: MPa when the model's unit is known, else the simulation's scaled value, marked so. */
-export function stress(pa: number, dep: Deployment): string {
-  return dep.options.unit ? `${formatNumber(pa / 1e6)} MPa` : `${formatNumber(pa)} (scaled: unit unknown)`;
+/** A stress in MPa: kappa t is scale-free, so stresses need no length unit (docs/decisions.md). */
+export function stress(pa: number): string {
+  return `${formatNumber(pa / 1e6)} MPa`;
+}
+
+/** "41.2 MPa = 69% of 60 MPa" (or "... (strength unknown)"); EXCEEDED above the strength. */
+export function stressAgainst(pa: number, strength: number, utilization: number | undefined): string {
+  if (utilization === undefined || !(strength > 0)) return `${stress(pa)} (strength unknown)`;
+  const percent = `${Math.round(100 * utilization)}%`;
+  return `${stress(pa)} = ${percent} of ${stress(strength)}${utilization > 1 ? ' EXCEEDED' : ''}`;
 }
 
 export function deploymentSummary(dep: Deployment): string {
@@ -61,17 +68,16 @@ export function deploymentSummary(dep: Deployment): string {
     if (rms === undefined || !r) return;
     lines.push(`${name}: RMS ${formatNumber(rms)}, max deviation ${formatNumber(r.max_deviation)}, ` +
                `${r.iterations} iterations, ${r.converged ? 'converged' : 'NOT converged'}, ${(s ?? r.seconds).toFixed(2)} s`);
+    const over = r.overstressed_lamellas > 0 ? `; ${r.overstressed_lamellas} lamellas overstressed` : '';
+    lines.push(`  max normal stress ${stressAgainst(r.max_normal_stress, dep.options.bending_strength, r.bending_utilization)}, ` +
+               `max torsion stress ${stressAgainst(r.max_torsion_stress, dep.options.shear_strength, r.shear_utilization)}${over}`);
   };
   run('with notches', dep.rms_with_notches, dep.seconds_with_notches, dep.with_notches);
   run('without notches', dep.rms_without_notches, dep.seconds_without_notches, dep.without_notches);
-  let bending = 0, torsion = 0;
-  for (const rod of dep.rods) {
-    bending = Math.max(bending, rod.max_bending_stress);
-    torsion = Math.max(torsion, rod.max_torsion_stress);
-  }
-  lines.push(`max bending stress ${stress(bending, dep)}, max torsion stress ${stress(torsion, dep)} ` +
-             `(${dep.options.material}, E = ${formatNumber(dep.options.young_modulus / 1e9)} GPa` +
-             `${dep.options.unit ? ', unit ' + dep.options.unit : ''})`);
+  lines.push(`material ${dep.options.material}: E = ${formatNumber(dep.options.young_modulus / 1e9)} GPa` +
+             (dep.options.bending_strength > 0 ? `, bending strength ${stress(dep.options.bending_strength)}` : '') +
+             (dep.options.shear_strength > 0 ? `, shear strength ${stress(dep.options.shear_strength)}` : '') +
+             (dep.options.unit ? `; unit ${dep.options.unit}` : ''));
   lines.push(`grid vertices ${dep.grid_vertices}; ${dep.converged ? 'every run converged' : 'a run did NOT converge'}`);
   return lines.join('\n');
 }

@@ -531,7 +531,7 @@ function showDeployment(): void {
   ui.devLegend.hidden = false;
   ui.devTitle.textContent = bending ? 'largest bending stress per lamella' : 'deviation from the target';
   drawBar(ui.devBar, (t) => sequential(t, 1));
-  ui.devMax.textContent = bending ? stress(max, dep) : formatNumber(max);
+  ui.devMax.textContent = bending ? stress(max) : formatNumber(max);
 }
 
 ui.colourBy.addEventListener('change', () => showDeployment());

@@ -53,6 +53,10 @@ struct Grid {
   std::vector<Member> g;  ///< g.front() is boundary c0-c3 (u=0), g.back() boundary c1-c2 (u=1)
   std::vector<Member> h;  ///< h.front() is boundary c1-c0 (v=0), h.back() boundary c2-c3 (v=1)
   std::vector<Crossing> crossings;  ///< every g with every h, sorted by (g, h)
+  /// Inner members whose end was not within the piece of the opposite boundary their first,
+  /// goal-pruned solve covered, so that they took a complete solve too (GridOptions::goal_pruning).
+  /// Not part of the design's value.
+  int complete_member_solves = 0;
 };
 
 struct GridOptions {
@@ -60,6 +64,10 @@ struct GridOptions {
   /// map) until surface and planar lengths agree to this relative tolerance (criterion i).
   double length_tolerance = 1e-10;
   int threads = 0;  // 0 = hardware concurrency; the result does not depend on it
+  /// Each inner member's solve is first exact only near its expected end (SolveOptions::goal,
+  /// about a third of a complete solve's work); false: complete solves only. Both give the same
+  /// members up to rounding (tests/design/test_grid.cpp); kept for that comparison.
+  bool goal_pruning = true;
 };
 
 /// Inner members already built on one patch with one solver, for redesigns that meet the same
@@ -78,7 +86,7 @@ class MemberMemo {
     auto operator<=>(const Key&) const = default;
   };
   static Key key(Family family, const MemberPosition& position, const PlanarPatch& planar,
-                 double length_tolerance);
+                 double length_tolerance, bool goal_pruning);
   std::optional<Member> find(const Key& key) const;
   void insert(const Key& key, const Member& member);
   std::size_t max_bytes() const { return max_bytes_; }

@@ -10,6 +10,7 @@
 // then call `solve` for as many sources as needed, from as many threads as wanted.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -54,6 +55,21 @@ struct SolveOptions {
   /// 2.5-4x slower per window than its default batches: worth it only for targets near the
   /// source. Default: false.
   bool stop_at_targets = false;
+  /// Goal-directed pruning, for a solve that needs exact answers in one small place only (a grid
+  /// member's end on the opposite boundary): a ball and a distance bound. The fast engine drops
+  /// every window whose paths cannot reach the ball within the bound: its own distance (sigma
+  /// plus the distance from its image to its interval) plus the straight distance from its
+  /// interval to the ball is a lower bound of any continuation, as in A*. Then distance_to and
+  /// path_to are exact for every surface point inside the ball whose distance is at most
+  /// `bound`; every other value (vertex_distances included) is an upper bound, the length of a
+  /// real path, or +inf. Other engines ignore it (their answers are exact everywhere).
+  /// bound = +inf (default): no pruning.
+  struct Goal {
+    Vec3 center = Vec3::Zero();
+    double radius = 0;
+    double bound = std::numeric_limits<double>::infinity();
+  };
+  Goal goal;
 };
 
 /// Result of one single-source solve. Holds whatever the method needs to answer distance and

@@ -28,11 +28,16 @@
 namespace gridshell {
 
 /// An isotropic-enough lamella material: Young's modulus along the lamella and shear modulus,
-/// both in pascal.
+/// both in pascal, and the stresses it bears (0 = unknown): the bending strength (wood: the
+/// modulus of rupture along the grain; metals and plastics: the yield stress) and the shear
+/// strength (wood: along the grain; metals: the shear yield stress). Reference values, not
+/// design values: no safety factor (docs/decisions.md).
 struct Material {
   std::string name;
-  double young_modulus = 0;  ///< E, Pa
-  double shear_modulus = 0;  ///< G, Pa
+  double young_modulus = 0;     ///< E, Pa
+  double shear_modulus = 0;     ///< G, Pa
+  double bending_strength = 0;  ///< f_m, Pa (0 = unknown)
+  double shear_strength = 0;    ///< f_v, Pa (0 = unknown)
 };
 
 /// The built-in materials (reference values; see docs/decisions.md), "lime-wood" first (the
@@ -108,6 +113,9 @@ struct SimulatedLamella {
   double max_bending_stress = 0;         ///< Pa: E kappa_weak t / 2
   double max_strong_bending_stress = 0;  ///< Pa: E kappa_strong w / 2
   double max_torsion_stress = 0;         ///< Pa: G theta' t (thin rectangle)
+  /// Pa: the largest normal stress at a corner of the cross-section, where both bending
+  /// stresses add up: E (kappa_weak t / 2 + kappa_strong w / 2) at one rod vertex.
+  double max_normal_stress = 0;
 };
 
 /// Final state of one crossing's connection.
