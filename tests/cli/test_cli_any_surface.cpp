@@ -70,8 +70,8 @@ TEST(CliAnySurface, LoopRoundAHoleIsInfeasibleAndNamesIt) {
 }
 
 TEST(CliAnySurface, InfeasibleDesignPrintsSuggestionsThatWork) {
-  const std::string base = "design example:double-vault --resolution 50 --quiet --out '" +
-                           testing::temp_dir() + "'";
+  const std::string base =
+      "design example:double-vault --resolution 50 --quiet --out '" + testing::temp_dir() + "'";
   const auto failed = run_cli(base + " --k-max 1.5 --suggest 2");
   EXPECT_EQ(failed.exit_code, 3) << failed.err;
   EXPECT_EQ(count_lines_starting(failed.err, "error:"), 1) << failed.err;

@@ -95,7 +95,7 @@ TEST(Suggestions, TooWideLamellasGetNarrowerOnesOrFewerMembers) {
   const ExampleSurface example = make_example("double-vault", 0.5);
   const CornerSpec corners = CornerSpec::at_vertices(example.corners);
   DesignOptions options;
-  options.maps.resolution = 48;  // a quicker design; the suggestions use the same
+  options.maps.resolution = 48;       // a quicker design; the suggestions use the same
   options.members.lamella_width = 8;  // 8 % of the longest side: two members fit, not three
   const Failed failed = fail_and_suggest(example.mesh, corners, options);
   EXPECT_EQ(failed.field, "options.lamella_width");

@@ -408,9 +408,10 @@ TEST(Gateway, InfeasibleDesignErrorCarriesSuggestions) {
   const size_t data = event + 19, end = reply.body.find('\n', data);
   expect_suggestions(nlohmann::json::parse(reply.body.substr(data, end - data))["error"]);
   // The CLI through gRPC: the suggestions from the status details, as in-process.
-  const auto cli = testing::run_cli("design example:double-vault --resolution 50 --k-max 1.5 "
-                                    "--suggest 2 --quiet --server " +
-                                    daemon.grpc_address() + " --out '" + testing::temp_dir() + "'");
+  const auto cli = testing::run_cli(
+      "design example:double-vault --resolution 50 --k-max 1.5 "
+      "--suggest 2 --quiet --server " +
+      daemon.grpc_address() + " --out '" + testing::temp_dir() + "'");
   EXPECT_EQ(cli.exit_code, 3) << cli.err;
   EXPECT_NE(cli.err.find("\nsuggestion 1: slope bounds k_max"), std::string::npos) << cli.err;
 }
