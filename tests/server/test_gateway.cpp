@@ -378,5 +378,43 @@ TEST(Gateway, StaticFilesNeverLeaveTheirFolder) {
     EXPECT_EQ(http_request(port, "GET", target).status, 404) << target;
 }
 
+// Issue 18: an infeasible design's error carries its computed suggestions, in the JSON body
+// and in the Server-Sent Events' error event; the CLI shows them from the gRPC details.
+TEST(Gateway, InfeasibleDesignErrorCarriesSuggestions) {
+  TestDaemon daemon;
+  v1::DesignRequest request = testing::design_request("double-vault", 50);
+  request.mutable_options()->set_k_max(1.5);
+  request.mutable_options()->set_suggest(2);
+  auto expect_suggestions = [](const nlohmann::json& error) {
+    ASSERT_TRUE(error.contains("suggestions")) << error.dump();
+    ASSERT_GE(error["suggestions"].size(), 1u);
+    ASSERT_LE(error["suggestions"].size(), 2u);
+    const auto& first = error["suggestions"][0];
+    EXPECT_EQ(first["rank"], 1);
+    EXPECT_EQ(first["kind"], "slope_bounds");
+    EXPECT_GT(first["k_max"].get<double>(), 1.5);
+    EXPECT_EQ(first["alpha_bar_range"].size(), 2u);
+    EXPECT_FALSE(first["description"].get<std::string>().empty());
+  };
+  auto reply =
+      http_request(daemon.http_port(), "POST", "/v1/design", to_json(request, false), kJson);
+  EXPECT_EQ(reply.status, 422) << reply.body;
+  expect_suggestions(nlohmann::json::parse(reply.body)["error"]);
+  auto headers = kJson;
+  headers["Accept"] = "text/event-stream";
+  reply = http_request(daemon.http_port(), "POST", "/v1/design", to_json(request, false), headers);
+  const size_t event = reply.body.find("event: error\ndata: ");
+  ASSERT_NE(event, std::string::npos) << reply.body;
+  const size_t data = event + 19, end = reply.body.find('\n', data);
+  expect_suggestions(nlohmann::json::parse(reply.body.substr(data, end - data))["error"]);
+  // The CLI through gRPC: the suggestions from the status details, as in-process.
+  const auto cli = testing::run_cli(
+      "design example:double-vault --resolution 50 --k-max 1.5 "
+      "--suggest 2 --quiet --server " +
+      daemon.grpc_address() + " --out '" + testing::temp_dir() + "'");
+  EXPECT_EQ(cli.exit_code, 3) << cli.err;
+  EXPECT_NE(cli.err.find("\nsuggestion 1: slope bounds k_max"), std::string::npos) << cli.err;
+}
+
 }  // namespace
 }  // namespace gridshell
