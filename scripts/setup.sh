@@ -8,7 +8,7 @@ PKGS=(
   libceres-dev libsuitesparse-dev
   libprotobuf-dev protobuf-compiler libgrpc++-dev protobuf-compiler-grpc libssl-dev
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
-  libcsv-dev haproxy
+  libcsv-dev haproxy libdxflib-dev libnanoflann-dev python3-ezdxf
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -38,7 +38,9 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:abort_on_error=1"
 # factor (tests/support.h, time_scale).
 export GRIDSHELL_TEST_TIME_SCALE="${GRIDSHELL_TEST_TIME_SCALE:-5}"
 
-subset=(-E 'ExampleDeployment\..*/(sphere|waves|torus_wide|waves_bump|mesh_knet1_obj|mesh_pillow_1_obj)( |$)')
+# Also left out: Compare.RecoversRigidMotionWithNoiseOutliersAndPartialView (a deployment and a
+# 100k-point scan; the same registration runs sanitized in Compare.RegistersASmallScanUnderAnyMotion).
+subset=(-E '(ExampleDeployment\..*/(sphere|waves|torus_wide|waves_bump|mesh_knet1_obj|mesh_pillow_1_obj)( |$))|Compare\.RecoversRigidMotion')
 [ "${GRIDSHELL_SANITIZE_FULL:-0}" = 1 ] && subset=()
 
 status=0

@@ -260,6 +260,11 @@ grpc::ServerWriteReactor<v1::ExamplesEvent>* GridshellService::Examples(
   return serve<v1::ExamplesEvent>(context, request, methods_.examples);
 }
 
+grpc::ServerWriteReactor<v1::FabricateEvent>* GridshellService::Fabricate(
+    grpc::CallbackServerContext* context, const v1::FabricateRequest* request) {
+  return serve<v1::FabricateEvent>(context, request, methods_.fabricate);
+}
+
 std::shared_ptr<grpc::AuthMetadataProcessor> make_token_processor(
     std::string token, std::function<void(const std::string&)> on_refused) {
   return std::make_shared<TokenProcessor>(std::move(token), std::move(on_refused));

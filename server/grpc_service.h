@@ -36,6 +36,8 @@ class GridshellService final : public v1::Gridshell::CallbackService {
                                                 const v1::LoadRequest* request) override;
   grpc::ServerWriteReactor<v1::ExamplesEvent>* Examples(
       grpc::CallbackServerContext* context, const v1::ExamplesRequest* request) override;
+  grpc::ServerWriteReactor<v1::FabricateEvent>* Fabricate(
+      grpc::CallbackServerContext* context, const v1::FabricateRequest* request) override;
 
  private:
   template <class Event, class M>

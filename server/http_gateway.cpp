@@ -157,6 +157,7 @@ struct HttpGateway::Impl {
     routes["/v1/geodesic"] = route(methods.geodesic);
     routes["/v1/load"] = route(methods.load);
     routes["/v1/examples"] = route(methods.examples);
+    routes["/v1/fabricate"] = route(methods.fabricate);
   }
 
   template <class Stream>
@@ -378,10 +379,11 @@ class HttpGateway::Impl::Session final : public SessionBase,
       const auto it = gateway_.routes.find(path);
       if (verb == http::verb::options && it != gateway_.routes.end()) return preflight();
       if (it == gateway_.routes.end())
-        return respond_error({StatusCode::NotFound,
-                              "no such method: " + path +
-                                  " (POST /v1/patch|design|simulate|run|geodesic|load|examples)"},
-                             keep_alive_);
+        return respond_error(
+            {StatusCode::NotFound,
+             "no such method: " + path +
+                 " (POST /v1/patch|design|simulate|run|geodesic|load|examples|fabricate)"},
+            keep_alive_);
       if (verb != http::verb::post)
         return respond_error({StatusCode::Unimplemented, "use POST " + path}, keep_alive_, 405);
       if (!authorized(request)) return unauthorized();

@@ -43,6 +43,11 @@ Methods make_methods(const RunSettings& settings) {
                         return run_examples(request, progress, settings);
                       },
                       {}};
+  methods.fabricate = {"Fabricate",
+                       [settings](const v1::FabricateRequest& request, const Progress& progress) {
+                         return run_fabricate(request, progress, settings);
+                       },
+                       {}};
   return methods;
 }
 

@@ -15,6 +15,7 @@
 #include <string>
 #include <utility>
 
+#include "gridshell/fabricate.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/progress.h"
 #include "gridshell/requests.h"
@@ -42,6 +43,7 @@ struct Methods {
   Method<v1::GeodesicRequest, v1::GeodesicResult> geodesic;
   Method<v1::LoadRequest, v1::LoadResult> load;
   Method<v1::ExamplesRequest, v1::ExamplesResult> examples;
+  Method<v1::FabricateRequest, v1::FabricateResult> fabricate;
 };
 
 /// The table; `settings` (kernel threads per request) applies to every method.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "cli_support.h"
 
+#include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,9 +11,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <mutex>
+#include <sstream>
 
 #include "gridshell/example_surfaces.h"
 #include "gridshell/files.h"
@@ -239,6 +242,22 @@ void prepare_output_folder(const std::string& out) {
   if (!f) throw InvalidInput("--out", "cannot write into " + out + ": " + std::strerror(errno));
   std::fclose(f);
   fs::remove(probe, ec);
+}
+
+v1::Design read_design_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InvalidInput(path, "cannot open the design file");
+  std::stringstream text;
+  text << in.rdbuf();
+  v1::Design design;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  std::string json = text.str();
+  if (json.rfind("\xEF\xBB\xBF", 0) == 0) json.erase(0, 3);  // a UTF-8 byte order mark
+  const auto status = google::protobuf::util::JsonStringToMessage(json, &design, options);
+  if (!status.ok())
+    throw InvalidInput(path, "not a gridshell design file: " + std::string(status.message()));
+  return design;
 }
 
 }  // namespace gridshell::cli

@@ -13,6 +13,7 @@
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/mesh/progress.h"
+#include "gridshell/v1/design.pb.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {
@@ -75,6 +76,10 @@ v1::Mesh request_mesh(const InputMesh& input);
 
 /// The file-order index of a loaded mesh vertex (the first, for welded duplicates), or -1.
 int file_vertex(const InputMesh& input, int mesh_vertex);
+
+/// A design.json (gridshell.v1.Design in JSON; unknown fields rejected). Throws InvalidInput
+/// naming the file.
+v1::Design read_design_file(const std::string& path);
 
 /// Median of a list of numbers.
 double median(std::vector<double> values);

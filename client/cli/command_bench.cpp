@@ -40,9 +40,10 @@ struct BenchArguments {
   bool no_write = false;
   int repeats = 3;
   std::vector<double> edges{1, 2, 3, 4};
-  std::string server;        // interactive: an existing gridshelld instead of a new one
-  int request_threads = 1;   // interactive: --request-threads of the daemon it starts
-  int redesign_threads = 0;  // interactive: --redesign-threads of the daemon it starts
+  std::string server;         // interactive: an existing gridshelld instead of a new one
+  int request_threads = 1;    // interactive: --request-threads of the daemon it starts
+  int redesign_threads = 0;   // interactive: --redesign-threads of the daemon it starts
+  int scan_points = 1000000;  // fabricate: points of the synthetic scans
 };
 
 /// CPU time of the whole process (all threads) in s.
@@ -284,10 +285,13 @@ Command add_bench_command(CLI::App& app) {
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
   sub->add_option("WHAT", args->what,
-                  "geodesic | design | simulate | resolution | service | interactive | sweep")
+                  "geodesic | design | simulate | resolution | service | interactive | sweep | "
+                  "fabricate")
       ->required()
-      ->check(CLI::IsMember(
-          {"geodesic", "design", "simulate", "resolution", "service", "interactive", "sweep"}));
+      ->check(CLI::IsMember({"geodesic", "design", "simulate", "resolution", "service",
+                             "interactive", "sweep", "fabricate"}));
+  sub->add_option("--scan-points", args->scan_points, "fabricate: points of the synthetic scans")
+      ->capture_default_str();
   sub->add_option("--edges", args->edges,
                   "rod edges per interval between crossings to compare (resolution)")
       ->delimiter(',')
@@ -321,6 +325,11 @@ Command add_bench_command(CLI::App& app) {
       if (s < 100 || s > 2000000) throw InvalidInput("--sizes", "each size must be 100..2000000");
     if (args->repeats < 1) throw InvalidInput("--repeats", "must be at least 1");
     if (args->what == "simulate") return bench_simulate(args->repeats, args->out, args->no_write);
+    if (args->what == "fabricate") {
+      if (args->scan_points < 1000 || args->scan_points > 100000000)
+        throw InvalidInput("--scan-points", "must be 1000..100000000");
+      return bench_fabricate(args->repeats, args->scan_points, args->out, args->no_write);
+    }
     if (args->what == "resolution") {
       if (args->edges.empty()) throw InvalidInput("--edges", "give at least one resolution");
       for (double e : args->edges)

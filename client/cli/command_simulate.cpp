@@ -136,25 +136,9 @@ struct SimulateArguments {
   SimulationFlags flags;
 };
 
-v1::Design read_design(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput(path, "cannot open the design file");
-  std::stringstream text;
-  text << in.rdbuf();
-  v1::Design design;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  std::string json = text.str();
-  if (json.rfind("\xEF\xBB\xBF", 0) == 0) json.erase(0, 3);  // a UTF-8 byte order mark
-  const auto status = google::protobuf::util::JsonStringToMessage(json, &design, options);
-  if (!status.ok())
-    throw InvalidInput(path, "not a gridshell design file: " + std::string(status.message()));
-  return design;
-}
-
 int run_simulate(const SimulateArguments& args) {
   v1::SimulateRequest request;
-  *request.mutable_design() = read_design(args.design);
+  *request.mutable_design() = read_design_file(args.design);
   *request.mutable_options() = simulation_options_from_flags(args.flags);
   request.set_design_name(std::filesystem::path(args.design).filename().string());
   prepare_output_folder(args.output.out);  // fail early on an unusable --out

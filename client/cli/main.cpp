@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   add(cli::add_run_command);
   add(cli::add_health_command);
   add(cli::add_sweep_command);
+  add(cli::add_fabricate_command);
+  add(cli::add_compare_command);
 
   try {
     app.parse(argc, argv);

@@ -278,6 +278,11 @@ v1::GeodesicResult RemoteClient::geodesic(const v1::GeodesicRequest& request,
   return impl_->call(&v1::Gridshell::Stub::Geodesic, request, progress);
 }
 
+v1::FabricateResult RemoteClient::fabricate(const v1::FabricateRequest& request,
+                                            const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Fabricate, request, progress);
+}
+
 std::string RemoteClient::health(const std::string& service) {
   auto stub = grpc::health::v1::Health::NewStub(impl_->channel);
   grpc::health::v1::HealthCheckRequest request;
@@ -306,6 +311,9 @@ v1::SimulateResult RemoteClient::simulate(const v1::SimulateRequest&, const Prog
   return {};
 }
 v1::GeodesicResult RemoteClient::geodesic(const v1::GeodesicRequest&, const Progress&) {
+  return {};
+}
+v1::FabricateResult RemoteClient::fabricate(const v1::FabricateRequest&, const Progress&) {
   return {};
 }
 std::string RemoteClient::health(const std::string&) { return {}; }

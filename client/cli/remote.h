@@ -10,6 +10,7 @@
 #include <string>
 
 #include "gridshell/mesh/progress.h"
+#include "gridshell/v1/fabrication.pb.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {
@@ -48,6 +49,7 @@ class RemoteClient {
   v1::DesignResult design(const v1::DesignRequest& request, const Progress& progress = {});
   v1::SimulateResult simulate(const v1::SimulateRequest& request, const Progress& progress = {});
   v1::GeodesicResult geodesic(const v1::GeodesicRequest& request, const Progress& progress = {});
+  v1::FabricateResult fabricate(const v1::FabricateRequest& request, const Progress& progress = {});
   /// grpc.health.v1 Check of `service` ("" = the whole daemon): "SERVING", "NOT_SERVING", ...
   std::string health(const std::string& service = "");
 

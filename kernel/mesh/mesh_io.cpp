@@ -1344,6 +1344,18 @@ TriangleMesh read_mesh(std::string_view data, MeshFormat format, const std::stri
   return finish(name, raw, out, options);
 }
 
+std::vector<Vec3> read_points(std::string_view data, MeshFormat format, const std::string& name) {
+  if (std::all_of(data.begin(), data.end(), [](char c) { return is_space(c) || c == '\n'; }))
+    fail(name, "the file is empty");
+  const RawMesh raw = format == MeshFormat::Obj   ? parse_obj(name, data)
+                      : format == MeshFormat::Off ? parse_off(name, data)
+                      : format == MeshFormat::Ply ? parse_ply(name, data)
+                                                  : parse_stl(name, data);
+  return raw.vertices;
+}
+
+std::string read_file_bytes(const std::string& path) { return read_file(path); }
+
 TriangleMesh load_mesh(const std::string& path, LoadReport* report,
                        const MeshLoadOptions& options) {
   std::string extension = fs::path(path).extension().string();

@@ -356,6 +356,31 @@ test('Simulate: deployment with RMS, deployment.json downloads', async () => {
   assert.match(await byId('deviation-legend').textContent(), /deviation from the target/);
 });
 
+test('Download kit: kit.zip holds the sheets, and kit.json is the CLI\'s for the same design', async () => {
+  const { unzipSync } = createRequire(path.join(web, 'package.json'))('fflate');
+  const { bytes: designBytes } = await downloadJson('download-design');
+  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), byId('kit').click()]);
+  assert.equal(download.suggestedFilename(), 'kit.zip');
+  const zip = unzipSync(new Uint8Array(readFileSync(await download.path())));
+  const names = Object.keys(zip).sort();
+  for (const name of ['kit/kit.json', 'kit/assembly.svg', 'kit/supports.csv', 'kit/bom.csv',
+                      'kit/sheets/sheet-01.dxf', 'kit/sheets/sheet-01.svg'])
+    assert.ok(names.includes(name), `${name} in ${names.join(' ')}`);
+  assert.match(await text('summary'), /kit: \d+ lamellas on \d+ sheet/);
+  // The same design through the CLI in-process: the same kit.json and sheets, byte for byte.
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-kit-'));
+  try {
+    writeFileSync(path.join(dir, 'design.json'), designBytes);
+    const r = spawnSync(cliPath, ['fabricate', path.join(dir, 'design.json'), '--unit', 'cm', '--quiet',
+                                  '--out', path.join(dir, 'kit')], { encoding: 'utf8' });
+    assert.equal(r.status, 0, r.stderr);
+    assert.equal(Buffer.from(zip['kit/kit.json']).toString('utf8'), readFileSync(path.join(dir, 'kit/kit.json'), 'utf8'));
+    assert.deepEqual(Buffer.from(zip['kit/sheets/sheet-01.dxf']), readFileSync(path.join(dir, 'kit/sheets/sheet-01.dxf')));
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('Cancel stops a running simulation (the daemon cancels the job)', async () => {
   const before = (daemonLog().match(/CANCELLED/g) ?? []).length;
   await byId('simulate').click();

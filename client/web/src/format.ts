@@ -94,7 +94,8 @@ export function maxDeviation(dep: Deployment): number {
  * `corners.vertices[2]`, `options.alpha`, `design.members[4]`) mapped to the page's
  * `data-for` slots, given the call it came from.
  */
-export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate', field: string): string {
+export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate', field: string): string {
+  if (call === 'fabricate') return 'fabricate';
   if (call === 'simulate') return field.startsWith('design') ? 'options' : 'simulation';
   if (field.startsWith('mesh')) return 'mesh';
   if (field.startsWith('corners')) return 'corners';

@@ -15,6 +15,7 @@ import {
   alphaOption, decodeState, deploymentSummary, designSummary, encodeState, errorSlot, maxDeviation,
   patchSummary, sliderRange, stress, type UrlState,
 } from './format';
+import { fabricateRequest, kitSummary, kitZip, type FabricateResult } from './kit';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
 import { patchKey, type KeyCorners } from './routing';
@@ -59,6 +60,7 @@ const ui = {
   unit: el<HTMLSelectElement>('unit'),
   material: el<HTMLSelectElement>('material'),
   simulate: el<HTMLButtonElement>('simulate'),
+  kit: el<HTMLButtonElement>('kit'),
   progress: el<HTMLProgressElement>('progress'),
   cancel: el<HTMLButtonElement>('cancel'),
   status: el('status'),
@@ -102,7 +104,7 @@ const state: State = {
 
 // ---- calls: one at a time, cancellable ----------------------------------------------------------
 
-type CallKind = 'load' | 'patch' | 'design' | 'simulate';
+type CallKind = 'load' | 'patch' | 'design' | 'simulate' | 'fabricate';
 let current: { kind: CallKind; controller: AbortController; byUser: boolean } | null = null;
 
 function setBusy(busy: boolean): void {
@@ -221,7 +223,7 @@ function resetFromMesh(): void {
   state.designWanted = false;
   state.simulation = null;
   state.alphaDeg = null;
-  ui.alpha.disabled = ui.design.disabled = ui.simulate.disabled = true;
+  ui.alpha.disabled = ui.design.disabled = ui.simulate.disabled = ui.kit.disabled = true;
   ui.alphaValue.textContent = 'min';
   ui.alphaMin.textContent = ui.alphaMax.textContent = '';
   ui.patchInfo.textContent = '';
@@ -390,7 +392,7 @@ function cornersJson(): { vertices?: number[]; label?: string } {
 async function computePatch(): Promise<void> {
   if (!state.mesh) return;
   state.patch = state.design = state.simulation = null;
-  ui.design.disabled = ui.simulate.disabled = true;
+  ui.design.disabled = ui.simulate.disabled = ui.kit.disabled = true;
   const result = await run<PatchResult>('patch', 'patch', { mesh: state.mesh, corners: cornersJson() });
   if (!result) {
     if (!current) { // failed or cancelled (not superseded): no stale patch
@@ -487,6 +489,7 @@ async function computeDesign(): Promise<void> {
   if (p) plan.show(blobUrl(p));
   if (m) maps.show(blobUrl(m));
   ui.simulate.disabled = false;
+  ui.kit.disabled = false;
   saveUrl();
 }
 
@@ -545,6 +548,28 @@ function showDeployment(): void {
 }
 
 ui.colourBy.addEventListener('change', () => showDeployment());
+
+// ---- fabricate ----------------------------------------------------------------------------------
+
+ui.kit.addEventListener('click', () => void downloadKit());
+
+/** Fabricate the design on screen and hand the kit over as kit.zip. */
+async function downloadKit(): Promise<void> {
+  const d = state.design;
+  if (!d) return;
+  const result = await run<FabricateResult>('fabricate', 'fabricate', fabricateRequest(d.design, ui.unit.value));
+  if (!result) return;
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(new Blob([kitZip(result.files)], { type: 'application/zip' }));
+  urls.push(a.href);
+  a.download = 'kit.zip';
+  a.textContent = 'kit.zip';
+  a.dataset['testid'] = 'download-kit';
+  ui.downloads.querySelector('[data-testid="download-kit"]')?.remove();
+  ui.downloads.append(a);
+  ui.summary.textContent = `${ui.summary.textContent ?? ''}\n\n${kitSummary(result.kit)}`;
+  a.click();
+}
 
 // ---- downloads, views -----------------------------------------------------------------------
 

@@ -51,6 +51,16 @@ const char* to_string(MeshFormat format);
 TriangleMesh read_mesh(std::string_view data, MeshFormat format, const std::string& name,
                        LoadReport* report = nullptr, const MeshLoadOptions& options = {});
 
+/// The vertices of a mesh file as its parser reads them (file order, every vertex; faces may be
+/// absent and are not checked): a point cloud given as OBJ `v` lines, OFF or PLY (ASCII and
+/// binary; properties other than x, y, z, such as normals, are skipped). Throws InvalidInput
+/// naming `name` and the line or element for an empty file, a malformed one and NaN/Inf.
+std::vector<Vec3> read_points(std::string_view data, MeshFormat format, const std::string& name);
+
+/// A whole file as bytes, with the mesh loader's checks (exists, regular file, at most 4 GiB);
+/// InvalidInput naming the path.
+std::string read_file_bytes(const std::string& path);
+
 /// Reads a mesh; the format is chosen by the extension (case-insensitive): .obj .off .ply (ASCII
 /// and binary little/big endian) .stl (ASCII and binary). Polygons are triangulated.
 /// Throws InvalidInput whose field is the path and whose message names the line or element for:

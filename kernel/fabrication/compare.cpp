@@ -1,0 +1,591 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "gridshell/fabrication/compare.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <nanoflann.hpp>
+#include <numbers>
+#include <numeric>
+#include <random>
+
+#include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/mesh_io.h"
+#include "gridshell/mesh/parallel.h"
+
+namespace gridshell {
+namespace {
+
+using Kernel = CGAL::Simple_cartesian<double>;
+using CgalTriangle = Kernel::Triangle_3;
+using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
+using AabbTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+
+Kernel::Point_3 to_cgal(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
+
+/// nanoflann's view of a point list.
+struct PointList {
+  const std::vector<Vec3>* points = nullptr;
+  size_t kdtree_get_point_count() const { return points->size(); }
+  double kdtree_get_pt(size_t i, size_t d) const { return (*points)[i][static_cast<int>(d)]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointList>,
+                                                   PointList, 3, std::uint32_t>;
+
+/// A reference surface: exact distances (AABB tree over its triangles) and, for ICP and as
+/// hints, points sampled on it by area with their face normals in a k-d tree.
+struct Reference {
+  std::vector<CgalTriangle> triangles;
+  std::unique_ptr<AabbTree> tree;
+  std::vector<Vec3> samples, normals;
+  PointList list;
+  std::unique_ptr<KdTree> kd;
+  double spacing = 0;  ///< typical distance between samples
+  double extent = 0;   ///< bounding-box diagonal
+
+  Reference(const std::vector<Triangle3>& input, int sample_count, unsigned seed) {
+    std::vector<double> cumulative;
+    double area = 0;
+    Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+    for (const Triangle3& t : input) {
+      const double a = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm();
+      for (const Vec3& p : t) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      if (!(a > 0)) continue;
+      triangles.emplace_back(to_cgal(t[0]), to_cgal(t[1]), to_cgal(t[2]));
+      area += a;
+      cumulative.push_back(area);
+    }
+    if (triangles.empty()) throw InvalidInput("", "the reference surface has no triangles");
+    extent = (hi - lo).norm();
+    tree = std::make_unique<AabbTree>(triangles.begin(), triangles.end());
+    tree->accelerate_distance_queries();
+    std::mt19937_64 random(seed);
+    std::uniform_real_distribution<double> uniform(0, 1);
+    std::vector<int> faces;
+    for (size_t i = 0; i < input.size(); ++i) {
+      const Triangle3& t = input[i];
+      if (0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm() > 0) faces.push_back(static_cast<int>(i));
+    }
+    samples.reserve(sample_count);
+    normals.reserve(sample_count);
+    for (int k = 0; k < sample_count; ++k) {
+      const double r = uniform(random) * area;
+      const size_t f =
+          std::min(cumulative.size() - 1,
+                   static_cast<size_t>(std::lower_bound(cumulative.begin(), cumulative.end(), r) -
+                                       cumulative.begin()));
+      const Triangle3& t = input[faces[f]];
+      double a = uniform(random), b = uniform(random);
+      if (a + b > 1) {
+        a = 1 - a;
+        b = 1 - b;
+      }
+      samples.push_back(t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]));
+      normals.push_back((t[1] - t[0]).cross(t[2] - t[0]).normalized());
+    }
+    spacing = std::sqrt(area / sample_count);
+    list.points = &samples;
+    kd = std::make_unique<KdTree>(3, list, nanoflann::KDTreeSingleIndexAdaptorParams(12));
+  }
+
+  /// Index of the nearest sample and the squared distance to it.
+  std::pair<std::uint32_t, double> nearest(const Vec3& p) const {
+    std::uint32_t index = 0;
+    double d2 = 0;
+    nanoflann::KNNResultSet<double, std::uint32_t> result(1);
+    result.init(&index, &d2);
+    kd->findNeighbors(result, p.data(), nanoflann::SearchParams(16));
+    return {index, d2};
+  }
+  /// Exact distance to the triangles (the nearest sample as the AABB tree's hint).
+  double distance(const Vec3& p) const {
+    const Vec3& hint = samples[nearest(p).first];
+    return std::sqrt(tree->squared_distance(to_cgal(p), to_cgal(hint)));
+  }
+  /// Distance estimate from the nearest sample: the plane distance where the sample is close
+  /// along the surface, the straight distance beyond the sampling's reach.
+  double estimate(const Vec3& p, std::uint32_t index, double d2) const {
+    const double r = normals[index].dot(p - samples[index]);
+    const double tangential2 = std::max(0.0, d2 - r * r);
+    return std::sqrt(r * r + std::max(0.0, tangential2 - spacing * spacing));
+  }
+};
+
+struct Pose {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Vec3 translation = Vec3::Zero();
+  Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
+};
+
+Eigen::Matrix3d rotation_from_vector(const Vec3& omega) {
+  const double angle = omega.norm();
+  if (angle == 0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix();
+}
+
+double median_of(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  return values[mid];
+}
+
+struct IcpResult {
+  Pose pose;
+  int iterations = 0;
+  double score = 0;  ///< trimmed RMS of the distance estimates at the end
+};
+
+/// Point-to-plane ICP of `points` (scan coordinates) against `reference` from `start`.
+/// Correspondences farther than three robust standard deviations are dropped each iteration;
+/// `trim` (0..1) additionally keeps only that fraction of the nearest (for the coarse search).
+IcpResult icp(const std::vector<Vec3>& points, const Reference& reference, Pose pose,
+              int iterations, double trim, const Progress& progress) {
+  IcpResult out;
+  const double floor = 1e-9 * reference.extent;
+  std::vector<double> error(points.size());
+  std::vector<std::uint32_t> match(points.size());
+  std::vector<Vec3> moved(points.size());
+  for (int it = 0; it < iterations; ++it) {
+    progress.check();
+    for (size_t i = 0; i < points.size(); ++i) {
+      moved[i] = pose.apply(points[i]);
+      const auto [index, d2] = reference.nearest(moved[i]);
+      match[i] = index;
+      error[i] = reference.estimate(moved[i], index, d2);
+    }
+    const double sigma = 1.4826 * median_of(error);
+    double limit = std::max(3 * sigma, floor);
+    if (trim < 1) {
+      std::vector<double> sorted = error;
+      const size_t keep = static_cast<size_t>(trim * (sorted.size() - 1));
+      std::nth_element(sorted.begin(), sorted.begin() + keep, sorted.end());
+      limit = std::max(limit, sorted[keep]);
+    }
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    int used = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (error[i] > limit) continue;
+      const Vec3& n = reference.normals[match[i]];
+      const double r = n.dot(moved[i] - reference.samples[match[i]]);
+      Eigen::Matrix<double, 6, 1> J;
+      J << moved[i].cross(n), n;
+      A += J * J.transpose();
+      b += J * r;
+      ++used;
+    }
+    out.iterations = it + 1;
+    if (used < 6) break;
+    // Levenberg-style damping keeps an ill-conditioned direction (a flat scan sliding in its
+    // plane) from jumping.
+    A.diagonal() += Eigen::Matrix<double, 6, 1>::Constant(1e-12 * A.diagonal().maxCoeff());
+    const Eigen::Matrix<double, 6, 1> delta = -A.ldlt().solve(b);
+    const Eigen::Matrix3d dR = rotation_from_vector(delta.head<3>());
+    pose.rotation = dR * pose.rotation;
+    pose.translation = dR * pose.translation + delta.tail<3>();
+    if (delta.head<3>().norm() < 1e-10 && delta.tail<3>().norm() < 1e-10 * reference.extent) break;
+  }
+  // Score: RMS of the nearest 90 % of the estimates.
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vec3 p = pose.apply(points[i]);
+    const auto [index, d2] = reference.nearest(p);
+    error[i] = reference.estimate(p, index, d2);
+  }
+  std::sort(error.begin(), error.end());
+  const size_t keep = std::max<size_t>(1, static_cast<size_t>(0.9 * error.size()));
+  double sum = 0;
+  for (size_t i = 0; i < keep; ++i) sum += error[i] * error[i];
+  out.score = std::sqrt(sum / keep);
+  out.pose = pose;
+  return out;
+}
+
+/// Mean and principal axes (columns, by increasing variance, right-handed).
+std::pair<Vec3, Eigen::Matrix3d> principal_axes(const std::vector<Vec3>& points) {
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : points) covariance += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  Eigen::Matrix3d axes = solver.eigenvectors();
+  if (axes.determinant() < 0) axes.col(0) = -axes.col(0);
+  return {mean, axes};
+}
+
+DistanceStatistics statistics(const std::vector<double>& distance, const std::vector<char>& inlier,
+                              double top, int bins) {
+  DistanceStatistics s;
+  std::vector<double> values;
+  for (size_t i = 0; i < distance.size(); ++i)
+    if (inlier[i]) values.push_back(distance[i]);
+  s.points = static_cast<int>(values.size());
+  if (values.empty()) return s;
+  double sum = 0, sum2 = 0;
+  for (double d : values) {
+    sum += d;
+    sum2 += d * d;
+    s.max = std::max(s.max, d);
+  }
+  const double n = static_cast<double>(values.size());
+  s.mean = sum / n;
+  s.rms = std::sqrt(sum2 / n);
+  s.standard_deviation = std::sqrt(std::max(0.0, sum2 / n - s.mean * s.mean));
+  const size_t k = static_cast<size_t>(std::ceil(0.95 * n)) - 1;
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  s.p95 = values[k];
+  const double width = std::max(top, s.max) / bins;
+  s.histogram_counts.assign(bins, 0);
+  for (int b = 0; b <= bins; ++b) s.histogram_edges.push_back(b * width);
+  for (double d : values)
+    s.histogram_counts[std::min(bins - 1, static_cast<int>(d / std::max(width, 1e-300)))] += 1;
+  return s;
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+std::vector<Triangle3> lamella_surface(const std::vector<SimulatedLamella>& lamellas, double width,
+                                       double thickness) {
+  std::vector<Triangle3> out;
+  // The corners deployed_obj uses: (+w,+t) (-w,+t) (-w,-t) (+w,-t) in (width, normal).
+  const double sw[4] = {0.5, -0.5, -0.5, 0.5}, st[4] = {0.5, 0.5, -0.5, -0.5};
+  for (const SimulatedLamella& l : lamellas) {
+    const size_t n = l.centerline.size();
+    if (n < 2 || l.normals.size() != n) continue;
+    std::vector<std::array<Vec3, 4>> ring(n);
+    for (size_t v = 0; v < n; ++v) {
+      Vec3 w = v < l.widths.size() ? l.widths[v] : Vec3::Zero();
+      if (!(w.norm() > 0)) {
+        const Vec3 t = l.centerline[std::min(v + 1, n - 1)] - l.centerline[v > 0 ? v - 1 : 0];
+        w = t.cross(l.normals[v]).normalized();
+      }
+      for (int c = 0; c < 4; ++c)
+        ring[v][c] = l.centerline[v] + sw[c] * width * w + st[c] * thickness * l.normals[v];
+    }
+    for (size_t v = 0; v + 1 < n; ++v)
+      for (int c = 0; c < 4; ++c) {
+        const Vec3 &a = ring[v][c], &b = ring[v][(c + 1) % 4], &a1 = ring[v + 1][c],
+                   &b1 = ring[v + 1][(c + 1) % 4];
+        out.push_back({a, a1, b1});
+        out.push_back({a, b1, b});
+      }
+    // End caps facing outwards: the corner order turns about -tangent at the start.
+    const auto& a = ring.front();
+    out.push_back({a[0], a[1], a[2]});
+    out.push_back({a[0], a[2], a[3]});
+    const auto& b = ring.back();
+    out.push_back({b[0], b[2], b[1]});
+    out.push_back({b[0], b[3], b[2]});
+  }
+  return out;
+}
+
+std::vector<Vec3> read_point_cloud(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  const std::string data = read_file_bytes(path);
+  if (ext == ".ply") return read_points(data, MeshFormat::Ply, path);
+  if (ext == ".obj") return read_points(data, MeshFormat::Obj, path);
+  if (ext == ".off") return read_points(data, MeshFormat::Off, path);
+  if (ext != ".xyz" && ext != ".txt" && ext != ".pts" && ext != ".asc" && ext != ".csv")
+    throw InvalidInput(path, "unknown point cloud format '" + ext +
+                                 "' (expected .ply, .xyz, .txt, .pts, .asc, .csv, .obj or .off)");
+  std::vector<Vec3> points;
+  const char* p = data.data();
+  const char* end = p + data.size();
+  int line = 0;
+  while (p < end) {
+    const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
+    if (!eol) eol = end;
+    ++line;
+    const char* q = p;
+    const auto skip = [&] {
+      while (q < eol && (*q == ' ' || *q == '\t' || *q == ',' || *q == ';' || *q == '\r')) ++q;
+    };
+    skip();
+    if (q < eol && *q != '#') {
+      Vec3 point;
+      for (int k = 0; k < 3; ++k) {
+        skip();
+        if (*q == '+') ++q;
+        const auto [next, ec] = std::from_chars(q, eol, point[k]);
+        if (ec != std::errc() || (next < eol && *next != ' ' && *next != '\t' && *next != ',' &&
+                                  *next != ';' && *next != '\r'))
+          throw InvalidInput(path, "line " + std::to_string(line) +
+                                       ": expected three numbers x y z (then anything)");
+        if (!std::isfinite(point[k]))
+          throw InvalidInput(path,
+                             "line " + std::to_string(line) + ": not a finite number (NaN or Inf)");
+        q = next;
+      }
+      points.push_back(point);
+    }
+    p = eol + 1;
+  }
+  if (points.empty()) throw InvalidInput(path, "no points");
+  return points;
+}
+
+void check_point_cloud(const std::vector<Vec3>& points, const std::string& name) {
+  if (points.empty()) throw InvalidInput(name, "no points");
+  for (size_t i = 0; i < points.size(); ++i)
+    if (!points[i].allFinite())
+      throw InvalidInput(name, "point " + std::to_string(i) + " is not finite (NaN or Inf)");
+  if (points.size() < 100)
+    throw InvalidInput(
+        name, "only " + std::to_string(points.size()) + " points: a comparison needs at least 100");
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : points) covariance += (p - mean) * (p - mean).transpose();
+  const Vec3 variance = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues();
+  if (!(variance[2] > 0)) throw InvalidInput(name, "all points are the same point");
+  if (variance[1] <= 1e-12 * variance[2])
+    throw InvalidInput(name, "all points lie on one line: nothing to register");
+}
+
+ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Triangle3>& deployment,
+                            const TriangleMesh& target, const CompareOptions& options,
+                            const Progress& progress) {
+  check_point_cloud(scan, "scan");
+  progress.report("compare: reference", 0);
+  const auto t_reference = std::chrono::steady_clock::now();
+  const Reference lamellas(deployment, options.reference_samples, options.seed);
+  std::vector<Triangle3> target_triangles;
+  for (const Face& f : target.faces())
+    target_triangles.push_back(
+        {target.vertices()[f[0]], target.vertices()[f[1]], target.vertices()[f[2]]});
+  const Reference patch(target_triangles, std::max(1000, options.reference_samples / 4),
+                        options.seed + 1);
+
+  if (std::getenv("GRIDSHELL_DEBUG_COMPARE"))
+    std::fprintf(
+        stderr, "references %.3f s\n",
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_reference).count());
+  // A fixed pseudo-random subset of the scan for ICP.
+  std::mt19937_64 random(options.seed);
+  std::vector<size_t> order(scan.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), random);
+  const auto subset = [&](size_t n) {
+    std::vector<Vec3> out;
+    for (size_t i = 0; i < std::min(n, scan.size()); ++i) out.push_back(scan[order[i]]);
+    return out;
+  };
+
+  // Coarse, in three steps. (1) Orientation: principal axes of the scan onto those of the target
+  // patch, with both orientations of the axis of least variance (the shell's normal) and 12
+  // turns about it, each tried with a short ICP against the patch: a smooth surface, so a start
+  // a few lamella spacings off still slides home. (2) Position on the lamellas: the grid of
+  // lamellas repeats itself every member spacing, and ICP started a spacing off stays there, so
+  // offsets in the shell's plane are searched on a grid (+-8 % of the extent in steps of
+  // 0.4 %), scored by the trimmed mean distance to the lamellas. (3) The best few are refined
+  // by ICP against the lamellas.
+  const bool debug = std::getenv("GRIDSHELL_DEBUG_COMPARE") != nullptr;
+  const auto clock = [] { return std::chrono::steady_clock::now(); };
+  const auto since = [&](auto t0) { return std::chrono::duration<double>(clock() - t0).count(); };
+  auto t0 = clock();
+  ScanComparison out;
+  const std::vector<Vec3> coarse_points = subset(1500);
+  const auto [scan_mean, scan_axes] = principal_axes(subset(20000));
+  const auto [ref_mean, ref_axes] = principal_axes(patch.samples);
+  struct Orientation {
+    IcpResult icp;
+    int flip = 0, turn = 0;
+  };
+  std::vector<Orientation> orientations;
+  int candidate = 0;
+  constexpr int kTurns = 12;
+  for (int flip = 0; flip < 2; ++flip)
+    for (int turn = 0; turn < kTurns; ++turn, ++candidate) {
+      progress.report("compare: coarse registration", 0.5 * candidate / (2.0 * kTurns));
+      Eigen::Matrix3d A =
+          Eigen::AngleAxisd(2 * std::numbers::pi * turn / kTurns, Vec3::UnitX()).toRotationMatrix();
+      if (flip) A = A * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+      Pose start;
+      start.rotation = ref_axes * A * scan_axes.transpose();
+      start.translation = ref_mean - start.rotation * scan_mean;
+      const IcpResult result = icp(coarse_points, patch, start, 12, 0.8, progress);
+      if (debug)
+        std::fprintf(stderr, "candidate flip %d turn %d score %g\n", flip, turn, result.score);
+      orientations.push_back({result, flip, turn});
+    }
+  // The three best orientations that differ by more than 20 degrees: a shell with a symmetry
+  // (a vault turned by half a turn) fits its smooth target in each, and only the lamellas tell
+  // them apart.
+  std::sort(orientations.begin(), orientations.end(),
+            [](const Orientation& a, const Orientation& b) { return a.icp.score < b.icp.score; });
+  std::vector<Orientation> distinct;
+  for (const Orientation& o : orientations) {
+    bool near = false;
+    for (const Orientation& d : distinct)
+      near =
+          near || Eigen::AngleAxisd(o.icp.pose.rotation * d.icp.pose.rotation.transpose()).angle() <
+                      20 * std::numbers::pi / 180;
+    if (!near) distinct.push_back(o);
+    if (distinct.size() == 3) break;
+  }
+  if (debug) std::fprintf(stderr, "orientation %.3f s\n", since(t0));
+  t0 = clock();
+  const std::vector<Vec3> probe = subset(300);
+  const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
+  constexpr int kSteps = 10;
+  const double step = 0.008 * lamellas.extent;
+  std::vector<double> error(probe.size());
+  IcpResult chosen;
+  chosen.score = 1e300;
+  for (size_t o = 0; o < distinct.size(); ++o) {
+    progress.report("compare: coarse registration", 0.5 + 0.4 * o / distinct.size());
+    const Pose pose = icp(subset(3000), patch, distinct[o].icp.pose, 20, 0.8, progress).pose;
+    // (2) Offsets in the plane of the shell.
+    std::vector<std::pair<double, Vec3>> offsets;
+    for (int i = -kSteps; i <= kSteps; ++i)
+      for (int j = -kSteps; j <= kSteps; ++j) {
+        progress.check();
+        const Vec3 offset = step * (i * e1 + j * e2);
+        for (size_t k = 0; k < probe.size(); ++k) {
+          const Vec3 p = pose.apply(probe[k]) + offset;
+          const auto [index, d2] = lamellas.nearest(p);
+          error[k] = lamellas.estimate(p, index, d2);
+        }
+        const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
+        std::nth_element(error.begin(), error.begin() + keep, error.end());
+        double sum = 0;
+        for (size_t k = 0; k <= keep; ++k) sum += error[k];
+        offsets.push_back({sum / (keep + 1), offset});
+      }
+    std::sort(offsets.begin(), offsets.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    // (3) The best few offsets, refined against the lamellas.
+    for (size_t k = 0; k < std::min<size_t>(3, offsets.size()); ++k) {
+      Pose start = pose;
+      start.translation += offsets[k].second;
+      const IcpResult result = icp(coarse_points, lamellas, start, 20, 0.8, progress);
+      if (debug)
+        std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k,
+                     offsets[k].first, result.score);
+      if (result.score < chosen.score) {
+        chosen = result;
+        out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
+                     "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
+                     " degrees about the normal axis, ICP on the target patch, in-plane offset "
+                     "search on the lamellas";
+      }
+    }
+  }
+  if (debug) std::fprintf(stderr, "offsets %.3f s\n", since(t0));
+  t0 = clock();
+
+  // Refinement on a larger subset, outliers rejected at three robust standard deviations.
+  progress.report("compare: ICP", 0.9);
+  const IcpResult fine =
+      icp(subset(options.icp_points), lamellas, chosen.pose, options.max_iterations, 1.0, progress);
+  out.rotation = fine.pose.rotation;
+  out.translation = fine.pose.translation;
+  out.icp_iterations = fine.iterations;
+  if (debug)
+    std::fprintf(stderr, "fine ICP %.3f s, %d iterations, score %g\n", since(t0), fine.iterations,
+                 fine.score);
+  t0 = clock();
+
+  // Exact distances of every point, in parallel chunks.
+  const size_t n = scan.size(), chunk = 1 << 15;
+  out.deployment_distance.assign(n, 0);
+  out.target_distance.assign(n, 0);
+  parallel_for((n + chunk - 1) / chunk,
+               [&](size_t job, const Progress& inner) {
+                 const size_t from = job * chunk, to = std::min(n, from + chunk);
+                 for (size_t i = from; i < to; ++i) {
+                   if ((i & 1023) == 0) inner.check();
+                   const Vec3 p = fine.pose.apply(scan[i]);
+                   out.deployment_distance[i] = lamellas.distance(p);
+                   out.target_distance[i] = patch.distance(p);
+                 }
+               },
+               progress, {options.threads, "compare: distances", 0, 1});
+  if (debug) std::fprintf(stderr, "distances %.3f s\n", since(t0));
+  // Outliers: farther from the lamellas than four robust standard deviations of all distances.
+  const double sigma = 1.4826 * median_of(out.deployment_distance);
+  out.rejection_distance = std::max(4 * sigma, 1e-9 * lamellas.extent);
+  out.inlier.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    out.inlier[i] = out.deployment_distance[i] <= out.rejection_distance;
+    (out.inlier[i] ? out.used : out.rejected) += 1;
+  }
+  out.deployment = statistics(out.deployment_distance, out.inlier, out.rejection_distance,
+                              options.histogram_bins);
+  double target_top = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (out.inlier[i]) target_top = std::max(target_top, out.target_distance[i]);
+  out.target = statistics(out.target_distance, out.inlier, target_top, options.histogram_bins);
+  return out;
+}
+
+std::string compare_ply(const std::vector<Vec3>& scan, const ScanComparison& c) {
+  std::string out =
+      "ply\nformat binary_little_endian 1.0\ncomment gridshell compare: scan points registered "
+      "to the design, coloured by distance to the deployment (blue 0, red at the rejection "
+      "distance " +
+      std::to_string(c.rejection_distance) + "; grey: outliers)\nelement vertex " +
+      std::to_string(scan.size()) +
+      "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty "
+      "uchar green\nproperty uchar blue\nproperty float deployment_distance\nproperty float "
+      "target_distance\nend_header\n";
+  const size_t header = out.size();
+  constexpr size_t kRecord = 3 * 4 + 3 + 2 * 4;
+  out.resize(header + kRecord * scan.size());
+  char* p = out.data() + header;
+  const auto put_float = [&](double v) {
+    const float f = static_cast<float>(v);
+    std::memcpy(p, &f, 4);  // x86-64 is little endian, as the header says
+    p += 4;
+  };
+  for (size_t i = 0; i < scan.size(); ++i) {
+    const Vec3 q = c.rotation * scan[i] + c.translation;
+    put_float(q.x());
+    put_float(q.y());
+    put_float(q.z());
+    unsigned char rgb[3] = {128, 128, 128};
+    if (c.inlier.empty() || c.inlier[i]) {
+      const double f =
+          std::clamp(c.deployment_distance[i] / std::max(c.rejection_distance, 1e-300), 0.0, 1.0);
+      rgb[0] = static_cast<unsigned char>(255 * f);
+      rgb[1] = static_cast<unsigned char>(255 * (1 - std::abs(2 * f - 1)));
+      rgb[2] = static_cast<unsigned char>(255 * (1 - f));
+    }
+    std::memcpy(p, rgb, 3);
+    p += 3;
+    put_float(c.deployment_distance[i]);
+    put_float(c.target_distance[i]);
+  }
+  return out;
+}
+
+}  // namespace gridshell
