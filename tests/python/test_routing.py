@@ -171,10 +171,10 @@ class RoutingKeyTest(unittest.TestCase):
         PROXY.reset()
         self.client = gs.Client(PROXY.url, backoff=0.01)
 
-    def design_key(self, mesh, corners=None, options=QUICK):
+    def design_key(self, mesh, corners=None, options=QUICK, client=None):
         """Designs once; returns (the key the proxy saw on the Design, the daemon's key)."""
         PROXY.reset()
-        result = self.client.design(mesh, corners, options)
+        result = (client or self.client).design(mesh, corners, options)
         sent = PROXY.calls("design")
         self.assertEqual(len(sent), 1)
         self.assertIn(KEY, sent[0], "no patch key sent")
@@ -201,6 +201,10 @@ class RoutingKeyTest(unittest.TestCase):
             seen.add(sent)
         # String and number forms of one value share a key; different values do not.
         self.assertEqual(len(seen), 4)
+        # Another Client of the process (the plugins make one per operation) loads it no more.
+        sent, daemon = self.design_key(mesh, corners, QUICK, gs.Client(PROXY.url))
+        self.assertEqual(len(PROXY.calls("load")), 0)
+        self.assertEqual(sent, daemon)
 
     def test_a_file_the_loader_repairs(self):
         positions, indices, corners = dome()

@@ -69,8 +69,13 @@ BACKOFF_MAX = 4.0
 # HTTP statuses the daemon did not answer itself (the proxy found no replica, or lost the one
 # serving the call) or answered because it is shutting down: the call is made again.
 RETRY_STATUSES = frozenset([502, 503])
-# Meshes whose loaded form (for the patch key) a client remembers, least recently used dropped.
+# Meshes whose loaded form (for the patch key) the process remembers, least recently used dropped.
 MESH_MEMO = 8
+# (server, mesh identity) -> routing.MeshDigest or None, shared by every Client of the process: the
+# plugins make a new Client per operation, and the loaded form of a mesh is the daemon's, not the
+# client's.
+_MESHES = collections.OrderedDict()
+_MESHES_LOCK = threading.Lock()
 
 
 def retry_delay(retry, backoff=BACKOFF, backoff_max=BACKOFF_MAX, draw=random.random):
@@ -316,8 +321,6 @@ class Client:
         # is kept as it is.
         given = any(name.lower() == PATCH_KEY_HEADER.lower() for name in self.headers)
         self.patch_keys = bool(patch_keys) and not given
-        self._meshes = collections.OrderedDict()  # mesh identity -> routing.MeshDigest or None
-        self._meshes_lock = threading.Lock()
 
     # ---- the API's methods -----------------------------------------------------------------
 
@@ -407,8 +410,9 @@ class Client:
         The key hashes the mesh as the daemon loads it (after welding duplicates, dropping
         isolated vertices and degenerate faces, fixing the orientation), which only the daemon's
         loader knows for sure: the first key on a mesh asks the daemon (``Load``, one call, no
-        patch work) and remembers the loaded mesh's hash state (the last 8 meshes, by content),
-        so the keys of further designs on it (an angle slider, other member counts) cost nothing.
+        patch work) and remembers the loaded mesh's hash state (the last 8 meshes of the process,
+        by server and content), so the keys of further designs on it (an angle slider, other
+        member counts), from any Client of the process, cost nothing.
         """
         deadline = _deadline(timeout if timeout is not None else self.timeout)
         digest = self._mesh_digest(mesh, None, cancel, deadline)
@@ -488,10 +492,11 @@ class Client:
         identity = _mesh_identity(mesh)
         if identity is None:
             return None
-        with self._meshes_lock:
-            if identity in self._meshes:
-                self._meshes.move_to_end(identity)
-                return self._meshes[identity]
+        identity = (self.server + self._prefix, identity)
+        with _MESHES_LOCK:
+            if identity in _MESHES:
+                _MESHES.move_to_end(identity)
+                return _MESHES[identity]
         try:
             loaded = self._call(
                 "load", encode_request({"mesh": mesh}), progress, cancel, deadline, stream=False
@@ -510,10 +515,10 @@ class Client:
             return None  # a full queue, a token refused: the call answers for itself
         except (KeyError, TypeError, ValueError, AttributeError, OverflowError):
             digest = None  # an answer without the loaded arrays: no key rather than a wrong one
-        with self._meshes_lock:
-            self._meshes[identity] = digest
-            while len(self._meshes) > MESH_MEMO:
-                self._meshes.popitem(last=False)
+        with _MESHES_LOCK:
+            _MESHES[identity] = digest
+            while len(_MESHES) > MESH_MEMO:
+                _MESHES.popitem(last=False)
         return digest
 
     # ---- internals -------------------------------------------------------------------------
