@@ -327,6 +327,10 @@ v1::LoadResult run_load(const v1::LoadRequest& request, const Progress& progress
   for (int k = 0; k < 3; ++k) report.add_bounding_box(hi[k]);
   if (corners[0] >= 0)
     for (int v : corners) out.mutable_example_corners()->add_vertices(v);
+  const std::vector<int>& map = load.vertex_of_file_vertex;
+  bool identity = static_cast<int>(map.size()) == mesh.vertex_count();
+  for (size_t v = 0; identity && v < map.size(); ++v) identity = map[v] == static_cast<int>(v);
+  if (!identity) out.mutable_vertex_map()->Add(map.begin(), map.end());
   return out;
 }
 

@@ -99,11 +99,38 @@ TEST(Gateway, LoadReadsFileBytesWithTheCliLoader) {
   ASSERT_EQ(result.report().warnings_size(), static_cast<int>(local.warnings.size()));
   EXPECT_EQ(result.report().bounding_box_size(), 6);
   EXPECT_EQ(result.report().bounding_box(3), 1.0);
+  // Where each file vertex went: the duplicate (file vertex 4) was welded to vertex 0.
+  EXPECT_EQ(std::vector<int>(result.vertex_map().begin(), result.vertex_map().end()),
+            (std::vector<int>{0, 1, 2, 3, 0}));
   // The loaded arrays come back as a mesh to send as it is.
   v1::PatchRequest patch;
   *patch.mutable_mesh() = result.mesh();
   LoadReport again;
   EXPECT_EQ(to_mesh(patch.mesh(), &again).face_count(), mesh.face_count());
+}
+
+TEST(Gateway, LoadMapsEverySentVertexToTheLoadedMesh) {
+  TestDaemon daemon;
+  // Packed arrays with an isolated vertex (1, removed) and a duplicate of vertex 2 (5, welded):
+  // the loaded mesh renumbers 0 2 3 4 as 0 1 2 3.
+  const std::string body = R"({"mesh": {"positions": [0,0,0, 5,5,5, 1,0,0, 1,1,0, 0,1,0, 1,0,0],
+                                         "indices": [0,5,3, 0,3,4]}})";
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/load", body, kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  v1::LoadResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  EXPECT_EQ(result.report().isolated_vertices_removed(), 1);
+  EXPECT_EQ(result.report().duplicate_vertices_merged(), 1);
+  EXPECT_EQ(std::vector<int>(result.vertex_map().begin(), result.vertex_map().end()),
+            (std::vector<int>{0, -1, 1, 2, 3, 1}));
+  // Each sent vertex that stayed is where the map says.
+  const std::vector<double> sent = {0, 0, 0, 5, 5, 5, 1, 0, 0, 1, 1, 0, 0, 1, 0, 1, 0, 0};
+  ASSERT_EQ(result.vertex_map_size(), 6);
+  for (int v = 0; v < 6; ++v) {
+    if (result.vertex_map(v) < 0) continue;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(result.mesh().positions(3 * result.vertex_map(v) + k), sent[3 * v + k]) << v;
+  }
 }
 
 TEST(Gateway, LoadErrorsNameTheFileFieldAndTheLine) {
@@ -148,6 +175,7 @@ TEST(Gateway, ExamplesAndExampleMeshes) {
     ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(mesh.body, &loaded).ok());
     EXPECT_EQ(loaded.mesh().positions_size(), 3 * example.vertices()) << example.name();
     ASSERT_EQ(loaded.example_corners().vertices_size(), 4);
+    EXPECT_EQ(loaded.vertex_map_size(), 0) << "nothing renumbered: empty (the identity)";
     for (int k = 0; k < 4; ++k) EXPECT_EQ(loaded.example_corners().vertices(k), example.corners(k));
   }
 }
