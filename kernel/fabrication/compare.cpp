@@ -473,23 +473,26 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     IcpResult icp;
     int flip = 0, turn = 0;
   };
-  std::vector<Orientation> orientations;
-  int candidate = 0;
+  // The 24 starts are independent: one job each, on all threads.
   constexpr int kTurns = 12;
-  for (int flip = 0; flip < 2; ++flip)
-    for (int turn = 0; turn < kTurns; ++turn, ++candidate) {
-      progress.report("compare: coarse registration", 0.5 * candidate / (2.0 * kTurns));
-      Eigen::Matrix3d A =
-          Eigen::AngleAxisd(2 * std::numbers::pi * turn / kTurns, Vec3::UnitX()).toRotationMatrix();
-      if (flip) A = A * Eigen::Vector3d(-1, -1, 1).asDiagonal();
-      Pose start;
-      start.rotation = ref_axes * A * scan_axes.transpose();
-      start.translation = ref_mean - start.rotation * scan_mean;
-      const IcpResult result = icp(coarse_points, patch, start, 12, 0.8, progress);
-      if (debug)
-        std::fprintf(stderr, "candidate flip %d turn %d score %g\n", flip, turn, result.score);
-      orientations.push_back({result, flip, turn});
-    }
+  std::vector<Orientation> orientations(2 * kTurns);
+  parallel_for(
+      orientations.size(),
+      [&](size_t candidate, const Progress& inner) {
+        const int flip = static_cast<int>(candidate) / kTurns;
+        const int turn = static_cast<int>(candidate) % kTurns;
+        Eigen::Matrix3d A = Eigen::AngleAxisd(2 * std::numbers::pi * turn / kTurns, Vec3::UnitX())
+                                .toRotationMatrix();
+        if (flip) A = A * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+        Pose start;
+        start.rotation = ref_axes * A * scan_axes.transpose();
+        start.translation = ref_mean - start.rotation * scan_mean;
+        orientations[candidate] = {icp(coarse_points, patch, start, 12, 0.8, inner), flip, turn};
+      },
+      progress, {options.threads, "compare: coarse registration", 0, 0.5});
+  if (debug)
+    for (const Orientation& o : orientations)
+      std::fprintf(stderr, "candidate flip %d turn %d score %g\n", o.flip, o.turn, o.icp.score);
   // The three best orientations that differ by more than 20 degrees: a shell with a symmetry
   // (a vault turned by half a turn) fits its smooth target in each, and only the lamellas tell
   // them apart.
@@ -508,49 +511,74 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   if (debug) std::fprintf(stderr, "orientation %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
   const std::vector<Vec3> probe = subset(300);
+  const std::vector<Vec3> patch_points = subset(3000);
   const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
-  constexpr int kSteps = 10;
+  constexpr int kSteps = 10, kSide = 2 * kSteps + 1;
   const double step = 0.008 * lamellas.extent;
-  std::vector<double> error(probe.size());
-  IcpResult chosen;
-  chosen.score = 1e300;
+  // (1b) Each orientation settled on the patch with more points.
+  std::vector<Pose> poses(distinct.size());
+  parallel_for(distinct.size(),
+               [&](size_t o, const Progress& inner) {
+                 poses[o] = icp(patch_points, patch, distinct[o].icp.pose, 20, 0.8, inner).pose;
+               },
+               progress, {options.threads, "compare: coarse registration", 0.5, 0.6});
+  // (2) Offsets in the plane of the shell, every orientation's grid on all threads.
+  std::vector<std::pair<double, Vec3>> scores(distinct.size() * kSide * kSide);
+  parallel_for(scores.size(),
+               [&](size_t job, const Progress& inner) {
+                 inner.check();
+                 const size_t o = job / (kSide * kSide);
+                 const int i = static_cast<int>(job % (kSide * kSide)) / kSide - kSteps;
+                 const int j = static_cast<int>(job % kSide) - kSteps;
+                 const Vec3 offset = step * (i * e1 + j * e2);
+                 std::vector<double> error(probe.size());
+                 for (size_t k = 0; k < probe.size(); ++k) {
+                   const Vec3 p = poses[o].apply(probe[k]) + offset;
+                   const auto [index, d2] = lamellas.nearest(p);
+                   error[k] = lamellas.estimate(p, index, d2);
+                 }
+                 const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
+                 std::nth_element(error.begin(), error.begin() + keep, error.end());
+                 double sum = 0;
+                 for (size_t k = 0; k <= keep; ++k) sum += error[k];
+                 scores[job] = {sum / (keep + 1), offset};
+               },
+               progress, {options.threads, "compare: coarse registration", 0.6, 0.8});
+  // (3) The best few offsets of each orientation, refined against the lamellas.
+  constexpr size_t kBest = 3;
+  std::vector<std::pair<size_t, Pose>> starts;  // (orientation, start)
+  std::vector<double> start_offset_score;
   for (size_t o = 0; o < distinct.size(); ++o) {
-    progress.report("compare: coarse registration", 0.5 + 0.4 * o / distinct.size());
-    const Pose pose = icp(subset(3000), patch, distinct[o].icp.pose, 20, 0.8, progress).pose;
-    // (2) Offsets in the plane of the shell.
-    std::vector<std::pair<double, Vec3>> offsets;
-    for (int i = -kSteps; i <= kSteps; ++i)
-      for (int j = -kSteps; j <= kSteps; ++j) {
-        progress.check();
-        const Vec3 offset = step * (i * e1 + j * e2);
-        for (size_t k = 0; k < probe.size(); ++k) {
-          const Vec3 p = pose.apply(probe[k]) + offset;
-          const auto [index, d2] = lamellas.nearest(p);
-          error[k] = lamellas.estimate(p, index, d2);
-        }
-        const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
-        std::nth_element(error.begin(), error.begin() + keep, error.end());
-        double sum = 0;
-        for (size_t k = 0; k <= keep; ++k) sum += error[k];
-        offsets.push_back({sum / (keep + 1), offset});
-      }
+    std::vector<std::pair<double, Vec3>> offsets(scores.begin() + o * kSide * kSide,
+                                                 scores.begin() + (o + 1) * kSide * kSide);
     std::sort(offsets.begin(), offsets.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
-    // (3) The best few offsets, refined against the lamellas.
-    for (size_t k = 0; k < std::min<size_t>(3, offsets.size()); ++k) {
-      Pose start = pose;
+    for (size_t k = 0; k < std::min(kBest, offsets.size()); ++k) {
+      Pose start = poses[o];
       start.translation += offsets[k].second;
-      const IcpResult result = icp(coarse_points, lamellas, start, 20, 0.8, progress);
-      if (debug)
-        std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k,
-                     offsets[k].first, result.score);
-      if (result.score < chosen.score) {
-        chosen = result;
-        out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
-                     "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
-                     " degrees about the normal axis, ICP on the target patch, in-plane offset "
-                     "search on the lamellas";
-      }
+      starts.push_back({o, start});
+      start_offset_score.push_back(offsets[k].first);
+    }
+  }
+  std::vector<IcpResult> refined(starts.size());
+  parallel_for(starts.size(),
+               [&](size_t k, const Progress& inner) {
+                 refined[k] = icp(coarse_points, lamellas, starts[k].second, 20, 0.8, inner);
+               },
+               progress, {options.threads, "compare: coarse registration", 0.8, 0.9});
+  IcpResult chosen;
+  chosen.score = 1e300;
+  for (size_t k = 0; k < starts.size(); ++k) {
+    const size_t o = starts[k].first;
+    if (debug)
+      std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k % kBest,
+                   start_offset_score[k], refined[k].score);
+    if (refined[k].score < chosen.score) {
+      chosen = refined[k];
+      out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
+                   "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
+                   " degrees about the normal axis, ICP on the target patch, in-plane offset "
+                   "search on the lamellas";
     }
   }
   if (debug) std::fprintf(stderr, "offsets %.3f s (cpu %.3f s)\n", since(t0), cpu());
