@@ -125,10 +125,19 @@ struct Reference {
     kd->findNeighbors(result, p.data(), nanoflann::SearchParams(16));
     return {index, d2};
   }
-  /// Exact distance to the triangles (the nearest sample as the AABB tree's hint).
-  double distance(const Vec3& p) const {
-    const Vec3& hint = samples[nearest(p).first];
-    return std::sqrt(tree->squared_distance(to_cgal(p), to_cgal(hint)));
+  /// Exact distance to the triangles. The AABB tree's answer is exact whatever the hint (a
+  /// point on the surface: its distance bounds the search); a close hint only makes it cheaper.
+  /// `last` is the closest point of the previous query (points come in Morton order, so it is
+  /// usually near): used when it is within two sample spacings of `p`, else the k-d tree's
+  /// nearest sample. `last` is updated to this query's closest point.
+  double distance(const Vec3& p, Vec3& last, bool& have_last) const {
+    Vec3 hint = last;
+    if (!have_last || (p - last).squaredNorm() > 4 * spacing * spacing)
+      hint = samples[nearest(p).first];
+    const Kernel::Point_3 c = tree->closest_point(to_cgal(p), to_cgal(hint));
+    last = Vec3(c.x(), c.y(), c.z());
+    have_last = true;
+    return (p - last).norm();
   }
   /// Distance estimate from the nearest sample: the plane distance where the sample is close
   /// along the surface, the straight distance beyond the sampling's reach.
@@ -611,12 +620,14 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   parallel_for((n + chunk - 1) / chunk,
                [&](size_t job, const Progress& inner) {
                  const size_t from = job * chunk, to = std::min(n, from + chunk);
+                 Vec3 on_lamellas, on_patch;
+                 bool have_lamellas = false, have_patch = false;
                  for (size_t k = from; k < to; ++k) {
                    if ((k & 1023) == 0) inner.check();
                    const size_t i = order_z[k];
                    const Vec3 p = fine.pose.apply(scan[i]);
-                   out.deployment_distance[i] = lamellas.distance(p);
-                   out.target_distance[i] = patch.distance(p);
+                   out.deployment_distance[i] = lamellas.distance(p, on_lamellas, have_lamellas);
+                   out.target_distance[i] = patch.distance(p, on_patch, have_patch);
                  }
                },
                progress, {options.threads, "compare: distances", 0, 1});
