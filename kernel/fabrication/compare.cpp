@@ -519,6 +519,13 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   }
   if (debug) std::fprintf(stderr, "orientation %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
+  // Sub-stage CPU times for the debug lines.
+  double c_sub = process_cpu_seconds();
+  const auto sub_cpu = [&] {
+    const double c = process_cpu_seconds(), d = c - c_sub;
+    c_sub = c;
+    return d;
+  };
   const std::vector<Vec3> probe = subset(300);
   const std::vector<Vec3> patch_points = subset(3000);
   const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
@@ -531,6 +538,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                  poses[o] = icp(patch_points, patch, distinct[o].icp.pose, 20, 0.8, inner).pose;
                },
                progress, {options.threads, "compare: coarse registration", 0.5, 0.6});
+  if (debug) std::fprintf(stderr, "  patch ICPs cpu %.3f s\n", sub_cpu());
   // (2) Offsets in the plane of the shell, every orientation's grid on all threads. Most of
   // the grid's probes are far from every lamella, and a k-d tree's nearest-neighbour query costs
   // about the number of samples within that distance: a tenth of the samples scores the grid
@@ -558,6 +566,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                  scores[job] = {sum / (keep + 1), offset};
                },
                progress, {options.threads, "compare: coarse registration", 0.6, 0.8});
+  if (debug) std::fprintf(stderr, "  offset grid cpu %.3f s\n", sub_cpu());
   // (3) The best few offsets of each orientation, refined against the lamellas.
   constexpr size_t kBest = 3;
   std::vector<std::pair<size_t, Pose>> starts;  // (orientation, start)
@@ -595,6 +604,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                    "search on the lamellas";
     }
   }
+  if (debug) std::fprintf(stderr, "  refinements cpu %.3f s\n", sub_cpu());
   if (debug) std::fprintf(stderr, "offsets %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
 
