@@ -29,6 +29,7 @@ int bench_resolution(const std::vector<double>& edges, int repeats, const std::s
 
 /// `gridshell bench fabricate` (bench_fabricate.cpp): kits of the seven examples and compare on
 /// synthetic scans of `scan_points` points; section "fabricate".
-int bench_fabricate(int repeats, int scan_points, const std::string& out, bool no_write);
+int bench_fabricate(int repeats, int scan_points, const std::string& out, bool no_write,
+                    bool compare_only = false);
 
 }  // namespace gridshell::cli

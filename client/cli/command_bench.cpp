@@ -44,6 +44,7 @@ struct BenchArguments {
   int request_threads = 1;    // interactive: --request-threads of the daemon it starts
   int redesign_threads = 0;   // interactive: --redesign-threads of the daemon it starts
   int scan_points = 1000000;  // fabricate: points of the synthetic scans
+  bool compare_only = false;  // fabricate: the scan comparison alone
 };
 
 /// CPU time of the whole process (all threads) in s.
@@ -292,6 +293,8 @@ Command add_bench_command(CLI::App& app) {
                              "interactive", "sweep", "fabricate"}));
   sub->add_option("--scan-points", args->scan_points, "fabricate: points of the synthetic scans")
       ->capture_default_str();
+  sub->add_flag("--compare-only", args->compare_only,
+                "fabricate: the scan comparison alone (printed, not written)");
   sub->add_option("--edges", args->edges,
                   "rod edges per interval between crossings to compare (resolution)")
       ->delimiter(',')
@@ -328,7 +331,8 @@ Command add_bench_command(CLI::App& app) {
     if (args->what == "fabricate") {
       if (args->scan_points < 1000 || args->scan_points > 100000000)
         throw InvalidInput("--scan-points", "must be 1000..100000000");
-      return bench_fabricate(args->repeats, args->scan_points, args->out, args->no_write);
+      return bench_fabricate(args->repeats, args->scan_points, args->out, args->no_write,
+                             args->compare_only);
     }
     if (args->what == "resolution") {
       if (args->edges.empty()) throw InvalidInput("--edges", "give at least one resolution");

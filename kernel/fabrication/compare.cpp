@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <memory>
 #include <nanoflann.hpp>
@@ -35,6 +36,13 @@ using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle
 using AabbTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 
 Kernel::Point_3 to_cgal(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
+
+/// CPU time of the process (all threads), for the stage times GRIDSHELL_DEBUG_COMPARE prints.
+double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 /// nanoflann's view of a point list.
 struct PointList {
@@ -117,10 +125,19 @@ struct Reference {
     kd->findNeighbors(result, p.data(), nanoflann::SearchParams(16));
     return {index, d2};
   }
-  /// Exact distance to the triangles (the nearest sample as the AABB tree's hint).
-  double distance(const Vec3& p) const {
-    const Vec3& hint = samples[nearest(p).first];
-    return std::sqrt(tree->squared_distance(to_cgal(p), to_cgal(hint)));
+  /// Exact distance to the triangles. The AABB tree's answer is exact whatever the hint (a
+  /// point on the surface: its distance bounds the search); a close hint only makes it cheaper.
+  /// `last` is the closest point of the previous query (points come in Morton order, so it is
+  /// usually near): used when it is within two sample spacings of `p`, else the k-d tree's
+  /// nearest sample. `last` is updated to this query's closest point.
+  double distance(const Vec3& p, Vec3& last, bool& have_last) const {
+    Vec3 hint = last;
+    if (!have_last || (p - last).squaredNorm() > 4 * spacing * spacing)
+      hint = samples[nearest(p).first];
+    const Kernel::Point_3 c = tree->closest_point(to_cgal(p), to_cgal(hint));
+    last = Vec3(c.x(), c.y(), c.z());
+    have_last = true;
+    return (p - last).norm();
   }
   /// Distance estimate from the nearest sample: the plane distance where the sample is close
   /// along the surface, the straight distance beyond the sampling's reach.
@@ -263,6 +280,42 @@ DistanceStatistics statistics(const std::vector<double>& distance, const std::ve
   return s;
 }
 
+/// 21 bits of each coordinate interleaved (x lowest): the Z-order curve's key.
+std::uint64_t morton_key(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  const auto spread = [](std::uint64_t v) {
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+  };
+  return spread(x) | spread(y) << 1 | spread(z) << 2;
+}
+
+/// Indices of `points` (moved by `pose`) sorted along the Z-order curve of their bounding box.
+std::vector<std::uint32_t> morton_order(const std::vector<Vec3>& points, const Pose& pose) {
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  for (const Vec3& p : points) {
+    const Vec3 q = pose.apply(p);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  const double scale = 2097151.0 / std::max((hi - lo).maxCoeff(), 1e-300);
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vec3 q = (pose.apply(points[i]) - lo) * scale;
+    keyed[i] = {morton_key(static_cast<std::uint32_t>(q.x()), static_cast<std::uint32_t>(q.y()),
+                           static_cast<std::uint32_t>(q.z())),
+                static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order(points.size());
+  for (size_t i = 0; i < points.size(); ++i) order[i] = keyed[i].second;
+  return order;
+}
+
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -377,6 +430,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   check_point_cloud(scan, "scan");
   progress.report("compare: reference", 0);
   const auto t_reference = std::chrono::steady_clock::now();
+  const double c_reference = process_cpu_seconds();
   const Reference lamellas(deployment, options.reference_samples, options.seed);
   std::vector<Triangle3> target_triangles;
   for (const Face& f : target.faces())
@@ -387,8 +441,9 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
 
   if (std::getenv("GRIDSHELL_DEBUG_COMPARE"))
     std::fprintf(
-        stderr, "references %.3f s\n",
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_reference).count());
+        stderr, "references %.3f s (cpu %.3f s)\n",
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_reference).count(),
+        process_cpu_seconds() - c_reference);
   // A fixed pseudo-random subset of the scan for ICP.
   std::mt19937_64 random(options.seed);
   std::vector<size_t> order(scan.size());
@@ -410,7 +465,14 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   // by ICP against the lamellas.
   const bool debug = std::getenv("GRIDSHELL_DEBUG_COMPARE") != nullptr;
   const auto clock = [] { return std::chrono::steady_clock::now(); };
+  double c0 = process_cpu_seconds();
+  // Wall time since t0, and (in the debug line) the process's CPU time since c0.
   const auto since = [&](auto t0) { return std::chrono::duration<double>(clock() - t0).count(); };
+  const auto cpu = [&] {
+    const double c = process_cpu_seconds(), d = c - c0;
+    c0 = c;
+    return d;
+  };
   auto t0 = clock();
   ScanComparison out;
   const std::vector<Vec3> coarse_points = subset(1500);
@@ -420,23 +482,26 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     IcpResult icp;
     int flip = 0, turn = 0;
   };
-  std::vector<Orientation> orientations;
-  int candidate = 0;
+  // The 24 starts are independent: one job each, on all threads.
   constexpr int kTurns = 12;
-  for (int flip = 0; flip < 2; ++flip)
-    for (int turn = 0; turn < kTurns; ++turn, ++candidate) {
-      progress.report("compare: coarse registration", 0.5 * candidate / (2.0 * kTurns));
-      Eigen::Matrix3d A =
-          Eigen::AngleAxisd(2 * std::numbers::pi * turn / kTurns, Vec3::UnitX()).toRotationMatrix();
-      if (flip) A = A * Eigen::Vector3d(-1, -1, 1).asDiagonal();
-      Pose start;
-      start.rotation = ref_axes * A * scan_axes.transpose();
-      start.translation = ref_mean - start.rotation * scan_mean;
-      const IcpResult result = icp(coarse_points, patch, start, 12, 0.8, progress);
-      if (debug)
-        std::fprintf(stderr, "candidate flip %d turn %d score %g\n", flip, turn, result.score);
-      orientations.push_back({result, flip, turn});
-    }
+  std::vector<Orientation> orientations(2 * kTurns);
+  parallel_for(
+      orientations.size(),
+      [&](size_t candidate, const Progress& inner) {
+        const int flip = static_cast<int>(candidate) / kTurns;
+        const int turn = static_cast<int>(candidate) % kTurns;
+        Eigen::Matrix3d A = Eigen::AngleAxisd(2 * std::numbers::pi * turn / kTurns, Vec3::UnitX())
+                                .toRotationMatrix();
+        if (flip) A = A * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+        Pose start;
+        start.rotation = ref_axes * A * scan_axes.transpose();
+        start.translation = ref_mean - start.rotation * scan_mean;
+        orientations[candidate] = {icp(coarse_points, patch, start, 12, 0.8, inner), flip, turn};
+      },
+      progress, {options.threads, "compare: coarse registration", 0, 0.5});
+  if (debug)
+    for (const Orientation& o : orientations)
+      std::fprintf(stderr, "candidate flip %d turn %d score %g\n", o.flip, o.turn, o.icp.score);
   // The three best orientations that differ by more than 20 degrees: a shell with a symmetry
   // (a vault turned by half a turn) fits its smooth target in each, and only the lamellas tell
   // them apart.
@@ -452,55 +517,95 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     if (!near) distinct.push_back(o);
     if (distinct.size() == 3) break;
   }
-  if (debug) std::fprintf(stderr, "orientation %.3f s\n", since(t0));
+  if (debug) std::fprintf(stderr, "orientation %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
+  // Sub-stage CPU times for the debug lines.
+  double c_sub = process_cpu_seconds();
+  const auto sub_cpu = [&] {
+    const double c = process_cpu_seconds(), d = c - c_sub;
+    c_sub = c;
+    return d;
+  };
   const std::vector<Vec3> probe = subset(300);
+  const std::vector<Vec3> patch_points = subset(3000);
   const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
-  constexpr int kSteps = 10;
+  constexpr int kSteps = 10, kSide = 2 * kSteps + 1;
   const double step = 0.008 * lamellas.extent;
-  std::vector<double> error(probe.size());
-  IcpResult chosen;
-  chosen.score = 1e300;
+  // (1b) Each orientation settled on the patch with more points.
+  std::vector<Pose> poses(distinct.size());
+  parallel_for(distinct.size(),
+               [&](size_t o, const Progress& inner) {
+                 poses[o] = icp(patch_points, patch, distinct[o].icp.pose, 20, 0.8, inner).pose;
+               },
+               progress, {options.threads, "compare: coarse registration", 0.5, 0.6});
+  if (debug) std::fprintf(stderr, "  patch ICPs cpu %.3f s\n", sub_cpu());
+  // (2) Offsets in the plane of the shell, every orientation's grid on all threads. Most of
+  // the grid's probes are far from every lamella, and a k-d tree's nearest-neighbour query costs
+  // about the number of samples within that distance: a tenth of the samples scores the grid
+  // at a fraction of the cost, the spacing term of the estimate absorbing the coarser sampling.
+  const Reference sparse(deployment, std::max(2000, options.reference_samples / 10),
+                         options.seed + 2);
+  std::vector<std::pair<double, Vec3>> scores(distinct.size() * kSide * kSide);
+  parallel_for(scores.size(),
+               [&](size_t job, const Progress& inner) {
+                 inner.check();
+                 const size_t o = job / (kSide * kSide);
+                 const int i = static_cast<int>(job % (kSide * kSide)) / kSide - kSteps;
+                 const int j = static_cast<int>(job % kSide) - kSteps;
+                 const Vec3 offset = step * (i * e1 + j * e2);
+                 std::vector<double> error(probe.size());
+                 for (size_t k = 0; k < probe.size(); ++k) {
+                   const Vec3 p = poses[o].apply(probe[k]) + offset;
+                   const auto [index, d2] = sparse.nearest(p);
+                   error[k] = sparse.estimate(p, index, d2);
+                 }
+                 const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
+                 std::nth_element(error.begin(), error.begin() + keep, error.end());
+                 double sum = 0;
+                 for (size_t k = 0; k <= keep; ++k) sum += error[k];
+                 scores[job] = {sum / (keep + 1), offset};
+               },
+               progress, {options.threads, "compare: coarse registration", 0.6, 0.8});
+  if (debug) std::fprintf(stderr, "  offset grid cpu %.3f s\n", sub_cpu());
+  // (3) The best few offsets of each orientation, refined against the lamellas.
+  constexpr size_t kBest = 3;
+  std::vector<std::pair<size_t, Pose>> starts;  // (orientation, start)
+  std::vector<double> start_offset_score;
   for (size_t o = 0; o < distinct.size(); ++o) {
-    progress.report("compare: coarse registration", 0.5 + 0.4 * o / distinct.size());
-    const Pose pose = icp(subset(3000), patch, distinct[o].icp.pose, 20, 0.8, progress).pose;
-    // (2) Offsets in the plane of the shell.
-    std::vector<std::pair<double, Vec3>> offsets;
-    for (int i = -kSteps; i <= kSteps; ++i)
-      for (int j = -kSteps; j <= kSteps; ++j) {
-        progress.check();
-        const Vec3 offset = step * (i * e1 + j * e2);
-        for (size_t k = 0; k < probe.size(); ++k) {
-          const Vec3 p = pose.apply(probe[k]) + offset;
-          const auto [index, d2] = lamellas.nearest(p);
-          error[k] = lamellas.estimate(p, index, d2);
-        }
-        const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
-        std::nth_element(error.begin(), error.begin() + keep, error.end());
-        double sum = 0;
-        for (size_t k = 0; k <= keep; ++k) sum += error[k];
-        offsets.push_back({sum / (keep + 1), offset});
-      }
+    std::vector<std::pair<double, Vec3>> offsets(scores.begin() + o * kSide * kSide,
+                                                 scores.begin() + (o + 1) * kSide * kSide);
     std::sort(offsets.begin(), offsets.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
-    // (3) The best few offsets, refined against the lamellas.
-    for (size_t k = 0; k < std::min<size_t>(3, offsets.size()); ++k) {
-      Pose start = pose;
+    for (size_t k = 0; k < std::min(kBest, offsets.size()); ++k) {
+      Pose start = poses[o];
       start.translation += offsets[k].second;
-      const IcpResult result = icp(coarse_points, lamellas, start, 20, 0.8, progress);
-      if (debug)
-        std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k,
-                     offsets[k].first, result.score);
-      if (result.score < chosen.score) {
-        chosen = result;
-        out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
-                     "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
-                     " degrees about the normal axis, ICP on the target patch, in-plane offset "
-                     "search on the lamellas";
-      }
+      starts.push_back({o, start});
+      start_offset_score.push_back(offsets[k].first);
     }
   }
-  if (debug) std::fprintf(stderr, "offsets %.3f s\n", since(t0));
+  std::vector<IcpResult> refined(starts.size());
+  parallel_for(starts.size(),
+               [&](size_t k, const Progress& inner) {
+                 refined[k] = icp(coarse_points, lamellas, starts[k].second, 20, 0.8, inner);
+               },
+               progress, {options.threads, "compare: coarse registration", 0.8, 0.9});
+  IcpResult chosen;
+  chosen.score = 1e300;
+  for (size_t k = 0; k < starts.size(); ++k) {
+    const size_t o = starts[k].first;
+    if (debug)
+      std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k % kBest,
+                   start_offset_score[k], refined[k].score);
+    if (refined[k].score < chosen.score) {
+      chosen = refined[k];
+      out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
+                   "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
+                   " degrees about the normal axis, ICP on the target patch, in-plane offset "
+                   "search on the lamellas";
+    }
+  }
+  if (debug) std::fprintf(stderr, "  refinements cpu %.3f s\n", sub_cpu());
+  if (debug) std::fprintf(stderr, "offsets %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
 
   // Refinement on a larger subset, outliers rejected at three robust standard deviations.
@@ -511,26 +616,32 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   out.translation = fine.pose.translation;
   out.icp_iterations = fine.iterations;
   if (debug)
-    std::fprintf(stderr, "fine ICP %.3f s, %d iterations, score %g\n", since(t0), fine.iterations,
-                 fine.score);
+    std::fprintf(stderr, "fine ICP %.3f s (cpu %.3f s), %d iterations, score %g\n", since(t0),
+                 cpu(), fine.iterations, fine.score);
   t0 = clock();
 
-  // Exact distances of every point, in parallel chunks.
-  const size_t n = scan.size(), chunk = 1 << 15;
+  // Exact distances of every point, in parallel chunks of points taken in Morton (Z-curve)
+  // order: a scan file's order may be anything (the bench's is shuffled), and neighbouring
+  // queries walk the same branches of the k-d and AABB trees, which then stay in cache.
+  const size_t n = scan.size(), chunk = 1 << 14;
+  const std::vector<std::uint32_t> order_z = morton_order(scan, fine.pose);
   out.deployment_distance.assign(n, 0);
   out.target_distance.assign(n, 0);
   parallel_for((n + chunk - 1) / chunk,
                [&](size_t job, const Progress& inner) {
                  const size_t from = job * chunk, to = std::min(n, from + chunk);
-                 for (size_t i = from; i < to; ++i) {
-                   if ((i & 1023) == 0) inner.check();
+                 Vec3 on_lamellas, on_patch;
+                 bool have_lamellas = false, have_patch = false;
+                 for (size_t k = from; k < to; ++k) {
+                   if ((k & 1023) == 0) inner.check();
+                   const size_t i = order_z[k];
                    const Vec3 p = fine.pose.apply(scan[i]);
-                   out.deployment_distance[i] = lamellas.distance(p);
-                   out.target_distance[i] = patch.distance(p);
+                   out.deployment_distance[i] = lamellas.distance(p, on_lamellas, have_lamellas);
+                   out.target_distance[i] = patch.distance(p, on_patch, have_patch);
                  }
                },
                progress, {options.threads, "compare: distances", 0, 1});
-  if (debug) std::fprintf(stderr, "distances %.3f s\n", since(t0));
+  if (debug) std::fprintf(stderr, "distances %.3f s (cpu %.3f s)\n", since(t0), cpu());
   // Outliers: farther from the lamellas than four robust standard deviations of all distances.
   const double sigma = 1.4826 * median_of(out.deployment_distance);
   out.rejection_distance = std::max(4 * sigma, 1e-9 * lamellas.extent);

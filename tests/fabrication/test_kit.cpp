@@ -15,6 +15,7 @@
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/fabrication/kit_export.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/mesh/surface_point.h"
 
 namespace gridshell {
 namespace {
@@ -313,6 +314,29 @@ TEST(Compare, RegistersASmallScanUnderAnyMotion) {
   EXPECT_NEAR(c.deployment.rms, 0.005, 0.001);
   EXPECT_EQ(c.used + c.rejected, 4000);
   EXPECT_EQ(c.deployment.histogram_counts.size(), 20u);
+  // The distances are exact whatever hint the AABB tree was given (the previous point's closest
+  // point in Morton order, or the nearest sample): every one against brute force over all
+  // triangles with closest_point_on_triangle (an independent oracle, not CGAL).
+  const auto brute = [](const Vec3& q, const std::vector<Triangle3>& surface) {
+    double best = 1e300;
+    for (const Triangle3& t : surface) {
+      const Vec3 w = closest_point_on_triangle(q, t[0], t[1], t[2]);  // barycentric weights
+      best = std::min(best, (q - (w[0] * t[0] + w[1] * t[1] + w[2] * t[2])).norm());
+    }
+    return best;
+  };
+  const std::vector<Triangle3> plane = {
+      {target.vertices()[0], target.vertices()[1], target.vertices()[2]},
+      {target.vertices()[0], target.vertices()[2], target.vertices()[3]}};
+  double worst_deployment = 0, worst_target = 0;
+  for (size_t i = 0; i < scan.size(); ++i) {
+    const Vec3 q = c.rotation * scan[i] + c.translation;
+    worst_deployment =
+        std::max(worst_deployment, std::abs(c.deployment_distance[i] - brute(q, triangles)));
+    worst_target = std::max(worst_target, std::abs(c.target_distance[i] - brute(q, plane)));
+  }
+  EXPECT_LT(worst_deployment, 1e-9);
+  EXPECT_LT(worst_target, 1e-9);
 }
 
 }  // namespace
