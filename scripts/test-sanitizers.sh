@@ -39,8 +39,10 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:abort_on_error=1"
 export GRIDSHELL_TEST_TIME_SCALE="${GRIDSHELL_TEST_TIME_SCALE:-5}"
 
 # Also left out: Compare.RecoversRigidMotionWithNoiseOutliersAndPartialView (a deployment and a
-# 100k-point scan; the same registration runs sanitized in Compare.RegistersASmallScanUnderAnyMotion).
-subset=(-E '(ExampleDeployment\..*/(sphere|waves|torus_wide|waves_bump|mesh_knet1_obj|mesh_pillow_1_obj)( |$))|Compare\.RecoversRigidMotion')
+# 100k-point scan; the same registration runs sanitized in Compare.RegistersASmallScanUnderAnyMotion),
+# and the automatic corners' search on all eleven examples (issue 18; the search runs under the
+# sanitizers on the helicoid, sphere, annulus and shared meshes in the same binary).
+subset=(-E '(ExampleDeployment\..*/(sphere|waves|torus_wide|waves_bump|mesh_knet1_obj|mesh_pillow_1_obj)( |$))|Compare\.RecoversRigidMotion|AutoCorners\.ExamplesAreAtLeastAsLargeAsTheFormerRule')
 [ "${GRIDSHELL_SANITIZE_FULL:-0}" = 1 ] && subset=()
 
 status=0

@@ -17,6 +17,7 @@ grpc::Status to_grpc(const Status& status) {
   detail.set_code(error_code_name(status.code));
   detail.set_field(status.field);
   detail.set_message(status.message);
+  for (const v1::Suggestion& s : status.suggestions) *detail.add_suggestions() = s;
   return grpc::Status(static_cast<grpc::StatusCode>(status.code), status.text(),
                       detail.SerializeAsString());
 }

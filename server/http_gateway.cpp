@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "http_gateway.h"
 
+#include <google/protobuf/util/json_util.h>
+
 #include <boost/asio.hpp>
 #include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
@@ -67,6 +69,17 @@ std::string error_json(const Status& status) {
                    {"status", code_name(status.code)},
                    {"field", status.field},
                    {"message", status.message}};
+  if (!status.suggestions.empty()) {
+    nlohmann::json list = nlohmann::json::array();
+    google::protobuf::util::JsonPrintOptions options;
+    options.preserve_proto_field_names = true;
+    for (const v1::Suggestion& s : status.suggestions) {
+      std::string text;
+      if (google::protobuf::util::MessageToJsonString(s, &text, options).ok())
+        list.push_back(nlohmann::json::parse(text));
+    }
+    body["error"]["suggestions"] = std::move(list);
+  }
   return body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 

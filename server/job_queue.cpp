@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gridshell/mesh/errors.h"
+#include "gridshell/requests.h"
 
 namespace gridshell::server {
 
@@ -244,6 +245,8 @@ void JobQueue::work() {
                               : e.code() == ErrorCode::Infeasible ? StatusCode::FailedPrecondition
                                                                   : StatusCode::Internal;
       status = {code, e.message(), e.field()};
+      if (const auto* s = dynamic_cast<const InfeasibleWithSuggestions*>(&e))
+        status.suggestions = s->suggestions();
     } catch (const std::bad_alloc&) {
       status = {StatusCode::ResourceExhausted, "out of memory"};
     } catch (const std::exception& e) {

@@ -4,6 +4,9 @@
 #pragma once
 
 #include <string>
+#include <vector>
+
+#include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::server {
 
@@ -31,6 +34,8 @@ struct Status {
   StatusCode code = StatusCode::Ok;
   std::string message;  ///< plain text, without the field
   std::string field{};  ///< the request field it concerns (kernel errors), or ""
+  /// An infeasible design's ranked feasible suggestions (v1::ErrorDetail.suggestions).
+  std::vector<v1::Suggestion> suggestions{};
   bool ok() const { return code == StatusCode::Ok; }
   /// "field: message", or the message alone: the gRPC status message and the log's.
   std::string text() const { return field.empty() ? message : field + ": " + message; }

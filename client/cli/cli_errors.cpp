@@ -3,12 +3,15 @@
 // then the message. The kernel and the converters name request fields ("options.lamella_width",
 // "corners.vertices[2]", "mesh.indices[21]", "design.members[3]"); only this file knows that the
 // CLI calls them --lamella-width, --corners, the MESH argument or the design file.
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <iostream>
+#include <sstream>
 #include <utility>
 
 #include "cli_support.h"
+#include "gridshell/requests.h"
 
 namespace gridshell::cli {
 namespace {
@@ -93,6 +96,31 @@ std::string cli_field(const std::string& field, const FieldContext& context) {
   return field;  // a flag or a file name already
 }
 
+void print_suggestions(const std::vector<v1::Suggestion>& suggestions) {
+  const FieldContext& context = field_context();
+  for (const v1::Suggestion& s : suggestions) {
+    std::ostringstream flags;
+    if (s.kind() == "slope_bounds") flags << "--k-min " << s.k_min() << " --k-max " << s.k_max();
+    if (s.kind() == "corners") {
+      flags << "--corners ";
+      for (int i = 0; i < s.corners().vertices_size(); ++i) {
+        const int v = s.corners().vertices(i);
+        // As sent -> as in the file (the loader may have welded or dropped vertices).
+        const auto& map = context.vertex_of_file_vertex;
+        const auto it = std::find(map.begin(), map.end(), v);
+        flags << (i ? "," : "") << (it == map.end() ? v : static_cast<int>(it - map.begin()));
+      }
+    }
+    if (s.kind() == "members") {
+      if (s.members_u() > 0) flags << "--members-u " << s.members_u() << " ";
+      if (s.members_v() > 0) flags << "--members-v " << s.members_v();
+    }
+    if (s.kind() == "lamella_width") flags << "--lamella-width " << s.lamella_width();
+    std::cerr << "suggestion " << s.rank() << ": " << s.description() << "  [" << flags.str()
+              << "]\n";
+  }
+}
+
 int report_error(const Error& error) {
   finish_progress();
   const std::string field = cli_field(error.field(), field_context());
@@ -101,6 +129,8 @@ int report_error(const Error& error) {
   if (error.code() == ErrorCode::Internal) line += "internal: ";
   if (!field.empty()) line += field + ": ";
   std::cerr << line << error.message() << "\n";
+  if (const auto* with = dynamic_cast<const InfeasibleWithSuggestions*>(&error))
+    print_suggestions(with->suggestions());
   switch (error.code()) {
     case ErrorCode::InvalidInput:
       return 2;

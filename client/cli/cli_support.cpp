@@ -16,6 +16,7 @@
 #include <limits>
 #include <mutex>
 #include <sstream>
+#include <numbers>
 
 #include "gridshell/example_surfaces.h"
 #include "gridshell/files.h"
@@ -42,6 +43,7 @@ InputMesh load_input(const std::string& name) {
   }
   input.mesh = load_mesh(name, &input.report);
   for (const std::string& warning : input.report.warnings) std::cerr << warning << "\n";
+  field_context().vertex_of_file_vertex = input.report.vertex_of_file_vertex;
   return input;
 }
 
@@ -219,6 +221,49 @@ int file_vertex(const InputMesh& input, int mesh_vertex) {
   const auto& map = input.report.vertex_of_file_vertex;
   const auto it = std::find(map.begin(), map.end(), mesh_vertex);
   return it == map.end() ? -1 : static_cast<int>(it - map.begin());
+}
+
+void add_corner_angles_flag(CLI::App* sub, std::string& text) {
+  sub->add_option("--corner-angles", text,
+                  "automatic corners: MIN,MAX inner corner angles of the patch in degrees "
+                  "(default 45,135)");
+}
+
+void set_corner_angles(const std::string& text, google::protobuf::RepeatedField<double>* out) {
+  if (text.empty()) return;
+  const size_t comma = text.find(',');
+  if (comma == std::string::npos)
+    throw InvalidInput("--corner-angles", "expected MIN,MAX in degrees, got '" + text + "'");
+  double values[2];
+  const std::string parts[2] = {trim(text.substr(0, comma)), trim(text.substr(comma + 1))};
+  for (int k = 0; k < 2; ++k) {
+    const auto [end, ec] =
+        std::from_chars(parts[k].data(), parts[k].data() + parts[k].size(), values[k]);
+    if (parts[k].empty() || ec != std::errc() || end != parts[k].data() + parts[k].size() ||
+        !std::isfinite(values[k]))
+      throw InvalidInput("--corner-angles", "'" + parts[k] + "' is not a number of degrees");
+  }
+  if (!(values[0] > 0 && values[0] < values[1] && values[1] < 180))
+    throw InvalidInput("--corner-angles",
+                       "expected 0 < MIN < MAX < 180 degrees, got '" + text + "'");
+  out->Clear();
+  for (double v : values) out->Add(v * std::numbers::pi / 180);
+}
+
+void auto_corners_to_file_order(const InputMesh& input, v1::AutoCornerSearch* search) {
+  for (v1::AutoCornerCandidate& candidate : *search->mutable_candidates())
+    for (int& v : *candidate.mutable_input_vertices()) v = file_vertex(input, v);
+}
+
+void print_auto_corners(const v1::AutoCornerSearch& search) {
+  if (search.candidates_size() == 0 || search.chosen() < 0) return;
+  const v1::AutoCornerCandidate& c = search.candidates(search.chosen());
+  std::printf(
+      "  auto corners    %d,%d,%d,%d (%s): candidate %d of %d, area %.4g; %d cut, %d "
+      "evaluated, %.2f s\n",
+      c.input_vertices(0), c.input_vertices(1), c.input_vertices(2), c.input_vertices(3),
+      c.kind().c_str(), search.chosen() + 1, search.candidates_size(), c.area(), search.cuts(),
+      search.evaluations(), search.seconds());
 }
 
 double median(std::vector<double> values) {

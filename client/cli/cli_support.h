@@ -3,10 +3,13 @@
 #pragma once
 
 #include <google/protobuf/message.h>
+#include <google/protobuf/repeated_field.h>
 
+#include <CLI/CLI.hpp>
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "gridshell/design/patch.h"
 #include "gridshell/mesh/errors.h"
@@ -45,7 +48,12 @@ CornerSpec parse_corners(const std::string& text);
 struct FieldContext {
   std::string mesh;    ///< the MESH argument (a file or example:NAME), for "mesh.*" fields
   std::string design;  ///< the DESIGN file of `gridshell simulate`, for "design.*" fields
+  /// The MESH's loader map (file vertex -> mesh vertex), to show suggested corners in file order.
+  std::vector<int> vertex_of_file_vertex;
 };
+/// The "suggestion N: ..." lines after an infeasible design's error line, each with the flags
+/// that make it.
+void print_suggestions(const std::vector<v1::Suggestion>& suggestions);
 /// The context of this run, filled in by the command.
 FieldContext& field_context();
 /// A request field ("options.lamella_width", "corners.vertices[2]") in the CLI's terms
@@ -76,6 +84,14 @@ v1::Mesh request_mesh(const InputMesh& input);
 
 /// The file-order index of a loaded mesh vertex (the first, for welded duplicates), or -1.
 int file_vertex(const InputMesh& input, int mesh_vertex);
+/// --corner-angles MIN,MAX (degrees) of the automatic corners' search.
+void add_corner_angles_flag(CLI::App* sub, std::string& text);
+/// Parses it into radians (nothing for ""); InvalidInput naming --corner-angles.
+void set_corner_angles(const std::string& text, google::protobuf::RepeatedField<double>* out);
+/// The automatic corners' candidates with vertex indices in file order (as sent -> file).
+void auto_corners_to_file_order(const InputMesh& input, v1::AutoCornerSearch* search);
+/// One summary line for the automatic corners' choice (nothing without a search).
+void print_auto_corners(const v1::AutoCornerSearch& search);
 
 /// A design.json (gridshell.v1.Design in JSON; unknown fields rejected). Throws InvalidInput
 /// naming the file.

@@ -55,6 +55,13 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
                   "also pin up to N inner crossings at the target's bumps and dips (0 = boundary "
                   "anchors only, as in the paper)")
       ->capture_default_str();
+  add_corner_angles_flag(sub, flags.corner_angles);
+  sub->add_option("--suggest", flags.suggest,
+                  "when the design is infeasible, compute and print up to N ranked feasible "
+                  "changes (0 = none)")
+      ->capture_default_str();
+  sub->add_option("--k-min", flags.k_min, "lower slope bound of the cladding functions (0.1)");
+  sub->add_option("--k-max", flags.k_max, "upper slope bound of the cladding functions (10)");
 }
 
 v1::DesignRequest design_request(const DesignFlags& flags) {
@@ -77,6 +84,10 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
   options.set_geodesic_method(flags.method);
   options.set_eta_max(flags.eta_max);
   options.set_interior_anchors(flags.interior_anchors);
+  set_corner_angles(flags.corner_angles, options.mutable_auto_corner_angles());
+  options.set_suggest(flags.suggest);
+  if (flags.k_min) options.set_k_min(*flags.k_min);
+  if (flags.k_max) options.set_k_max(*flags.k_max);
   return request;
 }
 
@@ -84,8 +95,12 @@ void print_design_summary(const v1::DesignResult& result) {
   const v1::Design& d = result.design();
   const v1::DesignReport& r = result.report();
   const double deg = 180 / std::numbers::pi;
-  std::printf("  patch           %d vertices, eta %.5f -> %.5f (%d smoothing iterations)\n",
-              r.patch_vertices(), r.eta_before(), r.eta_after(), r.smoothing_iterations());
+  std::printf("  patch           %d vertices, eta %.5f -> %.5f (%d smoothing iterations%s)\n",
+              r.patch_vertices(), r.eta_before(), r.eta_after(), r.smoothing_iterations(),
+              r.recuts() > 0 ? (", " + std::to_string(r.recuts()) + " re-cuts").c_str() : "");
+  print_auto_corners(r.auto_corners());
+  for (const std::string& warning : r.warnings())
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
   std::printf("  alpha           %.2f deg on the surface; planar %.2f deg in [%.2f, %.2f]\n",
               d.alpha() * deg, d.alpha_bar() * deg, d.alpha_bar_range(0) * deg,
               d.alpha_bar_range(1) * deg);

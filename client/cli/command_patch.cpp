@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell patch MESH --corners ... --out DIR`: cut, check and smooth the target patch, in
 // process or on a daemon (--server).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -23,6 +24,7 @@ struct PatchArguments {
   double eta_max = 1.0015;
   int max_iterations = 60;
   bool no_smoothing = false;
+  std::string corner_angles;
 };
 
 int run_patch(const PatchArguments& args) {
@@ -36,6 +38,7 @@ int run_patch(const PatchArguments& args) {
   options.set_eta_max(args.eta_max);
   options.set_max_smoothing_iterations(args.max_iterations);
   options.set_no_smoothing(args.no_smoothing);
+  set_corner_angles(args.corner_angles, options.mutable_auto_corner_angles());
 
   prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);
@@ -50,6 +53,7 @@ int run_patch(const PatchArguments& args) {
   // Corner indices in file order, so the user can pass them back to --corners.
   for (v1::Corner& corner : *result.mutable_report()->mutable_corners())
     corner.set_input_vertex(file_vertex(input, corner.input_vertex()));
+  auto_corners_to_file_order(input, result.mutable_report()->mutable_auto_corners());
   write_files(patch_files(result), args.output.out);
 
   const v1::PatchReport& r = result.report();
@@ -66,6 +70,14 @@ int run_patch(const PatchArguments& args) {
               r.injectivity_ok() ? "ok" : "exceeds bound");
   std::printf("  gap factor eta  %.6f -> %.6f after %d smoothing iterations (eta_max %.4f)\n",
               r.eta_before(), r.eta_after(), r.smoothing_iterations(), r.eta_max());
+  double excess = 0;
+  for (double e : r.boundary_geodesic_excess()) excess = std::max(excess, e);
+  std::printf("  boundary        shortest geodesics of the patch to %.1e (%d re-cuts)\n", excess,
+              r.recuts());
+  for (const std::string& warning : r.warnings())
+    if (warning.rfind("gap factor", 0) == 0 || warning.rfind("side c", 0) == 0)
+      std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  print_auto_corners(r.auto_corners());
   std::printf("  time            %.3f s\n", r.seconds());
   const std::filesystem::path out(args.output.out);
   std::printf("  wrote           %s, %s\n", (out / "patch.obj").c_str(),
@@ -89,6 +101,7 @@ Command add_patch_command(CLI::App& app) {
   sub->add_option("--max-smoothing-iterations", args->max_iterations, "smoothing cap")
       ->capture_default_str();
   sub->add_flag("--no-smoothing", args->no_smoothing, "report eta but do not smooth");
+  add_corner_angles_flag(sub, args->corner_angles);
   add_output_flags(sub, args->output, false);
   return [args] { return run_patch(*args); };
 }

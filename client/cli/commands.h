@@ -52,6 +52,9 @@ struct DesignFlags {
   std::string method = "fast";
   double eta_max = 1.0015;
   int interior_anchors = 0;
+  std::string corner_angles;  // "MIN,MAX" degrees for automatic corners, "" = 45,135
+  int suggest = 3;            // feasible suggestions when infeasible
+  std::optional<double> k_min, k_max;
 };
 void add_design_flags(CLI::App* sub, DesignFlags& flags);
 /// Loads the mesh and builds the request (InvalidInput names the flag).

@@ -13,6 +13,7 @@
 
 #include "gridshell/mesh/errors.h"
 #include "gridshell/patch_routing_key.h"
+#include "gridshell/requests.h"
 
 #ifdef GRIDSHELL_HAVE_GRPC
 #include <grpcpp/grpcpp.h>
@@ -86,6 +87,9 @@ struct RemoteClient::Impl {
       case grpc::StatusCode::INVALID_ARGUMENT:
         throw InvalidInput(field, text);
       case grpc::StatusCode::FAILED_PRECONDITION:
+        if (structured && detail.suggestions_size() > 0)
+          throw InfeasibleWithSuggestions(
+              field, text, {detail.suggestions().begin(), detail.suggestions().end()});
         throw Infeasible(field, text);
       case grpc::StatusCode::CANCELLED:
         throw Cancelled();

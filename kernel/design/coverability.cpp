@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -190,37 +191,102 @@ double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fix
   return moved;
 }
 
+std::array<double, 4> boundary_geodesic_excess(const Patch& patch, const GeodesicOptions& geodesic,
+                                               const Progress& progress) {
+  const GeodesicSolver solver(patch.mesh, geodesic);
+  const std::array<double, 4> lengths = side_lengths(patch);
+  std::array<double, 4> excess{};
+  for (int i = 0; i < 4; ++i) {
+    const std::vector<double> d =
+        solver.distances(SurfacePoint::at_vertex(patch.mesh, patch.corners[i]), progress.checker());
+    const double shortest = d[patch.corners[(i + 1) % 4]];
+    excess[i] = lengths[i] > 0 ? (lengths[i] - shortest) / lengths[i] : 0.0;
+  }
+  return excess;
+}
+
+namespace {
+
+// The patch cut again out of itself along the shortest geodesics between its corners (on its
+// current, smoothed surface). Input vertices are composed, so they still name the input mesh.
+Patch recut(const Patch& patch, const GeodesicOptions& geodesic, const Progress& progress) {
+  std::array<SurfacePoint, 4> corners;
+  for (int i = 0; i < 4; ++i) corners[i] = SurfacePoint::at_vertex(patch.mesh, patch.corners[i]);
+  Patch cut = cut_patch(patch.mesh, corners, geodesic, {}, progress);
+  for (int& v : cut.input_vertex)
+    if (v >= 0) v = patch.input_vertex[v];
+  cut.corners_reversed = patch.corners_reversed;
+  return cut;
+}
+
+std::string excess_text(const std::array<double, 4>& excess) {
+  std::ostringstream out;
+  out << "the boundary exceeds the shortest geodesics between its corners by up to "
+      << *std::max_element(excess.begin(), excess.end()) << " of a side's length";
+  return out.str();
+}
+
+}  // namespace
+
 SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic,
                                        const CoverabilityOptions& options,
                                        const Progress& progress) {
   SmoothingResult result;
-  const TriangleMesh original = patch.mesh;
-  const MeshTopology& topology = patch.mesh.topology();
-  std::vector<char> fixed(patch.mesh.vertex_count(), 0);
-  for (int v = 0; v < patch.mesh.vertex_count(); ++v) fixed[v] = topology.is_boundary_vertex[v];
+  // Positions of the surface the patch was cut from, for the displacement: vertices of the
+  // input keep their index map; vertices a cut made are measured from where they were made.
+  std::map<int, Vec3> input_of;  // input vertex -> position before smoothing
+  for (int v = 0; v < patch.mesh.vertex_count(); ++v)
+    if (patch.input_vertex[v] >= 0) input_of[patch.input_vertex[v]] = patch.mesh.vertices()[v];
   auto eta_of = [&]() {
     GeodesicSolver solver(patch.mesh, geodesic);
     return gap_factor(patch, solver, gaussian_curvature(patch.mesh), progress).eta;
   };
+  auto fail = [&](const std::string& why) {
+    std::ostringstream msg;
+    msg << "smoothing: " << why << " after " << result.iterations << " iterations and "
+        << result.recuts << " re-cuts (gap factor eta " << result.eta_after << ", eta_max "
+        << options.eta_max << "; "
+        << excess_text(boundary_geodesic_excess(patch, geodesic, progress))
+        << "): the patch cannot be covered by shortest geodesics (paper 3.3); choose corners "
+           "closer together or a smoother surface";
+    throw Infeasible("corners", msg.str());
+  };
   result.eta_before = result.eta_after = eta_of();
-  while (result.eta_after > options.eta_max) {
-    if (result.iterations >= options.max_smoothing_iterations) {
-      std::ostringstream msg;
-      msg << "smoothing: gap factor eta is still " << result.eta_after << " > eta_max "
-          << options.eta_max << " after " << result.iterations
-          << " iterations: the patch cannot be covered by shortest geodesics (paper 3.3); "
-             "choose corners closer together or a smoother surface";
-      throw Infeasible("corners", msg.str());
+  bool smoothed = false;
+  while (true) {
+    // Smooth with the boundary fixed until eta <= eta_max.
+    const MeshTopology& topology = patch.mesh.topology();
+    std::vector<char> fixed(patch.mesh.vertex_count(), 0);
+    for (int v = 0; v < patch.mesh.vertex_count(); ++v) fixed[v] = topology.is_boundary_vertex[v];
+    while (result.eta_after > options.eta_max) {
+      if (result.iterations >= options.max_smoothing_iterations)
+        fail("gap factor eta is still above eta_max");
+      progress.report("smoothing", std::min(1.0, static_cast<double>(result.iterations) /
+                                                     options.max_smoothing_iterations));
+      const double moved = laplacian_smoothing_step(patch.mesh, fixed, options.smoothing_step);
+      result.max_displacement = std::max(result.max_displacement, moved);
+      smoothed = true;
+      ++result.iterations;
+      result.eta_after = eta_of();
     }
-    progress.report("smoothing", std::min(1.0, static_cast<double>(result.iterations) /
-                                                   options.max_smoothing_iterations));
-    laplacian_smoothing_step(patch.mesh, fixed, options.smoothing_step);
-    ++result.iterations;
+    if (!smoothed) break;  // the surface is as it was cut: its sides are exact
+    // The surface moved under the fixed boundary: is every side still a shortest geodesic?
+    const std::array<double, 4> excess = boundary_geodesic_excess(patch, geodesic, progress);
+    if (*std::max_element(excess.begin(), excess.end()) <= kBoundaryGeodesicTolerance) break;
+    if (result.recuts >= kMaxRecuts) fail("the boundary is still not geodesic");
+    progress.report("smoothing: re-cut along the boundary geodesics", 0.5);
+    patch = recut(patch, geodesic, progress);
+    ++result.recuts;
+    smoothed = false;  // the re-cut keeps the surface: its new sides are exact on it
     result.eta_after = eta_of();
+    if (result.eta_after <= options.eta_max) break;
   }
-  for (int v = 0; v < patch.mesh.vertex_count(); ++v)
-    result.max_displacement = std::max(result.max_displacement,
-                                       (patch.mesh.vertices()[v] - original.vertices()[v]).norm());
+  for (int v = 0; v < patch.mesh.vertex_count(); ++v) {
+    const auto it = input_of.find(patch.input_vertex[v]);
+    if (patch.input_vertex[v] >= 0 && it != input_of.end())
+      result.max_displacement =
+          std::max(result.max_displacement, (patch.mesh.vertices()[v] - it->second).norm());
+  }
   return result;
 }
 

@@ -41,8 +41,14 @@ PatchWork prepare_patch_work(TargetPatch target, const DesignOptions& options,
   PatchWork work;
   work.target = std::move(target);
   const auto start = std::chrono::steady_clock::now();
-  const GeodesicSolver solver(work.target.patch.mesh, options.patch.geodesic);
-  work.maps = compute_distance_maps(work.target.patch, solver, options.maps, progress);
+  // The automatic corners' search computed these maps already (same patch, same options).
+  if (work.target.maps && work.target.maps_options.resolution == options.maps.resolution) {
+    work.maps = *work.target.maps;
+  } else {
+    const GeodesicSolver solver(work.target.patch.mesh, options.patch.geodesic);
+    work.maps = compute_distance_maps(work.target.patch, solver, options.maps, progress);
+  }
+  work.target.maps.reset();
   work.maps_seconds = seconds_since(start);
   return work;
 }
@@ -123,10 +129,17 @@ Design design_grid(TargetPatch target, const DesignOptions& options, const Progr
   return design;
 }
 
+TargetPatchOptions patch_options(const DesignOptions& options) {
+  TargetPatchOptions patch = options.patch;
+  patch.auto_corners.maps = options.maps;
+  patch.auto_corners.cladding = options.cladding;
+  return patch;
+}
+
 Design make_design(const TriangleMesh& mesh, const CornerSpec& corners,
                    const DesignOptions& options, const Progress& progress) {
   const auto start = std::chrono::steady_clock::now();
-  TargetPatch target = make_target_patch(mesh, corners, options.patch, progress);
+  TargetPatch target = make_target_patch(mesh, corners, patch_options(options), progress);
   const double patch_seconds = seconds_since(start);
   Design design = design_grid(std::move(target), options, progress);
   design.stage_seconds["patch"] = patch_seconds;

@@ -315,8 +315,15 @@ std::array<std::vector<Location>, 4> boundary_geodesics(const TriangleMesh& mesh
   for (int i = 0; i < 4; ++i) {
     progress.report("patch: boundary geodesics", 0.1 + 0.2 * i);
     // solve + path_to is shortest_path with the cancellation flag polled during the solve.
-    const auto path = solver.solve(SurfacePoint::at_vertex(mesh, corners[i]), progress.checker())
-                          .path_to(SurfacePoint::at_vertex(mesh, corners[(i + 1) % 4]));
+    const DistanceField field =
+        solver.solve(SurfacePoint::at_vertex(mesh, corners[i]), progress.checker());
+    const int next = corners[(i + 1) % 4];
+    if (!std::isfinite(field.vertex_distances()[next]))
+      throw Infeasible("corners", "corners c" + std::to_string(i) + " and c" +
+                                      std::to_string((i + 1) % 4) +
+                                      " lie on separate pieces of the surface: no geodesic "
+                                      "joins them");
+    const auto path = field.path_to(SurfacePoint::at_vertex(mesh, next));
     std::vector<Location> locations;
     for (const SurfacePoint& p : path) {
       Location loc = classify(mesh, p, snap);
@@ -493,9 +500,29 @@ std::vector<Face> retriangulate(const TriangleMesh& mesh, const PathNodes& path,
   return faces;
 }
 
-// Step 7: which side of the loop is the patch: the faces flooded from the loop's left (or
-// right) without crossing it. The side that does not reach the mesh's own boundary wins, or the
-// left one (c0->c1->c2->c3 counter-clockwise) if both do; `reversed` says it was the right.
+// Step 7: which side of the loop is the patch. Each side is flooded from the loop without
+// crossing it. A side can be the patch only if it is a disk bounded by the loop alone: no edge of
+// the mesh's own boundary (a hole, or the mesh's outer edge) and Euler characteristic 1 (no
+// handle). On an open disk mesh with corners on or inside its boundary that is one side; on a
+// closed surface (a sphere) both sides are disks, and the patch is the one with convex corners
+// (the other has the reflex complements), else the left one (c0->c1->c2->c3 counter-clockwise).
+// If neither side is a disk, the error says which case it is and where. `reversed` says the
+// patch is the right side.
+struct LoopSide {
+  std::vector<char> faces;
+  long long face_count = 0;
+  int boundary_edge_face = -1;  ///< a face with an edge on the mesh's own boundary, or -1
+  int boundary_edge = -1;       ///< that edge (local index)
+  long long euler = 0;          ///< V - E + F of the side's faces
+  bool disk() const { return face_count > 0 && boundary_edge_face < 0 && euler == 1; }
+};
+
+std::string point_text(const Vec3& p) {
+  std::ostringstream out;
+  out << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return out.str();
+}
+
 std::vector<char> patch_region(const TriangleMesh& cut,
                                const std::array<std::vector<int>, 4>& nodes, bool* reversed) {
   const MeshTopology& topology = cut.topology();
@@ -508,7 +535,9 @@ std::vector<char> patch_region(const TriangleMesh& cut,
     }
   const std::vector<Face>& faces = cut.faces();
   auto flood = [&](bool left) {
-    std::vector<char> in(cut.face_count(), 0);
+    LoopSide side;
+    std::vector<char>& in = side.faces;
+    in.assign(cut.face_count(), 0);
     std::queue<int> queue;
     for (const auto& [a, b] : directed) {
       for (int f : topology.vertex_faces[a]) {
@@ -534,36 +563,93 @@ std::vector<char> patch_region(const TriangleMesh& cut,
         queue.push(g);
       }
     }
-    return in;
-  };
-  const std::vector<char> left = flood(true), right = flood(false);
-  auto reaches_outer_boundary = [&](const std::vector<char>& region) {
+    // Its boundary edges other than the loop's, and its Euler characteristic.
+    std::set<int> vertices;
+    long long edges2 = 0;  // interior edges of the side count twice, its boundary edges once
     for (int f = 0; f < cut.face_count(); ++f) {
-      if (!region[f]) continue;
-      for (int i = 0; i < 3; ++i)
-        if (topology.face_neighbors[f][i] < 0 &&
-            !loop_edges.count(edge_key(faces[f][i], faces[f][(i + 1) % 3])))
-          return true;
+      if (!in[f]) continue;
+      ++side.face_count;
+      for (int i = 0; i < 3; ++i) {
+        vertices.insert(faces[f][i]);
+        const int g = topology.face_neighbors[f][i];
+        const bool on_loop = loop_edges.count(edge_key(faces[f][i], faces[f][(i + 1) % 3])) > 0;
+        edges2 += (g >= 0 && in[g]) ? 1 : 2;
+        if (g < 0 && !on_loop && side.boundary_edge_face < 0) {
+          side.boundary_edge_face = f;
+          side.boundary_edge = i;
+        }
+      }
     }
-    return false;
+    side.euler = static_cast<long long>(vertices.size()) - edges2 / 2 + side.face_count;
+    return side;
   };
-  auto count = [](const std::vector<char>& region) {
-    return std::count(region.begin(), region.end(), 1);
-  };
+  const LoopSide left = flood(true), right = flood(false);
   for (int f = 0; f < cut.face_count(); ++f)
-    if (left[f] && right[f])
+    if (left.faces[f] && right.faces[f]) {
+      const Face& t = faces[f];
+      const Vec3 p = (cut.vertices()[t[0]] + cut.vertices()[t[1]] + cut.vertices()[t[2]]) / 3;
       throw Infeasible("corners",
-                       "the four boundary geodesics do not enclose a region (grid criterion iv)");
+                       "the four boundary geodesics do not bound a region: both sides of the "
+                       "loop c0->c1->c2->c3 are one connected piece (the loop goes around a "
+                       "handle or a tube of the surface), e.g. near " +
+                           point_text(p) + " (the patch must be a disk)");
+    }
+  // A closed surface: both sides are disks; the one with convex corners (inner angle < pi at
+  // every corner) is the patch.
+  auto convex_corners = [&](const LoopSide& side) {
+    for (int i = 0; i < 4; ++i) {
+      const int c = nodes[i].front();
+      double sum = 0;
+      for (int f : topology.vertex_faces[c]) {
+        if (!side.faces[f]) continue;
+        const Face& t = faces[f];
+        for (int k = 0; k < 3; ++k)
+          if (t[k] == c) {
+            const Vec3 u = cut.vertices()[t[(k + 1) % 3]] - cut.vertices()[c];
+            const Vec3 v = cut.vertices()[t[(k + 2) % 3]] - cut.vertices()[c];
+            sum += std::atan2(u.cross(v).norm(), u.dot(v));
+          }
+      }
+      if (sum >= kPi) return false;
+    }
+    return true;
+  };
   bool use_left = true;
-  if (count(left) == 0) {
-    use_left = false;
-  } else if (count(right) > 0 && reaches_outer_boundary(left) && !reaches_outer_boundary(right)) {
-    use_left = false;
+  if (left.disk() && right.disk()) {
+    use_left = convex_corners(left) || !convex_corners(right);
+  } else if (left.disk() || right.disk()) {
+    use_left = left.disk();
+  } else {
+    // Neither side is a disk: say why, for each side that has faces.
+    auto why = [&](const LoopSide& side, const char* name) {
+      std::string text = std::string("the ") + name + " side ";
+      if (side.face_count == 0) return text + "is empty";
+      if (side.boundary_edge_face >= 0) {
+        const Face& t = faces[side.boundary_edge_face];
+        const int a = t[side.boundary_edge];
+        // A hole: a boundary loop of the mesh that the patch loop does not touch.
+        bool touches = false;
+        std::vector<int> loop;
+        for (const auto& l : topology.boundary_loops)
+          if (std::find(l.begin(), l.end(), a) != l.end()) loop = l;
+        std::set<int> on_loop;
+        for (const auto& n : nodes) on_loop.insert(n.begin(), n.end());
+        for (int v : loop) touches = touches || on_loop.count(v) > 0;
+        return text + (touches ? "reaches the mesh's boundary" : "contains a hole of the mesh") +
+               " (a boundary edge at " + point_text(cut.vertices()[a]) + ")";
+      }
+      std::ostringstream out;
+      out << text << "is not a disk (Euler characteristic " << side.euler
+          << ": it contains a handle)";
+      return out.str();
+    };
+    throw Infeasible("corners",
+                     "the region bounded by the four boundary geodesics is not a disk: " +
+                         why(left, "left (c0->c1->c2->c3 counter-clockwise)") + "; " +
+                         why(right, "right") + " (grid criterion iv: the patch must be a disk)");
   }
-  const std::vector<char>& region = use_left ? left : right;
-  if (count(region) == 0) throw Infeasible("corners", "the patch enclosed by the corners is empty");
   *reversed = !use_left;
-  return region;
+  return use_left ? left.faces : right.faces;
 }
 
 // Step 8: the patch: the region's faces and vertices, renumbered, its corners and sides

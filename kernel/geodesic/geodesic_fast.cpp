@@ -1475,8 +1475,21 @@ void Propagator::process_list(int h) {
   double best = kInf;
   int best_id = kFromSource;
   batch_list_.clear();
+  // A window whose nearest point is farther than an end vertex's distance plus the edge's
+  // length is dominated on all of its interval by the real path through that vertex (and so is
+  // everything beyond it): dropped. Rule B alone never kills a window that keeps finding no
+  // better path to its opposite corner, and on a closed surface windows then go round for ever
+  // (a closed sphere ran out of memory, issue 18); this one comparison ends them.
+  const double near = std::min(dist_[e.va], dist_[e.vb]) + e.len + margin_;
   for (; id >= 0; id = windows_[id].next) {
     const Window& w = windows_[id];
+    if (near < kInf) {
+      const double dx = w.sx < w.b0 ? w.b0 - w.sx : (w.sx > w.b1 ? w.sx - w.b1 : 0.0);
+      if (w.sigma + std::sqrt(dx * dx + w.sy * w.sy) > near) {
+        if (recycle_) free_.push_back(id);
+        continue;
+      }
+    }
     // The opposite corner C seen straight through the window: a distance for C and the barrier
     // record (rule B), now the best of the whole batch before any of it propagates.
     // x = num / den (den > 0); the division only for windows that see C: for the others only

@@ -107,7 +107,38 @@ v1::DesignReport to_report(const Design& design, const std::string& input_name, 
   report.set_eta_before(design.target.smoothing.eta_before);
   report.set_eta_after(design.target.smoothing.eta_after);
   report.set_smoothing_iterations(design.target.smoothing.iterations);
+  for (const std::string& w : design.target.warnings) report.add_warnings(w);
+  report.set_recuts(design.target.smoothing.recuts);
+  for (double e : design.target.boundary_excess) report.add_boundary_geodesic_excess(e);
   return report;
+}
+
+v1::AutoCornerSearch to_proto(const AutoCornerReport& report, const TriangleMesh& mesh,
+                              const std::function<int(int)>& sent_vertex) {
+  v1::AutoCornerSearch out;
+  for (const AutoCornerCandidate& c : report.candidates) {
+    v1::AutoCornerCandidate* candidate = out.add_candidates();
+    for (int v : c.vertices) {
+      for (int k = 0; k < 3; ++k) candidate->add_positions(mesh.vertices()[v][k]);
+      candidate->add_input_vertices(sent_vertex(v));
+    }
+    candidate->set_kind(c.kind);
+    candidate->set_area(c.area);
+    for (double a : c.corner_angles) candidate->add_corner_angles(a);
+    candidate->set_eta(c.eta);
+    if (c.alpha_range)
+      for (double a : *c.alpha_range) candidate->add_alpha_bar_range(a);
+    candidate->set_accepted(c.accepted);
+    candidate->set_reason(c.reason);
+  }
+  out.set_chosen(report.chosen);
+  out.set_rule(report.rule);
+  out.set_cuts(report.cuts);
+  out.set_evaluations(report.evaluations);
+  out.set_seconds(report.seconds);
+  out.set_min_corner_angle(report.min_corner_angle);
+  out.set_max_corner_angle(report.max_corner_angle);
+  return out;
 }
 
 }  // namespace gridshell

@@ -63,6 +63,15 @@ PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
   h.integer(patch.coverability.member_distance_samples);
   h.integer(patch.smooth);
   h.integer(options.maps.resolution);
+  if (corners.kind == CornerSpec::Kind::Auto) {  // the search checks the planar angle too
+    h.number(patch.auto_corners.min_corner_angle);
+    h.number(patch.auto_corners.max_corner_angle);
+    h.integer(patch.auto_corners.max_cuts);
+    h.integer(patch.auto_corners.max_evaluations);
+    h.number(options.cladding.k_min);
+    h.number(options.cladding.k_max);
+    h.number(options.cladding.min_planar_angle);
+  }
   PatchKey key;
   key.hash[0] = h.a();
   key.hash[1] = h.b();

@@ -10,6 +10,7 @@
 
 #include "gridshell/convert.h"
 #include "gridshell/design/design_export.h"
+#include "gridshell/design/suggestions.h"
 #include "gridshell/example_surfaces.h"
 #include "gridshell/files.h"
 #include "gridshell/geodesic/geodesic.h"
@@ -25,6 +26,7 @@ namespace {
 constexpr int kMaxMembers = 1000;
 constexpr int kMaxInteriorAnchors = 100;
 constexpr int kMaxSmoothingIterations = 100000;
+constexpr int kMaxSuggestions = 20;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -75,6 +77,21 @@ double eta_max_option(bool has, double value, const std::string& field, double f
   if (!has) return fallback;
   if (!(value >= 1.0)) throw InvalidInput(field, "must be >= 1 (it is a ratio of path lengths)");
   return value;
+}
+
+/// [min, max] corner angles of the automatic corners' search, radians (empty = default).
+void auto_corner_angles(const google::protobuf::RepeatedField<double>& values,
+                        const std::string& field, AutoCornerOptions& options) {
+  if (values.empty()) return;
+  if (values.size() != 2)
+    throw InvalidInput(field, "expected two angles [min, max] in radians, got " +
+                                  std::to_string(values.size()) + " numbers");
+  const double lo = values[0], hi = values[1];
+  if (!(lo > 0 && lo < hi && hi < std::numbers::pi))
+    throw InvalidInput(
+        field, "expected 0 < min < max < pi radians, got " + shortest(lo) + ", " + shortest(hi));
+  options.min_corner_angle = lo;
+  options.max_corner_angle = hi;
 }
 
 std::string corner_label(const v1::Corners& corners) {
@@ -310,6 +327,10 @@ v1::LoadResult run_load(const v1::LoadRequest& request, const Progress& progress
   for (int k = 0; k < 3; ++k) report.add_bounding_box(hi[k]);
   if (corners[0] >= 0)
     for (int v : corners) out.mutable_example_corners()->add_vertices(v);
+  const std::vector<int>& map = load.vertex_of_file_vertex;
+  bool identity = static_cast<int>(map.size()) == mesh.vertex_count();
+  for (size_t v = 0; identity && v < map.size(); ++v) identity = map[v] == static_cast<int>(v);
+  if (!identity) out.mutable_vertex_map()->Add(map.begin(), map.end());
   return out;
 }
 
@@ -351,6 +372,7 @@ PatchInputs prepare_patch(const v1::PatchRequest& request) {
     in.options.coverability.max_smoothing_iterations = n;
   }
   in.options.smooth = !o.no_smoothing();
+  auto_corner_angles(o.auto_corner_angles(), "options.auto_corner_angles", in.options.auto_corners);
   return in;
 }
 
@@ -398,6 +420,12 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
       report.add_warnings("corners were given clockwise; the patch uses them counter-clockwise");
     if (!cov.injectivity_ok)
       report.add_warnings("longest member distance exceeds the injectivity bound pi/sqrt(Kmax)");
+    for (const std::string& w : result.warnings) report.add_warnings(w);
+    for (double e : result.boundary_excess) report.add_boundary_geodesic_excess(e);
+    report.set_recuts(result.smoothing.recuts);
+    if (result.auto_corners)
+      *report.mutable_auto_corners() =
+          to_proto(*result.auto_corners, in.mesh, [&](int v) { return sent_vertex(in.load, v); });
     for (int i = 0; i < 4; ++i) {
       v1::Side* side = report.add_sides();
       for (int v : result.patch.sides[i]) side->add_vertices(v);
@@ -416,30 +444,82 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
 
 namespace {
 
-/// make_design with the patch work from (or into) the cache: the same design, without the
-/// patch stage and the maps when another design on this patch computed them.
-Design design_with_cache(PatchCache& cache, const DesignInputs& in, const Progress& progress,
-                         int redesign_threads, bool* cached) {
+/// The patch work of a design: from (or into) the cache when there is one. `patch_seconds` is
+/// the patch stage's time (0 from the cache).
+std::shared_ptr<const PatchWork> patch_work(const RunSettings& settings, const DesignInputs& in,
+                                            const Progress& progress, bool* cached,
+                                            double* patch_seconds) {
+  auto compute = [&] {
+    const auto start = std::chrono::steady_clock::now();
+    TargetPatch target =
+        make_target_patch(in.mesh, in.corners, patch_options(in.options), progress);
+    *patch_seconds = seconds_since(start);
+    PatchWork work = prepare_patch_work(std::move(target), in.options, progress);
+    if (settings.patch_cache) {
+      // Room for the members of a few designs: 2 MiB (a design's members are a few hundred
+      // KB on the examples) plus a quarter of the patch mesh's bytes, since members grow with
+      // the mesh, not with the maps; counted with the entry from the start.
+      const std::size_t maps =
+          (work.maps.g.distances.size() + work.maps.h.distances.size()) * sizeof(double);
+      work.members = std::make_shared<MemberMemo>((2u << 20) + (memory_bytes(work) - maps) / 4);
+    }
+    return work;
+  };
+  *cached = false;
+  if (!settings.patch_cache) return std::make_shared<const PatchWork>(compute());
+  return settings.patch_cache->get(patch_key(in.mesh, in.corners, in.options), compute, cached,
+                                   progress);
+}
+
+/// Ranked feasible suggestions for a design that failed with `failure` on `work`, as the API's
+/// messages (corners as sent).
+std::vector<v1::Suggestion> suggestions_for(const DesignInputs& in, const PatchWork& work,
+                                            const DesignOptions& options, const Error& failure,
+                                            const Progress& progress) {
+  SuggestionOptions limits;
+  limits.count = in.suggest;
+  std::vector<v1::Suggestion> out;
+  int rank = 0;
+  for (const DesignSuggestion& s :
+       suggest_feasible_designs(in.mesh, work, options, failure, limits, progress)) {
+    v1::Suggestion& m = out.emplace_back();
+    m.set_rank(++rank);
+    m.set_kind(to_string(s.kind));
+    m.set_description(s.description);
+    if (s.kind == DesignSuggestion::Kind::Corners)
+      for (int v : s.corners) m.mutable_corners()->add_vertices(sent_vertex(in.load, v));
+    m.set_k_min(s.k_min > 0 ? s.k_min : options.cladding.k_min);
+    m.set_k_max(s.k_max > 0 ? s.k_max : options.cladding.k_max);
+    m.set_members_u(s.members_g);
+    m.set_members_v(s.members_h);
+    m.set_lamella_width(s.lamella_width);
+    m.add_alpha_bar_range(s.alpha.min);
+    m.add_alpha_bar_range(s.alpha.max);
+    m.set_change(s.change);
+  }
+  return out;
+}
+
+/// make_design through patch_work, so that a failing design's patch work can be searched for
+/// feasible suggestions.
+Design design_with_suggestions(const DesignInputs& in, const Progress& progress,
+                               const RunSettings& settings, bool* cached) {
   double patch_seconds = 0;
-  const std::shared_ptr<const PatchWork> work = cache.get(
-      patch_key(in.mesh, in.corners, in.options),
-      [&] {
-        const auto start = std::chrono::steady_clock::now();
-        TargetPatch target = make_target_patch(in.mesh, in.corners, in.options.patch, progress);
-        patch_seconds = seconds_since(start);
-        PatchWork work = prepare_patch_work(std::move(target), in.options, progress);
-        // Room for the members of a few designs: 2 MiB (a design's members are a few hundred
-        // KB on the examples) plus a quarter of the patch mesh's bytes, since members grow with
-        // the mesh, not with the maps; counted with the entry from the start.
-        const std::size_t maps =
-            (work.maps.g.distances.size() + work.maps.h.distances.size()) * sizeof(double);
-        work.members = std::make_shared<MemberMemo>((2u << 20) + (memory_bytes(work) - maps) / 4);
-        return work;
-      },
-      cached, progress);
+  const std::shared_ptr<const PatchWork> work =
+      patch_work(settings, in, progress, cached, &patch_seconds);
   DesignOptions options = in.options;
-  if (*cached && redesign_threads >= 0) options.grid.threads = redesign_threads;
-  Design design = design_on_patch(*work, options, progress);
+  if (*cached && settings.redesign_threads >= 0) options.grid.threads = settings.redesign_threads;
+  Design design;
+  try {
+    design = design_on_patch(*work, options, progress);
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const Infeasible& e) {
+    if (in.suggest <= 0) throw;
+    std::vector<v1::Suggestion> suggestions = suggestions_for(in, *work, in.options, e, progress);
+    if (suggestions.empty()) throw;
+    throw InfeasibleWithSuggestions(e.field(), e.message(), std::move(suggestions));
+  }
   design.stage_seconds["patch"] = patch_seconds;
   design.stage_seconds["distance_maps"] = *cached ? 0.0 : work->maps_seconds;
   if (*cached)
@@ -486,6 +566,20 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
       throw InvalidInput("options.resolution", "must be 0 (adaptive) or 8..1000");
     options.maps.resolution = r;
   }
+  auto_corner_angles(o.auto_corner_angles(), "options.auto_corner_angles",
+                     options.patch.auto_corners);
+  if (o.has_k_min()) options.cladding.k_min = o.k_min();
+  if (o.has_k_max()) options.cladding.k_max = o.k_max();
+  if (!(options.cladding.k_min > 0 && options.cladding.k_min < options.cladding.k_max &&
+        options.cladding.k_max <= 100))
+    throw InvalidInput(o.has_k_min() && !o.has_k_max() ? "options.k_min" : "options.k_max",
+                       "slope bounds must satisfy 0 < k_min < k_max <= 100, got k_min " +
+                           shortest(options.cladding.k_min) + ", k_max " +
+                           shortest(options.cladding.k_max));
+  if (o.has_suggest() && (o.suggest() < 0 || o.suggest() > kMaxSuggestions))
+    throw InvalidInput("options.suggest",
+                       "must be between 0 (none) and " + std::to_string(kMaxSuggestions));
+  in.suggest = o.has_suggest() ? o.suggest() : 3;
 
   v1::DesignOptions& record = in.record;
   record.set_corners(corner_label(request.corners()));
@@ -513,10 +607,7 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     in.options.maps.threads = in.options.grid.threads = settings.threads;
     in.options.patch.coverability.threads = settings.threads;
     bool cached = false;
-    const Design design = settings.patch_cache
-                              ? design_with_cache(*settings.patch_cache, in, progress,
-                                                  settings.redesign_threads, &cached)
-                              : make_design(in.mesh, in.corners, in.options, progress);
+    const Design design = design_with_suggestions(in, progress, settings, &cached);
     in.record.set_lamella_width(design.lamella_width);
     in.record.set_lamella_thickness(design.lamella_thickness);
     in.record.set_map_resolution(design.maps.g.resolution());
@@ -535,6 +626,9 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
     out.mutable_report()->set_distance_maps_cached(cached);
     out.mutable_report()->set_patch_key(patch_routing_key(in.mesh, in.corners, in.options));
+    if (design.target.auto_corners)
+      *out.mutable_report()->mutable_auto_corners() = to_proto(
+          *design.target.auto_corners, in.mesh, [&](int v) { return sent_vertex(in.load, v); });
     if (request.files())  // the files the CLI writes, for clients that offer downloads
       for (auto& [file, content] : design_files(out))
         if (file == "design.json" || file == "report.json") add_view(file.c_str(), content);

@@ -104,10 +104,12 @@ def main():
             return time.monotonic() - started, time.process_time() - cpu
 
         def daemon_seconds(before, methods):
-            """The daemon's time (queue + run) of the requests logged after ``before``."""
-            daemon.wait_for(lambda e: len(daemon.requests()) >= before + len(methods), 10)
+            """The daemon's time (queue + run) of the requests logged after ``before`` (with the
+            Load the add-on's first design on a mesh makes for its patch key)."""
+            calls = lambda: [e for e in daemon.requests()[before:] if e["method"] != "Load"]  # noqa: E731
+            daemon.wait_for(lambda e: len(calls()) >= len(methods), 10)
             entries = daemon.requests()[before:]
-            if sorted(e["method"] for e in entries) != sorted(methods):
+            if sorted(e["method"] for e in calls()) != sorted(methods):
                 raise RuntimeError("unexpected requests: %s" % entries)
             return sum(e["run_ms"] + e["queue_ms"] for e in entries) / 1000
 

@@ -874,18 +874,26 @@ TEST(MeshIoReject, NonOrientableMoebiusStrip) {
                   {"moebius.obj", "inconsistent orientation", "not orientable", "line"});
 }
 
-TEST(MeshIoReject, ClosedSurfaceOnlyWithSingleBoundaryRequired) {
-  const std::string tetra =
-      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
-  expect_contains(reject("closed.obj", tetra), {"closed.obj", "closed", "no boundary"});
+// Any orientable manifold surface loads by default (issue 18: holes, several boundary loops,
+// closed meshes, handles, pieces are targets; the patch cut out of them must be a disk). The
+// disk check stays available with require_single_boundary.
+MeshLoadOptions disk_only() {
   MeshLoadOptions options;
-  options.require_single_boundary = false;
-  const TriangleMesh mesh =
-      load_mesh(write_text(temp_dir(), "closed.obj", tetra), nullptr, options);
-  EXPECT_EQ(mesh.face_count(), 4);
+  options.require_single_boundary = true;
+  return options;
 }
 
-TEST(MeshIoReject, TwoBoundaryLoopsOnlyWithSingleBoundaryRequired) {
+TEST(MeshIoTopology, ClosedSurfaceLoadsAndIsRejectedOnlyWhenADiskIsRequired) {
+  const std::string tetra =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+  expect_contains(reject("closed.obj", tetra, disk_only()),
+                  {"closed.obj", "closed", "no boundary"});
+  const TriangleMesh mesh = load_mesh(write_text(temp_dir(), "closed.obj", tetra));
+  EXPECT_EQ(mesh.face_count(), 4);
+  EXPECT_TRUE(mesh.topology().boundary_loops.empty());
+}
+
+TEST(MeshIoTopology, TwoBoundaryLoopsLoadAndAreRejectedOnlyWhenADiskIsRequired) {
   // A square frame: outer square 1-4, inner square 5-8.
   std::string obj = "v 0 0 0\nv 3 0 0\nv 3 3 0\nv 0 3 0\nv 1 1 0\nv 2 1 0\nv 2 2 0\nv 1 2 0\n";
   for (int k = 0; k < 4; ++k) {
@@ -893,24 +901,25 @@ TEST(MeshIoReject, TwoBoundaryLoopsOnlyWithSingleBoundaryRequired) {
     obj += "f " + std::to_string(o0) + " " + std::to_string(o1) + " " + std::to_string(i1) + " " +
            std::to_string(i0) + "\n";
   }
-  expect_contains(reject("frame.obj", obj), {"frame.obj", "2 boundary loops", "exactly one"});
-  MeshLoadOptions options;
-  options.require_single_boundary = false;
+  expect_contains(reject("frame.obj", obj, disk_only()),
+                  {"frame.obj", "2 boundary loops", "exactly one"});
   LoadReport report;
-  const TriangleMesh mesh = load_mesh(write_text(temp_dir(), "frame.obj", obj), &report, options);
+  const TriangleMesh mesh = load_mesh(write_text(temp_dir(), "frame.obj", obj), &report);
   EXPECT_EQ(mesh.face_count(), 8);
+  EXPECT_EQ(mesh.topology().boundary_loops.size(), 2u);
   EXPECT_TRUE(report.warnings.empty());
 }
 
-TEST(MeshIoReject, DiskWithASeparateClosedPiece) {
+TEST(MeshIoTopology, DiskWithASeparateClosedPiece) {
   // A square (two triangles) plus a tetrahedron far away: one boundary loop, two pieces.
   const std::string obj =
       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n"
       "v 5 5 5\nv 6 5 5\nv 5 6 5\nv 5 5 6\nf 5 7 6\nf 5 6 8\nf 6 7 8\nf 7 5 8\n";
-  expect_contains(reject("pieces.obj", obj), {"pieces.obj", "2 separate pieces"});
+  expect_contains(reject("pieces.obj", obj, disk_only()), {"pieces.obj", "2 separate pieces"});
+  EXPECT_EQ(load_mesh(write_text(temp_dir(), "pieces.obj", obj)).face_count(), 6);
 }
 
-TEST(MeshIoReject, OneBoundaryLoopWithAHandle) {
+TEST(MeshIoTopology, OneBoundaryLoopWithAHandle) {
   // A 6 x 6 torus with one face removed: one boundary loop, genus 1.
   const int n = 6;
   std::string obj;
@@ -927,8 +936,9 @@ TEST(MeshIoReject, OneBoundaryLoopWithAHandle) {
       obj += "f " + id(i, j) + " " + id(i + 1, j) + " " + id(i + 1, j + 1) + "\n";
       if (i + j > 0) obj += "f " + id(i, j) + " " + id(i + 1, j + 1) + " " + id(i, j + 1) + "\n";
     }
-  expect_contains(reject("handle.obj", obj),
+  expect_contains(reject("handle.obj", obj, disk_only()),
                   {"handle.obj", "not a topological disk", "Euler characteristic -1"});
+  EXPECT_EQ(load_mesh(write_text(temp_dir(), "handle.obj", obj)).face_count(), 2 * n * n - 1);
 }
 
 // ---------------------------------------------------------------------------------------------

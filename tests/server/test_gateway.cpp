@@ -99,11 +99,38 @@ TEST(Gateway, LoadReadsFileBytesWithTheCliLoader) {
   ASSERT_EQ(result.report().warnings_size(), static_cast<int>(local.warnings.size()));
   EXPECT_EQ(result.report().bounding_box_size(), 6);
   EXPECT_EQ(result.report().bounding_box(3), 1.0);
+  // Where each file vertex went: the duplicate (file vertex 4) was welded to vertex 0.
+  EXPECT_EQ(std::vector<int>(result.vertex_map().begin(), result.vertex_map().end()),
+            (std::vector<int>{0, 1, 2, 3, 0}));
   // The loaded arrays come back as a mesh to send as it is.
   v1::PatchRequest patch;
   *patch.mutable_mesh() = result.mesh();
   LoadReport again;
   EXPECT_EQ(to_mesh(patch.mesh(), &again).face_count(), mesh.face_count());
+}
+
+TEST(Gateway, LoadMapsEverySentVertexToTheLoadedMesh) {
+  TestDaemon daemon;
+  // Packed arrays with an isolated vertex (1, removed) and a duplicate of vertex 2 (5, welded):
+  // the loaded mesh renumbers 0 2 3 4 as 0 1 2 3.
+  const std::string body = R"({"mesh": {"positions": [0,0,0, 5,5,5, 1,0,0, 1,1,0, 0,1,0, 1,0,0],
+                                         "indices": [0,5,3, 0,3,4]}})";
+  const auto reply = http_request(daemon.http_port(), "POST", "/v1/load", body, kJson);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  v1::LoadResult result;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(reply.body, &result).ok());
+  EXPECT_EQ(result.report().isolated_vertices_removed(), 1);
+  EXPECT_EQ(result.report().duplicate_vertices_merged(), 1);
+  EXPECT_EQ(std::vector<int>(result.vertex_map().begin(), result.vertex_map().end()),
+            (std::vector<int>{0, -1, 1, 2, 3, 1}));
+  // Each sent vertex that stayed is where the map says.
+  const std::vector<double> sent = {0, 0, 0, 5, 5, 5, 1, 0, 0, 1, 1, 0, 0, 1, 0, 1, 0, 0};
+  ASSERT_EQ(result.vertex_map_size(), 6);
+  for (int v = 0; v < 6; ++v) {
+    if (result.vertex_map(v) < 0) continue;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(result.mesh().positions(3 * result.vertex_map(v) + k), sent[3 * v + k]) << v;
+  }
 }
 
 TEST(Gateway, LoadErrorsNameTheFileFieldAndTheLine) {
@@ -148,6 +175,7 @@ TEST(Gateway, ExamplesAndExampleMeshes) {
     ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(mesh.body, &loaded).ok());
     EXPECT_EQ(loaded.mesh().positions_size(), 3 * example.vertices()) << example.name();
     ASSERT_EQ(loaded.example_corners().vertices_size(), 4);
+    EXPECT_EQ(loaded.vertex_map_size(), 0) << "nothing renumbered: empty (the identity)";
     for (int k = 0; k < 4; ++k) EXPECT_EQ(loaded.example_corners().vertices(k), example.corners(k));
   }
 }
@@ -376,6 +404,44 @@ TEST(Gateway, StaticFilesNeverLeaveTheirFolder) {
                              "/js/%2E%2E/%2E%2E/outside.txt", "/.secret", "/link.txt",
                              "/nothing.html", "/js", "/%zz", "//etc/passwd"})
     EXPECT_EQ(http_request(port, "GET", target).status, 404) << target;
+}
+
+// Issue 18: an infeasible design's error carries its computed suggestions, in the JSON body
+// and in the Server-Sent Events' error event; the CLI shows them from the gRPC details.
+TEST(Gateway, InfeasibleDesignErrorCarriesSuggestions) {
+  TestDaemon daemon;
+  v1::DesignRequest request = testing::design_request("double-vault", 50);
+  request.mutable_options()->set_k_max(1.5);
+  request.mutable_options()->set_suggest(2);
+  auto expect_suggestions = [](const nlohmann::json& error) {
+    ASSERT_TRUE(error.contains("suggestions")) << error.dump();
+    ASSERT_GE(error["suggestions"].size(), 1u);
+    ASSERT_LE(error["suggestions"].size(), 2u);
+    const auto& first = error["suggestions"][0];
+    EXPECT_EQ(first["rank"], 1);
+    EXPECT_EQ(first["kind"], "slope_bounds");
+    EXPECT_GT(first["k_max"].get<double>(), 1.5);
+    EXPECT_EQ(first["alpha_bar_range"].size(), 2u);
+    EXPECT_FALSE(first["description"].get<std::string>().empty());
+  };
+  auto reply =
+      http_request(daemon.http_port(), "POST", "/v1/design", to_json(request, false), kJson);
+  EXPECT_EQ(reply.status, 422) << reply.body;
+  expect_suggestions(nlohmann::json::parse(reply.body)["error"]);
+  auto headers = kJson;
+  headers["Accept"] = "text/event-stream";
+  reply = http_request(daemon.http_port(), "POST", "/v1/design", to_json(request, false), headers);
+  const size_t event = reply.body.find("event: error\ndata: ");
+  ASSERT_NE(event, std::string::npos) << reply.body;
+  const size_t data = event + 19, end = reply.body.find('\n', data);
+  expect_suggestions(nlohmann::json::parse(reply.body.substr(data, end - data))["error"]);
+  // The CLI through gRPC: the suggestions from the status details, as in-process.
+  const auto cli = testing::run_cli(
+      "design example:double-vault --resolution 50 --k-max 1.5 "
+      "--suggest 2 --quiet --server " +
+      daemon.grpc_address() + " --out '" + testing::temp_dir() + "'");
+  EXPECT_EQ(cli.exit_code, 3) << cli.err;
+  EXPECT_NE(cli.err.find("\nsuggestion 1: slope bounds k_max"), std::string::npos) << cli.err;
 }
 
 }  // namespace

@@ -326,6 +326,26 @@ test('member counts redesign live; a bad option shows its field next to the cont
   assert.equal(await page.locator('.field-error[data-for=options]').textContent(), '');
 });
 
+test('an infeasible design lists the computed feasible changes under the error', async () => {
+  const n = await designCount();
+  allowHttpErrors = true;
+  try {
+    await byId('lamella-width').fill('12'); // 12 % of the longest side: too few members fit
+    await until(() => byId('error').isVisible(), 120000, 'the infeasible design');
+    await until(async () => (await page.locator('[data-testid=suggestions] li').count()) > 0, 1000,
+      'the suggestions');
+  } finally {
+    allowHttpErrors = false;
+  }
+  assert.match(await text('error'), /FAILED_PRECONDITION/);
+  assert.match(await text('error'), /Feasible changes \(computed\):/);
+  const first = await page.locator('[data-testid=suggestions] li').first().textContent();
+  assert.match(first, /(lamella width|members).*feasible planar angles/);
+  await byId('lamella-width').fill('0');
+  await until(async () => (await designCount()) === n + 1, 60000, 'the redesign after the fix');
+  assert.ok(await byId('error').isHidden());
+});
+
 test('Simulate: deployment with RMS, deployment.json downloads', async () => {
   await byId('unit').selectOption('cm'); // a unit makes the stresses physical
   await byId('simulate').click();

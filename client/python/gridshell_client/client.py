@@ -14,13 +14,19 @@ then the result). Results are the API's JSON as Python dicts and lists.
 Cancelling: pass a ``Cancel`` and call its ``cancel()`` from any thread; the call's connection is
 shut, the daemon stops the work within milliseconds (a client that goes away cancels its job) and
 the call raises ``Cancelled``. Deadlines: ``timeout`` seconds per call, sent as ``X-Timeout-Ms``
-(the daemon stops the work when it passes) and kept by the client too. Replicas: an idempotent call
-answered with 503 (UNAVAILABLE), refused, or cut off before its result is tried again a bounded
-number of times with exponential backoff.
+(the daemon stops the work when it passes) and kept by the client too.
+
+Replicas (docs/api.md, "Replicas and the patch key" and "Retries"): Design and Run carry the
+patch routing key (``X-Gridshell-Patch-Key``, routing.py) so that a proxy sends every design on
+one patch to the replica that has its work cached; a call the daemon could not answer (refused or
+cut connection, 502, 503, an event stream cut before its result) is made again, at most 5 times,
+after 0.25 s doubling to 4 s, each wait times a random factor in [0.5, 1), within the deadline and
+never after a cancel.
 """
 
 import base64
 import collections
+import hashlib
 import http.client
 import json
 import math
@@ -31,7 +37,7 @@ import threading
 import time
 import urllib.parse
 
-from . import errors
+from . import errors, routing
 from .errors import (
     Cancelled,
     DeadlineExceeded,
@@ -50,6 +56,37 @@ USER_AGENT = "gridshell-python/0.1"
 IDEMPOTENT_METHODS = frozenset(
     ["patch", "design", "simulate", "run", "geodesic", "load", "examples"]
 )
+# The calls that use the daemon's per-patch cache and so carry the patch routing key.
+ROUTED_METHODS = frozenset(["design", "run"])
+PATCH_KEY_HEADER = "X-Gridshell-Patch-Key"
+
+# The retry policy of docs/api.md ("Retries"), the same numbers as the CLI and the web page: at
+# most RETRIES more attempts, the k-th after min(BACKOFF_MAX, BACKOFF * 2^(k-1)) seconds times a
+# random factor in [0.5, 1).
+RETRIES = 5
+BACKOFF = 0.25
+BACKOFF_MAX = 4.0
+# HTTP statuses the daemon did not answer itself (the proxy found no replica, or lost the one
+# serving the call) or answered because it is shutting down: the call is made again.
+RETRY_STATUSES = frozenset([502, 503])
+# Meshes whose loaded form (for the patch key) the process remembers, least recently used dropped.
+MESH_MEMO = 8
+# (server, mesh identity) -> routing.MeshDigest or None, shared by every Client of the process: the
+# plugins make a new Client per operation, and the loaded form of a mesh is the daemon's, not the
+# client's.
+_MESHES = collections.OrderedDict()
+_MESHES_LOCK = threading.Lock()
+
+
+def retry_delay(retry, backoff=BACKOFF, backoff_max=BACKOFF_MAX, draw=random.random):
+    """Seconds to wait before the ``retry``-th retry (1-based): min(backoff_max, backoff *
+    2^(retry-1)) times a random factor in [0.5, 1), so that many clients do not return in step."""
+    return min(backoff_max, backoff * 2.0 ** (retry - 1)) * (0.5 + 0.5 * draw())
+
+
+def retry_stage(retry, retries):
+    """The progress stage shown while a call waits for its ``retry``-th retry."""
+    return "gridshelld unavailable, retry %d of %d" % (retry, retries)
 
 Progress = collections.namedtuple("Progress", "stage fraction message")
 Progress.__doc__ = """One progress event: the kernel's stage name, the fraction (0..1) of that
@@ -186,7 +223,7 @@ def _holds_raw(value):
 
 
 class _Retry(Exception):
-    """An attempt that may be tried again (503, refused, cut off before the result)."""
+    """An attempt that may be made again (refused or cut connection, 502, 503, a cut stream)."""
 
     def __init__(self, error):
         super().__init__(str(error))
@@ -205,11 +242,15 @@ class Client:
     timeout          default deadline of a call in seconds (None: no deadline); each call may
                      give its own. Sent as X-Timeout-Ms, so the daemon stops the work too.
     connect_timeout  seconds to connect (default 10).
-    retries          further attempts of an idempotent call after UNAVAILABLE (503), a refused
-                     connection or one cut off before the result (default 3; 0 = none).
-    backoff          first wait before a retry in seconds (default 0.25); doubles per attempt up
-                     to ``backoff_max`` (4 s), each wait drawn in [w/2, w] (jitter).
+    retries          further attempts of a call the daemon could not answer: a refused or cut
+                     connection, 502, 503, an event stream cut before its result (default 5, as
+                     docs/api.md documents; 0 = none).
+    backoff          wait before the first retry in seconds (default 0.25); doubles per retry up
+                     to ``backoff_max`` (4 s), each wait times a random factor in [0.5, 1).
     headers          extra headers sent with every call (a dict).
+    patch_keys       send the patch routing key with Design and Run (default True): the mesh is
+                     loaded once by the daemon (``Load``) to learn its repaired arrays, then
+                     remembered; see ``patch_key``.
     """
 
     def __init__(
@@ -220,10 +261,11 @@ class Client:
         ca_file=None,
         timeout=None,
         connect_timeout=10.0,
-        retries=3,
-        backoff=0.25,
-        backoff_max=4.0,
+        retries=RETRIES,
+        backoff=BACKOFF,
+        backoff_max=BACKOFF_MAX,
         headers=None,
+        patch_keys=True,
     ):
         if not isinstance(server, str) or not server.strip():
             raise InvalidInput("empty: give the daemon's HTTP address", "INVALID_ARGUMENT", "server")
@@ -275,6 +317,10 @@ class Client:
         self.backoff = backoff
         self.backoff_max = backoff_max
         self.headers = dict(headers or {})
+        # A key the caller set for every call (the workaround before the client computed one)
+        # is kept as it is.
+        given = any(name.lower() == PATCH_KEY_HEADER.lower() for name in self.headers)
+        self.patch_keys = bool(patch_keys) and not given
 
     # ---- the API's methods -----------------------------------------------------------------
 
@@ -356,48 +402,132 @@ class Client:
             request["distances"] = True
         return self.call("geodesic", request, **call)
 
+    def patch_key(self, mesh, corners=None, options=None, cancel=None, timeout=None):
+        """The patch routing key (docs/api.md) that ``design`` and ``run`` send for this mesh,
+        corners and design options: 32 hex digits, equal to the daemon's ``report["patch_key"]``;
+        None where the daemon would refuse the request (it then answers with the reason).
+
+        The key hashes the mesh as the daemon loads it (after welding duplicates, dropping
+        isolated vertices and degenerate faces, fixing the orientation), which only the daemon's
+        loader knows for sure: the first key on a mesh asks the daemon (``Load``, one call, no
+        patch work) and remembers the loaded mesh's hash state (the last 8 meshes of the process,
+        by server and content), so the keys of further designs on it (an angle slider, other
+        member counts), from any Client of the process, cost nothing.
+        """
+        deadline = _deadline(timeout if timeout is not None else self.timeout)
+        digest = self._mesh_digest(mesh, None, cancel, deadline)
+        return None if digest is None else digest.key(_corners(corners), options)
+
     # ---- one call --------------------------------------------------------------------------
 
-    def call(self, method, request, progress=None, cancel=None, timeout=None):
+    def call(self, method, request, progress=None, cancel=None, timeout=None, response_headers=None):
         """``POST /v1/METHOD`` with ``request`` (a dict in the API's JSON form, or JSON bytes).
 
         progress  called as ``progress(Progress(stage, fraction, message))`` on this thread for
-                  every progress event (the call then streams Server-Sent Events)
+                  every progress event (the call then streams Server-Sent Events), and with the
+                  stage ``gridshelld unavailable, retry k of 5`` (fraction 0, the error as the
+                  message) while the call waits to be made again
         cancel    a ``Cancel``; its ``cancel()`` from another thread ends the call (``Cancelled``)
         timeout   deadline in seconds for this call (default: the client's)
+        response_headers  a dict that the call fills with the answer's HTTP headers (lowercase
+                  names): ``x-request-id``, and behind the proxy ``x-gridshell-replica``
+        Design and Run given as dicts carry the patch routing key (``patch_key``); a request given
+        as JSON bytes is sent as it is, without one.
         Returns the result message as a dict; raises a GridshellError subclass.
         """
         if not isinstance(method, str) or not method.isidentifier():
             raise InvalidInput("not an API method name: %r" % (method,), "INVALID_ARGUMENT", "method")
         body = request if isinstance(request, (bytes, bytearray)) else encode_request(request)
         deadline = _deadline(timeout if timeout is not None else self.timeout)
-        attempts = 1 + (self.retries if method in IDEMPOTENT_METHODS else 0)
-        wait = self.backoff
-        for attempt in range(attempts):
+        key = None
+        if self.patch_keys and method in ROUTED_METHODS and isinstance(request, dict):
+            design = request if method == "design" else request.get("design")
+            if isinstance(design, dict):
+                digest = self._mesh_digest(design.get("mesh"), progress, cancel, deadline)
+                if digest is not None:
+                    key = digest.key(design.get("corners"), design.get("options"))
+        return self._call(method, body, progress, cancel, deadline, key, response_headers)
+
+    def _call(self, method, body, progress, cancel, deadline, key=None, response_headers=None,
+              stream=None):
+        """One call with the retry policy (docs/api.md, "Retries"). ``stream`` (default: a
+        progress callback is given) asks for Server-Sent Events."""
+        if stream is None:
+            stream = progress is not None
+        retries = self.retries if method in IDEMPOTENT_METHODS else 0
+        retry = 0
+        while True:
             if cancel is not None and cancel.cancelled:
                 raise Cancelled("cancelled by the client", "CANCELLED")
             try:
-                return self._attempt(method, body, progress, cancel, deadline)
-            except _Retry as retry:
-                if attempt + 1 == attempts:
-                    raise retry.error from None
-                pause = min(wait, self.backoff_max)
-                pause = pause / 2 + random.uniform(0, pause / 2)
+                return self._attempt(
+                    method, body, progress if stream else None, cancel, deadline, key,
+                    response_headers,
+                )
+            except _Retry as failed:
+                retry += 1
+                if retry > retries:
+                    raise failed.error from None
+                pause = retry_delay(retry, self.backoff, self.backoff_max)
+                # No retry starts after the deadline: the last error is the answer.
                 if deadline is not None and time.monotonic() + pause >= deadline:
-                    raise retry.error from None
-                if cancel is not None:
-                    if cancel.wait(pause):
-                        raise Cancelled("cancelled by the client", "CANCELLED") from None
-                else:
-                    time.sleep(pause)
-                wait *= 2
-        raise AssertionError("unreachable")
+                    raise failed.error from None
+                if progress is not None:
+                    progress(Progress(retry_stage(retry, retries), 0.0, str(failed.error)))
+                if self._wait(pause, cancel):
+                    raise Cancelled("cancelled by the client", "CANCELLED") from None
+
+    @staticmethod
+    def _wait(seconds, cancel):
+        """Sleeps before a retry; True when cancelled meanwhile."""
+        if cancel is not None:
+            return cancel.wait(seconds)
+        time.sleep(seconds)
+        return False
+
+    def _mesh_digest(self, mesh, progress, cancel, deadline):
+        """The routing.MeshDigest of a request's mesh as the daemon loads it (remembered per
+        mesh content), or None where there is none: the daemon refuses the mesh, or the mesh is
+        not one this client can name (then the call goes without a key)."""
+        identity = _mesh_identity(mesh)
+        if identity is None:
+            return None
+        identity = (self.server + self._prefix, identity)
+        with _MESHES_LOCK:
+            if identity in _MESHES:
+                _MESHES.move_to_end(identity)
+                return _MESHES[identity]
+        try:
+            loaded = self._call(
+                "load", encode_request({"mesh": mesh}), progress, cancel, deadline, stream=False
+            )
+            arrays = loaded["mesh"]
+            digest = routing.MeshDigest(
+                arrays.get("positions", []), arrays.get("indices", []), loaded.get("vertex_map")
+            )
+        except (Cancelled, DeadlineExceeded, Unavailable):
+            raise  # the call itself would end the same way
+        except InvalidInput:
+            # The daemon refuses the mesh: the call goes without a key, and its own answer names
+            # the problem in the call's terms (design.mesh...). The same mesh is refused again.
+            digest = None
+        except GridshellError:
+            return None  # a full queue, a token refused: the call answers for itself
+        except (KeyError, TypeError, ValueError, AttributeError, OverflowError):
+            digest = None  # an answer without the loaded arrays: no key rather than a wrong one
+        with _MESHES_LOCK:
+            _MESHES[identity] = digest
+            while len(_MESHES) > MESH_MEMO:
+                _MESHES.popitem(last=False)
+        return digest
 
     # ---- internals -------------------------------------------------------------------------
 
-    def _headers(self, deadline, stream=False):
+    def _headers(self, deadline, stream=False, key=None):
         headers = {"User-Agent": USER_AGENT}
         headers.update(self.headers)
+        if key:
+            headers[PATCH_KEY_HEADER] = key
         if self.token:
             headers["Authorization"] = "Bearer " + self.token
         if deadline is not None:
@@ -418,7 +548,7 @@ class Client:
             connection = http.client.HTTPConnection(self._host, self._port, timeout=timeout)
         return connection
 
-    def _attempt(self, method, body, progress, cancel, deadline):
+    def _attempt(self, method, body, progress, cancel, deadline, key=None, response_headers=None):
         stream = progress is not None
         connection = self._connect(deadline)
         # http.client hands the socket over to the response of a "Connection: close" answer
@@ -435,10 +565,13 @@ class Client:
                 raise Cancelled("cancelled by the client", "CANCELLED")
             # From here on, the deadline bounds every read (the daemon answers 504 before it).
             line.sock.settimeout(None if deadline is None else _remaining(deadline) + 5)
-            headers = self._headers(deadline, stream)
+            headers = self._headers(deadline, stream, key)
             headers["Content-Type"] = "application/json"
             connection.request("POST", "%s/v1/%s" % (self._prefix, method), body, headers)
             response = connection.getresponse()
+            if response_headers is not None:
+                response_headers.clear()
+                response_headers.update((k.lower(), v) for k, v in response.getheaders())
             content_type = response.getheader("Content-Type", "")
             if response.status == 200 and content_type.startswith("text/event-stream"):
                 return _read_events(response, progress, cancel, method)
@@ -448,7 +581,7 @@ class Client:
             if response.status == 200:
                 return _parse_json(data, "the result")
             error = _error_from_response(response.status, data)
-            if response.status == 503 and method in IDEMPOTENT_METHODS:
+            if response.status in RETRY_STATUSES and method in IDEMPOTENT_METHODS:
                 raise _Retry(error)
             raise error
         except _Cut as e:
@@ -495,6 +628,32 @@ class _Cut(Exception):
         self.cause = cause
 
 
+def _mesh_identity(mesh):
+    """What identifies a ``Mesh`` message's surface for the daemon's loader (not its name or
+    warnings): a digest of its arrays, file bytes and format, or example name; None for a value
+    that is not a mesh message this client builds (no key then)."""
+    if not isinstance(mesh, dict):
+        return None
+    h = hashlib.sha256()
+    try:
+        positions, indices = mesh.get("positions"), mesh.get("indices")
+        if positions or indices:
+            positions, indices = list(positions or []), list(indices or [])
+            h.update(b"arrays %d %d\n" % (len(positions), len(indices)))
+            h.update(routing._packed("d", positions))
+            h.update(routing._packed("q", indices))
+        for name in ("file", "format", "example"):
+            value = mesh.get(name)
+            if value is not None and not isinstance(value, str):
+                return None
+            if value:
+                h.update(b"%s %d\n" % (name.encode("ascii"), len(value)))
+                h.update(value.encode("utf-8"))
+    except (TypeError, ValueError, OverflowError):
+        return None  # e.g. a RawJSON mesh or numbers in strings: the call goes without a key
+    return h.digest()
+
+
 def _deadline(timeout):
     if timeout is None:
         return None
@@ -532,9 +691,16 @@ def _corners(corners):
     )
 
 
+def _json_int(text):
+    """An integer of the answer's JSON; "-0" is a double's negative zero as protobuf prints it
+    (json would make it the integer 0 and lose the sign bit, which the patch key hashes)."""
+    return -0.0 if text == "-0" else int(text)
+
+
 def _parse_json(data, what):
     try:
-        return json.loads(data.decode("utf-8") if isinstance(data, (bytes, bytearray)) else data)
+        text = data.decode("utf-8") if isinstance(data, (bytes, bytearray)) else data
+        return json.loads(text, parse_int=_json_int)
     except (ValueError, UnicodeDecodeError) as e:
         raise InternalError("%s is not JSON: %s" % (what, e), "INTERNAL") from None
 

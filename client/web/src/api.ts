@@ -11,15 +11,33 @@ export interface Progress {
 }
 
 /** A failed call: the daemon's error body, or a transport failure / cancellation of our own. */
+/** A feasible change to an infeasible design (ErrorDetail.suggestions, docs/api.md). */
+export interface Suggestion {
+  rank: number;
+  kind: string; // "slope_bounds" | "corners" | "members" | "lamella_width"
+  description: string;
+  corners?: { vertices?: number[] };
+  k_min?: number;
+  k_max?: number;
+  members_u?: number;
+  members_v?: number;
+  lamella_width?: number;
+  alpha_bar_range?: number[];
+  change?: number;
+}
+
 export class ApiError extends Error {
   readonly status: string;
   readonly field: string;
   readonly httpStatus: number;
-  constructor(status: string, field: string, message: string, httpStatus: number) {
+  readonly suggestions: Suggestion[];
+  constructor(status: string, field: string, message: string, httpStatus: number,
+              suggestions: Suggestion[] = []) {
     super(message);
     this.status = status;
     this.field = field;
     this.httpStatus = httpStatus;
+    this.suggestions = suggestions;
   }
   /** "field: message", as the CLI prints it. */
   describe(): string {
@@ -204,10 +222,12 @@ function headers(sse: boolean, patchKey?: string | null): Record<string, string>
 async function errorFrom(response: Response): Promise<ApiError> {
   const text = await response.text().catch(() => '');
   try {
-    const body = JSON.parse(text) as { error?: { status?: string; field?: string; message?: string } };
+    const body = JSON.parse(text) as {
+      error?: { status?: string; field?: string; message?: string; suggestions?: Suggestion[] };
+    };
     if (body.error)
       return new ApiError(body.error.status ?? 'UNKNOWN', body.error.field ?? '', body.error.message ?? text,
-                          response.status);
+                          response.status, body.error.suggestions ?? []);
   } catch {
     // not JSON: fall through
   }
@@ -313,8 +333,10 @@ export async function readEvents<T>(body: ReadableStream<Uint8Array>, onProgress
         void reader.cancel().catch(() => {});
         return JSON.parse(data) as T;
       } else if (event === 'error') {
-        const e = (JSON.parse(data) as { error: { status: string; field: string; message: string } }).error;
-        throw new ApiError(e.status, e.field, e.message, 200);
+        const e = (JSON.parse(data) as {
+          error: { status: string; field: string; message: string; suggestions?: Suggestion[] };
+        }).error;
+        throw new ApiError(e.status, e.field, e.message, 200, e.suggestions ?? []);
       }
     }
     if (done) throw new ApiError('UNAVAILABLE', '', 'the daemon closed the stream without a result', 0);

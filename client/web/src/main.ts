@@ -16,6 +16,7 @@ import {
   patchSummary, sliderRange, stress, type UrlState,
 } from './format';
 import { fabricateRequest, kitSummary, kitZip, type FabricateResult } from './kit';
+import { appendSuggestions } from './suggestions';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
 import { patchKey, type KeyCorners } from './routing';
@@ -174,6 +175,7 @@ function showError(kind: CallKind, e: unknown): void {
   if (err.status === 'UNAUTHENTICATED') ui.tokenBox.hidden = false;
   ui.error.hidden = false;
   ui.error.textContent = `${kind} failed (${err.status}): ${err.describe()}`;
+  appendSuggestions(ui.error, err.suggestions);
   ui.status.textContent = `${kind}: failed`;
   const slot = document.querySelector<HTMLElement>(`.field-error[data-for="${errorSlot(kind, err.field)}"]`);
   if (slot) slot.textContent = err.describe();

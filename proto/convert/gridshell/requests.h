@@ -88,12 +88,26 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
 // Design -----------------------------------------------------------------------------------------
 
 /// A design request checked and converted into kernel inputs.
+/// An infeasible design with the ranked feasible suggestions computed for it (issue 18): the
+/// daemon puts them in ErrorDetail.suggestions, the CLI prints them after the error line.
+class InfeasibleWithSuggestions : public Infeasible {
+ public:
+  InfeasibleWithSuggestions(const std::string& field, const std::string& message,
+                            std::vector<v1::Suggestion> suggestions)
+      : Infeasible(field, message), suggestions_(std::move(suggestions)) {}
+  const std::vector<v1::Suggestion>& suggestions() const { return suggestions_; }
+
+ private:
+  std::vector<v1::Suggestion> suggestions_;
+};
+
 struct DesignInputs {
   TriangleMesh mesh;
   LoadReport load;
   CornerSpec corners;
   DesignOptions options;
   v1::DesignOptions record;  ///< the options as recorded in design.json (completed after the run)
+  int suggest = 3;           ///< ranked feasible suggestions to compute when infeasible
 };
 
 /// Checks every field; throws InvalidInput naming the first bad one.

@@ -7,6 +7,7 @@
 // is, and cotangent-Laplacian smoothing with a fixed boundary shrinks it until eta <= eta_max.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "gridshell/design/patch.h"
@@ -62,16 +63,36 @@ CoverabilityReport analyze_coverability(const Patch& patch, const GeodesicOption
 double laplacian_smoothing_step(TriangleMesh& mesh, const std::vector<char>& fixed, double step);
 
 struct SmoothingResult {
-  int iterations = 0;
+  int iterations = 0;  ///< smoothing steps, over all rounds
   double eta_before = 1.0;
   double eta_after = 1.0;
-  double max_displacement = 0;  ///< largest total vertex movement
+  double max_displacement = 0;  ///< largest vertex movement from the input surface
+  int recuts = 0;  ///< times the patch was re-cut along the smoothed surface's boundary geodesics
 };
 
-/// Smooths the patch interior (boundary fixed) until eta <= eta_max. Throws Infeasible (field
-/// "corners": the patch they bound cannot be covered) if the iteration cap is reached first.
+/// Relative excess of each side over the exact shortest geodesic between its corners on the
+/// patch itself: (polyline length of sides[i] - d(c_i, c_i+1)) / polyline length; 0 when the
+/// side is a shortest geodesic of the patch (rounding aside). Four exact solves.
+std::array<double, 4> boundary_geodesic_excess(const Patch& patch,
+                                               const GeodesicOptions& geodesic = {},
+                                               const Progress& progress = {});
+
+/// A side counts as a shortest geodesic of the patch when its excess is at most this.
+constexpr double kBoundaryGeodesicTolerance = 1e-9;
+
+/// Smooths the patch interior (boundary fixed) until eta <= eta_max, then makes the boundary
+/// exact again (paper 3.2 needs the four sides to be shortest geodesics of the patch the grid
+/// is designed on, and smoothing moves the surface under them): the boundary geodesics between
+/// the same corners are recomputed on the smoothed surface and the patch is re-cut along them;
+/// if the re-cut patch has eta > eta_max again, it is smoothed and re-cut again. Ends when both
+/// hold. Throws Infeasible (field "corners") with eta and the boundary excess when the
+/// iteration cap (CoverabilityOptions::max_smoothing_iterations, over all rounds) or
+/// kMaxRecuts re-cuts are reached first.
 SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic = {},
                                        const CoverabilityOptions& options = {},
                                        const Progress& progress = {});
+
+/// Re-cuts in one smoothing run, at most.
+constexpr int kMaxRecuts = 12;
 
 }  // namespace gridshell

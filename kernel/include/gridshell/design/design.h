@@ -73,6 +73,10 @@ Design design_on_patch(const PatchWork& work, const DesignOptions& options = {},
 Design design_grid(TargetPatch target, const DesignOptions& options = {},
                    const Progress& progress = {});
 
+/// The patch stage's options of a design: options.patch, with the automatic corners' search
+/// checking the planar angle on the design's maps and slope bounds.
+TargetPatchOptions patch_options(const DesignOptions& options);
+
 /// Patch stage then grid design.
 Design make_design(const TriangleMesh& mesh, const CornerSpec& corners,
                    const DesignOptions& options = {}, const Progress& progress = {});

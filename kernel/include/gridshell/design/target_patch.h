@@ -5,8 +5,12 @@
 
 #include <array>
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
+#include "gridshell/design/auto_corners.h"
 #include "gridshell/design/coverability.h"
 #include "gridshell/design/patch.h"
 
@@ -19,6 +23,7 @@ struct TargetPatchOptions {
   PatchCutOptions cut;               // boundary geodesics and cutting
   CoverabilityOptions coverability;  // eta_max, smoothing cap and step
   bool smooth = true;                // run smoothing when eta > eta_max
+  AutoCornerOptions auto_corners;    // the search behind CornerSpec::Kind::Auto
 };
 
 struct TargetPatch {
@@ -29,7 +34,18 @@ struct TargetPatch {
   double area = 0;
   CoverabilityReport coverability;  ///< before smoothing
   SmoothingResult smoothing;
+  /// Per side: relative excess of its length over the shortest geodesic between its corners on
+  /// the final patch (<= kBoundaryGeodesicTolerance: the sides are exact shortest geodesics).
+  std::array<double, 4> boundary_excess{};
+  /// Conditions the user must see (eta above eta_max without smoothing, ...), one line each.
+  std::vector<std::string> warnings;
   std::map<std::string, double> stage_seconds;  ///< "cut", "coverability", "smoothing"
+  /// With automatic corners: the candidates tried and the choice.
+  std::optional<AutoCornerReport> auto_corners;
+  /// With automatic corners: the distance maps the search computed on this patch (with
+  /// maps_options), so that the design need not compute them again; null otherwise.
+  std::shared_ptr<const DistanceMaps> maps;
+  DistanceMapOptions maps_options;
 };
 
 /// Resolves the corner spec on `mesh` (vertex indices refer to `mesh`), cuts the patch, checks
@@ -38,5 +54,21 @@ struct TargetPatch {
 TargetPatch make_target_patch(const TriangleMesh& mesh, const CornerSpec& corners,
                               const TargetPatchOptions& options = {},
                               const Progress& progress = {});
+
+/// The patch stage for corners already located on `mesh`.
+TargetPatch target_patch_at(const TriangleMesh& mesh, const std::array<SurfacePoint, 4>& corners,
+                            const TargetPatchOptions& options = {}, const Progress& progress = {});
+
+/// The patch stage after the cut: convexity, coverability, smoothing with exact re-cut
+/// boundaries, the boundary check and warnings.
+TargetPatch target_patch_from_cut(Patch patch, const std::array<SurfacePoint, 4>& corners,
+                                  const TargetPatchOptions& options = {},
+                                  const Progress& progress = {});
+
+/// The automatic corners' search (auto_corners.h): the largest acceptable candidate's patch,
+/// with its report and distance maps. Throws Infeasible (field "corners") naming the best
+/// candidates' reasons when none is acceptable.
+TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptions& options = {},
+                                const Progress& progress = {});
 
 }  // namespace gridshell

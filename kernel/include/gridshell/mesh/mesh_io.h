@@ -12,9 +12,11 @@
 namespace gridshell {
 
 struct MeshLoadOptions {
-  /// Reject meshes that are not a topological disk (exactly one boundary loop). Default: true,
-  /// as every gridshell target is a disk-like patch.
-  bool require_single_boundary = true;
+  /// Reject meshes that are not a topological disk (exactly one boundary loop, one piece, no
+  /// handle). Default: false: any orientable manifold surface is a target (holes, several
+  /// boundary loops, closed meshes); the patch cut out of it must be a disk, which cut_patch
+  /// checks.
+  bool require_single_boundary = false;
   /// Vertices closer than this (relative to the bounding-box diagonal) are merged. Default 1e-12.
   double duplicate_tolerance = 1e-12;
 };
@@ -65,8 +67,8 @@ std::string read_file_bytes(const std::string& path);
 /// and binary little/big endian) .stl (ASCII and binary). Polygons are triangulated.
 /// Throws InvalidInput whose field is the path and whose message names the line or element for:
 /// missing or unreadable file, unknown extension, empty file or no faces, unparseable
-/// line/header/element, NaN/Inf coordinate, out-of-range index, non-manifold edge or vertex, no
-/// boundary (closed surface), more than one boundary loop.
+/// line/header/element, NaN/Inf coordinate, out-of-range index, non-manifold edge or vertex, a
+/// surface that is not orientable (and, with require_single_boundary, one that is not a disk).
 TriangleMesh load_mesh(const std::string& path, LoadReport* report = nullptr,
                        const MeshLoadOptions& options = {});
 

@@ -1,0 +1,318 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Feasible suggestions for an infeasible design (suggestions.h; issue 18 item 4).
+#include "gridshell/design/suggestions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace gridshell {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+std::string degrees_text(const AlphaRange& range) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << range.min * 180 / kPi << ".."
+      << range.max * 180 / kPi << " deg";
+  return out.str();
+}
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << std::setprecision(3) << value;
+  return out.str();
+}
+
+/// `value` rounded to 3 significant digits, up or down.
+double round3(double value, bool up) {
+  const double scale = std::pow(10.0, 2 - std::floor(std::log10(value)));
+  return (up ? std::ceil(value * scale - 1e-9) : std::floor(value * scale + 1e-9)) / scale;
+}
+
+bool alpha_feasible(const PatchWork& work, const CladdingOptions& cladding, AlphaRange* range,
+                    const Progress& progress) {
+  try {
+    *range = feasible_alpha_range(work.maps, side_lengths(work.target.patch), cladding,
+                                  progress.checker());
+    return true;
+  } catch (const Infeasible&) {
+    return false;
+  }
+}
+
+/// The design with `options` on `work`; false (and nothing else) if it is infeasible.
+bool design_ok(const PatchWork& work, const DesignOptions& options, AlphaRange* range,
+               const Progress& progress) {
+  try {
+    const Design design = design_on_patch(work, options, progress.checker());
+    *range = design.alpha_range;
+    return true;
+  } catch (const Infeasible&) {
+    return false;
+  } catch (const InvalidInput&) {
+    return false;
+  }
+}
+
+struct Search {
+  const TriangleMesh& mesh;
+  const PatchWork& work;
+  const DesignOptions& options;
+  const SuggestionOptions& limits;
+  const Progress& progress;
+  std::vector<DesignSuggestion> found;
+  int designs = 0;
+  int screens = 0;
+
+  bool budget() const { return designs < limits.max_designs; }
+
+  // Slope bounds: the smallest relaxation (k_max up, k_min down, or both by one factor) that
+  // gives a feasible planar angle on the same maps, then a complete design with it.
+  void slope_bounds() {
+    const CladdingOptions& base = options.cladding;
+    const double ladder[] = {1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 2, 3, 5};
+    struct Variant {
+      bool raise_max, lower_min;
+    };
+    auto relaxed = [&](const Variant& v, double f) {
+      CladdingOptions c = base;
+      if (v.raise_max) c.k_max = base.k_max * f;
+      if (v.lower_min) c.k_min = base.k_min / f;
+      return c;
+    };
+    bool any = false;
+    for (const Variant& v : {Variant{true, false}, Variant{false, true}, Variant{true, true}}) {
+      if (v.raise_max && v.lower_min && any) break;  // both only when neither alone works
+      if (!budget()) return;
+      progress.check();
+      double lo = 1, hi = 0;
+      AlphaRange range;
+      for (double f : ladder) {
+        if (alpha_feasible(work, relaxed(v, f), &range, progress)) {
+          hi = f;
+          break;
+        }
+        lo = f;
+      }
+      if (hi == 0) continue;
+      for (int k = 0; k < 6; ++k) {  // the smallest factor, to 1.5 % of the bracket's ratio
+        const double mid = std::sqrt(lo * hi);
+        if (alpha_feasible(work, relaxed(v, mid), &range, progress))
+          hi = mid;
+        else
+          lo = mid;
+      }
+      CladdingOptions c = relaxed(v, hi);
+      if (v.raise_max) c.k_max = round3(c.k_max, true);
+      if (v.lower_min) c.k_min = round3(c.k_min, false);
+      DesignOptions changed = options;
+      changed.cladding = c;
+      ++designs;
+      if (!design_ok(work, changed, &range, progress)) continue;
+      DesignSuggestion s;
+      s.kind = DesignSuggestion::Kind::SlopeBounds;
+      s.k_min = c.k_min;
+      s.k_max = c.k_max;
+      s.alpha = range;
+      s.change = std::max(c.k_max / base.k_max, base.k_min / c.k_min) - 1;
+      std::ostringstream text;
+      text << "slope bounds";
+      if (v.lower_min)
+        text << " k_min " << number(c.k_min) << " (from " << number(base.k_min) << ")";
+      if (v.raise_max)
+        text << " k_max " << number(c.k_max) << " (from " << number(base.k_max) << ")";
+      text << ": feasible planar angles " << degrees_text(range);
+      s.description = text.str();
+      found.push_back(s);
+      any = true;
+    }
+  }
+
+  // Corners: each corner moved along either of its patch sides by a fraction of that side.
+  void corners() {
+    const Patch& patch = work.target.patch;
+    const TriangleMesh& pm = patch.mesh;
+    // The input vertex nearest a patch point.
+    auto nearest_input = [&](const Vec3& p) {
+      int best = -1;
+      double best_d = std::numeric_limits<double>::infinity();
+      for (int v = 0; v < mesh.vertex_count(); ++v) {
+        if (mesh.topology().vertex_faces[v].empty()) continue;
+        const double d = (mesh.vertices()[v] - p).squaredNorm();
+        if (d < best_d) best_d = d, best = v;
+      }
+      return best;
+    };
+    // The point at fraction t of a side's length from its start (or end).
+    auto along = [&](const std::vector<int>& side, double t, bool from_end) {
+      std::vector<Vec3> points;
+      for (int v : side) points.push_back(pm.vertices()[v]);
+      if (from_end) std::reverse(points.begin(), points.end());
+      double total = 0;
+      for (size_t k = 1; k < points.size(); ++k) total += (points[k] - points[k - 1]).norm();
+      double left = t * total;
+      for (size_t k = 1; k < points.size(); ++k) {
+        const double l = (points[k] - points[k - 1]).norm();
+        if (left <= l && l > 0)
+          return Vec3(points[k - 1] + (left / l) * (points[k] - points[k - 1]));
+        left -= l;
+      }
+      return points.back();
+    };
+    std::array<int, 4> base{};
+    for (int i = 0; i < 4; ++i) base[i] = nearest_input(pm.vertices()[patch.corners[i]]);
+    for (double t : {0.05, 0.1}) {
+      for (int i = 0; i < 4; ++i)
+        for (bool forward : {true, false}) {
+          if (!budget() || static_cast<int>(found.size()) >= 2 * limits.count) return;
+          progress.check();
+          // Along side i (towards corner i+1) or side i-1 (towards corner i-1).
+          const Vec3 p =
+              forward ? along(patch.sides[i], t, false) : along(patch.sides[(i + 3) % 4], t, true);
+          std::array<int, 4> moved = base;
+          moved[i] = nearest_input(p);
+          if (moved[i] == base[i]) continue;
+          if (screens >= limits.max_corner_screens) return;
+          ++screens;
+          try {
+            // Screened on coarse maps (R = 32, a third of the solves) first; only a move that
+            // is feasible there gets the design's maps and a complete design.
+            TargetPatch target = make_target_patch(mesh, CornerSpec::at_vertices(moved),
+                                                   patch_options(options), progress.checker());
+            {
+              const GeodesicSolver solver(target.patch.mesh, options.patch.geodesic);
+              DistanceMapOptions coarse = options.maps;
+              coarse.resolution =
+                  std::min(32, options.maps.resolution > 0 ? options.maps.resolution : 32);
+              PatchWork screen;
+              screen.target.patch = target.patch;
+              screen.maps = compute_distance_maps(target.patch, solver, coarse, progress.checker());
+              AlphaRange coarse_range;
+              if (!alpha_feasible(screen, options.cladding, &coarse_range, progress)) continue;
+            }
+            ++designs;
+            const PatchWork other =
+                prepare_patch_work(std::move(target), options, progress.checker());
+            AlphaRange range;
+            if (!design_ok(other, options, &range, progress)) continue;
+            DesignSuggestion s;
+            s.kind = DesignSuggestion::Kind::Corners;
+            s.corners = moved;
+            s.alpha = range;
+            s.change = t;
+            std::ostringstream text;
+            text << "move corner c" << i << " " << static_cast<int>(std::lround(100 * t))
+                 << "% along side "
+                 << (forward ? "c" + std::to_string(i) + "-c" + std::to_string((i + 1) % 4)
+                             : "c" + std::to_string(i) + "-c" + std::to_string((i + 3) % 4))
+                 << " (to input vertex " << moved[i] << "): feasible planar angles "
+                 << degrees_text(range);
+            s.description = text.str();
+            found.push_back(s);
+          } catch (const Infeasible&) {
+          } catch (const InvalidInput&) {
+          }
+        }
+    }
+  }
+
+  // Members: narrower lamellas, or fewer explicit members.
+  void members(const Error& failure) {
+    const bool width = failure.field() == "options.lamella_width";
+    const bool g = failure.field() == "options.members_u",
+               h = failure.field() == "options.members_v";
+    if (!width && !g && !h) return;
+    const LamellaSize size = lamella_size(work.target.patch, options.members);
+    for (double f : {0.8, 0.6, 0.4, 0.25, 0.15, 0.1}) {
+      if (!budget()) return;
+      progress.check();
+      DesignOptions changed = options;
+      changed.members.lamella_width = size.width * f;
+      changed.members.lamella_thickness = size.thickness;
+      AlphaRange range;
+      ++designs;
+      if (!design_ok(work, changed, &range, progress)) continue;
+      DesignSuggestion s;
+      s.kind = DesignSuggestion::Kind::LamellaWidth;
+      s.lamella_width = changed.members.lamella_width;
+      s.alpha = range;
+      s.change = 1 - f;
+      s.description = "lamella width " + number(s.lamella_width) + " (from " + number(size.width) +
+                      "): feasible planar angles " + degrees_text(range);
+      found.push_back(s);
+      break;
+    }
+    const int base_g = options.members_g > 0 ? options.members_g : options.members.min_members;
+    const int base_h = options.members_h > 0 ? options.members_h : options.members.min_members;
+    for (int fewer = 1; fewer <= 2; ++fewer) {
+      if (!budget()) return;
+      progress.check();
+      DesignOptions changed = options;
+      if (width || g) changed.members_g = std::max(1, base_g - fewer);
+      if (width || h) changed.members_h = std::max(1, base_h - fewer);
+      AlphaRange range;
+      ++designs;
+      if (!design_ok(work, changed, &range, progress)) continue;
+      DesignSuggestion s;
+      s.kind = DesignSuggestion::Kind::Members;
+      s.members_g = changed.members_g;
+      s.members_h = changed.members_h;
+      s.alpha = range;
+      s.change = static_cast<double>(fewer) / std::max(base_g, base_h);
+      std::ostringstream text;
+      text << "members";
+      if (changed.members_g) text << " u " << changed.members_g;
+      if (changed.members_h) text << " v " << changed.members_h;
+      text << ": feasible planar angles " << degrees_text(range);
+      s.description = text.str();
+      found.push_back(s);
+      break;
+    }
+  }
+};
+
+}  // namespace
+
+const char* to_string(DesignSuggestion::Kind kind) {
+  switch (kind) {
+    case DesignSuggestion::Kind::SlopeBounds:
+      return "slope_bounds";
+    case DesignSuggestion::Kind::Corners:
+      return "corners";
+    case DesignSuggestion::Kind::Members:
+      return "members";
+    case DesignSuggestion::Kind::LamellaWidth:
+      return "lamella_width";
+  }
+  return "";
+}
+
+std::vector<DesignSuggestion> suggest_feasible_designs(
+    const TriangleMesh& mesh, const PatchWork& work, const DesignOptions& options,
+    const Error& failure, const SuggestionOptions& limits, const Progress& progress) {
+  Search search{mesh, work, options, limits, progress, {}, 0};
+  if (limits.count <= 0 || failure.code() != ErrorCode::Infeasible) return {};
+  progress.report("suggestions", 0.0);
+  const bool members = failure.field() == "options.lamella_width" ||
+                       failure.field() == "options.members_u" ||
+                       failure.field() == "options.members_v";
+  if (members) {
+    search.members(failure);
+  } else {
+    search.slope_bounds();
+    progress.report("suggestions", 0.3);
+    search.corners();
+  }
+  std::stable_sort(
+      search.found.begin(), search.found.end(),
+      [](const DesignSuggestion& a, const DesignSuggestion& b) { return a.change < b.change; });
+  if (static_cast<int>(search.found.size()) > limits.count) search.found.resize(limits.count);
+  progress.report("suggestions", 1.0);
+  return search.found;
+}
+
+}  // namespace gridshell
