@@ -4,12 +4,11 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <iterator>
 #include <limits>
-#include <numeric>
 #include <tuple>
 
 #include "gridshell/mesh/normals.h"
+#include "gridshell/mesh/surface_distance.h"
 
 namespace gridshell {
 namespace {
@@ -71,20 +70,11 @@ std::vector<double> boundary_curvature(const std::vector<Vec3>& polyline, int sa
 
 namespace {
 
-/// The vertex of `candidates` closest to p (the first of equals); `candidates` is not empty.
-template <class Range>
-int nearest_vertex(const TriangleMesh& mesh, const Range& candidates, const Vec3& p) {
-  int best = *std::begin(candidates);
-  for (int v : candidates)
-    if ((mesh.vertices()[v] - p).squaredNorm() < (mesh.vertices()[best] - p).squaredNorm())
-      best = v;
-  return best;
-}
-
 /// Inner anchors (AnchorOptions::interior): strict local extrema of the height over the boundary's
 /// least-squares plane among the grid's inner crossings, most prominent first.
 void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vector<Vec3>& normals,
-                            const AnchorOptions& options, std::vector<Anchor>& anchors) {
+                            const SurfaceDistance& surface, const AnchorOptions& options,
+                            std::vector<Anchor>& anchors) {
   const TriangleMesh& mesh = patch.mesh;
   const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
   if (ng < 3 || nh < 3 || static_cast<int>(grid.crossings.size()) != ng * nh) return;
@@ -134,17 +124,12 @@ void place_interior_anchors(const Patch& patch, const Grid& grid, const std::vec
                                         : std::tie(a.g, a.h) < std::tie(b.g, b.h);
   });
   if (static_cast<int>(candidates.size()) > options.interior) candidates.resize(options.interior);
-  // Every vertex is a candidate (a vector, not std::views::iota: clang 14, which builds the fuzz
-  // targets, cannot compile libstdc++ 12's views).
-  std::vector<int> all_vertices(static_cast<size_t>(mesh.vertex_count()));
-  std::iota(all_vertices.begin(), all_vertices.end(), 0);
   for (const Candidate& c : candidates) {
     Anchor a;
     a.g = c.g, a.h = c.h;
     a.side = -1;
     a.position = grid.crossings[static_cast<size_t>(c.g) * nh + c.h].surface_point;
-    // The nearest vertex carries the normal, as for the boundary anchors.
-    a.normal = normals[nearest_vertex(mesh, all_vertices, a.position)];
+    a.normal = surface.normal_at_closest(a.position);
     anchors.push_back(a);
   }
 }
@@ -156,10 +141,10 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
   const TriangleMesh& mesh = patch.mesh;
   const std::vector<Vec3> normals = vertex_normals(mesh);
   const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
-  auto normal_near = [&](const Vec3& p, int side) {
-    // The closest vertex of that side carries the normal (boundary crossings lie on the side).
-    return normals[nearest_vertex(mesh, patch.sides[side], p)];
-  };
+  // The normal at the crossing itself (the vertex normals interpolated over its face): a support
+  // holds the lamellas' orientation there, and the simulation holds it rigidly, so the nearest
+  // vertex's normal (up to 0.012 rad off on the sphere example) would tilt the grid.
+  const SurfaceDistance surface(mesh);
   std::vector<Anchor> anchors;
   // Corners: c0 = g0 x h0, c1 = g_last x h0, c2 = g_last x h_last, c3 = g0 x h_last.
   const std::array<std::array<int, 2>, 4> corner_crossings{
@@ -239,12 +224,12 @@ std::vector<Anchor> place_anchors(const Patch& patch, const Grid& grid,
       a.g = best->g, a.h = best->h;
       a.side = side;
       a.position = best->p;
-      a.normal = normal_near(best->p, side);
+      a.normal = surface.normal_at_closest(best->p);
       a.boundary_curvature = kappa[static_cast<int>(std::lround(t * (samples - 1)))];
       anchors.push_back(a);
     }
   }
-  if (options.interior > 0) place_interior_anchors(patch, grid, normals, options, anchors);
+  if (options.interior > 0) place_interior_anchors(patch, grid, normals, surface, options, anchors);
   return anchors;
 }
 

@@ -250,7 +250,7 @@ template <typename Residual>
 class PairCost : public ceres::CostFunction {
  public:
   explicit PairCost(const Residual& residual) : residual_(residual) {
-    set_num_residuals(9);
+    set_num_residuals(kRows);
     auto* sizes = mutable_parameter_block_sizes();
     for (const MemberEdge* edge : {&residual.g, &residual.h}) {
       for (int size : {3, 3, 1, 1}) sizes->push_back(size);
@@ -265,32 +265,33 @@ class PairCost : public ceres::CostFunction {
     const MemberPointDerivatives b = member_point_derivatives(p + g_blocks_, residual_.h);
     // Residual rows as linear maps of (q_a, m_a) and (q_b, m_b): r = A [q_a; m_a] + B [q_b; m_b]
     // + constant.
-    Eigen::Matrix<double, 9, 6> A = Eigen::Matrix<double, 9, 6>::Zero(), B = A;
+    Eigen::Matrix<double, kRows, 6> A = Eigen::Matrix<double, kRows, 6>::Zero(), B = A;
     const Mat3d I = Mat3d::Identity();
-    Eigen::Matrix<double, 9, 1> value;
+    Eigen::Matrix<double, kRows, 1> value;
     if constexpr (std::is_same_v<Residual, ConnectionResidual>) {
       const double wp = residual_.sqrt_position, wd = residual_.sqrt_direction,
                    t = residual_.thickness;
       value << wp * (a.q - b.q + t * a.m), wp * (b.q - a.q - t * b.m), wd * (a.m - b.m);
-      A.block<3, 3>(0, 0) = wp * I;
-      A.block<3, 3>(0, 3) = wp * t * I;
-      B.block<3, 3>(0, 0) = -wp * I;
-      A.block<3, 3>(3, 0) = -wp * I;
-      B.block<3, 3>(3, 0) = wp * I;
-      B.block<3, 3>(3, 3) = -wp * t * I;
-      A.block<3, 3>(6, 3) = wd * I;
-      B.block<3, 3>(6, 3) = -wd * I;
+      A.template block<3, 3>(0, 0) = wp * I;
+      A.template block<3, 3>(0, 3) = wp * t * I;
+      B.template block<3, 3>(0, 0) = -wp * I;
+      A.template block<3, 3>(3, 0) = -wp * I;
+      B.template block<3, 3>(3, 0) = wp * I;
+      B.template block<3, 3>(3, 3) = -wp * t * I;
+      A.template block<3, 3>(6, 3) = wd * I;
+      B.template block<3, 3>(6, 3) = -wd * I;
     } else {
       const double wp = residual_.sqrt_position, wd = residual_.sqrt_direction;
-      value << wp * (0.5 * (a.q + b.q) - residual_.position), wd * (a.m - residual_.normal),
-          wd * (b.m - residual_.normal);
-      A.block<3, 3>(0, 0) = 0.5 * wp * I;
-      B.block<3, 3>(0, 0) = 0.5 * wp * I;
-      A.block<3, 3>(3, 3) = wd * I;
-      B.block<3, 3>(6, 3) = wd * I;
+      const Vec3d offset = 0.5 * residual_.thickness * residual_.normal;
+      value << wp * (a.q - residual_.position + offset), wp * (b.q - residual_.position - offset),
+          wd * (a.m - residual_.normal), wd * (b.m - residual_.normal);
+      A.template block<3, 3>(0, 0) = wp * I;
+      B.template block<3, 3>(3, 0) = wp * I;
+      A.template block<3, 3>(6, 3) = wd * I;
+      B.template block<3, 3>(9, 3) = wd * I;
     }
-    Eigen::Map<Eigen::Matrix<double, 9, 1>>{r} = value;
-    const Eigen::Matrix<double, 9, 12> ja = A * a.d, jb = B * b.d;
+    Eigen::Map<Eigen::Matrix<double, kRows, 1>>{r} = value;
+    const Eigen::Matrix<double, kRows, 12> ja = A * a.d, jb = B * b.d;
     static constexpr int kColumn[6] = {0, 3, 6, 7, 8, 11};  // first column of each block
     static constexpr int kSize[6] = {3, 3, 1, 1, 3, 1};
     const int blocks = static_cast<int>(parameter_block_sizes().size());
@@ -301,20 +302,21 @@ class PairCost : public ceres::CostFunction {
       const int local = on_g ? block : block - g_blocks_;
       const auto& j = on_g ? ja : jb;
       const int size = kSize[local], column = kColumn[local];
-      for (int row = 0; row < 9; ++row)
+      for (int row = 0; row < kRows; ++row)
         for (int c = 0; c < size; ++c) out[row * size + c] = j(row, column + c);
     }
     return true;
   }
 
  private:
+  static constexpr int kRows = Residual::kResiduals;
   Residual residual_;
   int g_blocks_ = 4;
 };
 
 /// The direction of a lamella at an anchor (rod_terms::AnchorTangent) with its analytic
-/// Jacobian: r = w (t - t_a), t = e / |e|, D t / D x_b = (I - t t^T) / |e| = -D t / D x_a.
-class AnchorTangentCost : public ceres::SizedCostFunction<3, 3, 3> {
+/// Jacobian: r = w t . c_a, t = e / |e|, D t / D x_b = (I - t t^T) / |e| = -D t / D x_a.
+class AnchorTangentCost : public ceres::SizedCostFunction<1, 3, 3> {
  public:
   explicit AnchorTangentCost(const AnchorTangent& term) : term_(term) {}
   bool Evaluate(const double* const* p, double* r, double** jacobians) const override {
@@ -322,12 +324,11 @@ class AnchorTangentCost : public ceres::SizedCostFunction<3, 3, 3> {
     const double length = e.norm();
     if (!(length > 0)) return false;
     const Vec3d t = e / length;
-    Eigen::Map<Vec3d>{r} = term_.sqrt_weight * (t - term_.tangent);
+    r[0] = term_.sqrt_weight * t.dot(term_.across);
     if (jacobians) {
-      using RowMajor33 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
-      const Mat3d dt = term_.sqrt_weight * (Mat3d::Identity() - t * t.transpose()) / length;
-      if (jacobians[0]) Eigen::Map<RowMajor33>{jacobians[0]} = -dt;
-      if (jacobians[1]) Eigen::Map<RowMajor33>{jacobians[1]} = dt;
+      const Vec3d row = term_.sqrt_weight * (term_.across - t.dot(term_.across) * t) / length;
+      if (jacobians[0]) Eigen::Map<Vec3d>{jacobians[0]} = -row;
+      if (jacobians[1]) Eigen::Map<Vec3d>{jacobians[1]} = row;
     }
     return true;
   }

@@ -222,6 +222,7 @@ MemberPoint<T> member_point(const T* const* p, const MemberEdge& edge) {
 /// The angle term uses the chord |m_g - m_h| = 2 sin(angle / 2) (smooth, = angle to third order).
 /// Residuals carry sqrt(2 w) so that 1/2 |r|^2 equals the paper's energy. Nine residuals.
 struct ConnectionResidual {
+  static constexpr int kResiduals = 9;
   MemberEdge g, h;
   double thickness = 0;
   double sqrt_position = 1;   ///< sqrt(2 w_q1)
@@ -237,15 +238,22 @@ struct ConnectionResidual {
   }
 };
 
-/// Anchor E_a of paper Section 5 at a connection: its position (the midpoint between the two
-/// lamellas' centerlines, which is where the target surface lies) and both material normals
-/// pinned to the anchor's target position and surface normal:
-///   E_a = w1 |(q_g + q_h)/2 - q_a|^2 + w2 (|angle(m_g, m_a)|^2 + |angle(m_h, m_a)|^2).
-/// Nine residuals with the same sqrt(2 w) convention.
+/// Anchor E_a of paper Section 5 at a connection, as a support holds it: the lamella stack is
+/// clamped there, so each lamella's point is pinned, half the thickness below (g) and above (h)
+/// the anchor's target position q_a on the surface, and both material normals are pinned to the
+/// surface normal m_a:
+///   E_a = w1 (|q_g - (q_a - t/2 m_a)|^2 + |q_h - (q_a + t/2 m_a)|^2)
+///       + w2 (|angle(m_g, m_a)|^2 + |angle(m_h, m_a)|^2).
+/// (Pinning only the midpoint (q_g + q_h)/2 left the two lamellas free to be pulled apart at
+/// the support, held only by the connection term: gaps of up to 3% of the thickness opened at
+/// anchors once their directions were held as well; docs/decisions.md, issue 18.)
+/// Twelve residuals with the same sqrt(2 w) convention.
 struct AnchorResidual {
+  static constexpr int kResiduals = 12;
   MemberEdge g, h;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double thickness = 0;
   double sqrt_position = 1;
   double sqrt_direction = 1;
   template <typename T>
@@ -253,9 +261,11 @@ struct AnchorResidual {
     const MemberPoint<T> a = member_point(pg, g), b = member_point(ph, h);
     const T wp(sqrt_position), wd(sqrt_direction);
     const V3<T> n = normal.cast<T>();
-    store<T>(wp * (T(0.5) * (a.q + b.q) - position.cast<T>()), r);
-    store<T>(wd * (a.m - n), r + 3);
-    store<T>(wd * (b.m - n), r + 6);
+    const V3<T> offset = T(0.5 * thickness) * n;
+    store<T>(wp * (a.q - position.cast<T>() + offset), r);
+    store<T>(wp * (b.q - position.cast<T>() - offset), r + 3);
+    store<T>(wd * (a.m - n), r + 6);
+    store<T>(wd * (b.m - n), r + 9);
     return true;
   }
 };
@@ -336,19 +346,24 @@ inline void add_notch_limit_curvature(const NotchLimit& term, const double* beta
   H(0, 0) += -r[0] * cw / (gap * gap);
 }
 
-/// The direction of a lamella at an anchor: its edge's unit tangent pinned to the target's
-/// (the member's geodesic direction there), so that a support holds the lamella's orientation
-/// about the surface normal as well as the normal itself (paper 4.6 and 6.1: the supports
-/// "provide correct orientation for the lamellas by inclined contact areas"):
-///   E = w |t - t_a|^2,  t = (x_b - x_a) / |x_b - x_a|  (|t - t_a| = 2 sin(angle / 2)).
-/// Three residuals with the sqrt(2 w) convention; parameters x_a, x_b.
+/// The direction of a lamella at an anchor: a support holds the lamella's orientation about the
+/// surface normal as well as the normal itself (paper 4.6 and 6.1: the supports "provide
+/// correct orientation for the lamellas by inclined contact areas"). The anchor's normal term
+/// already holds the rotations about the lamella's tangent and width; this term holds the one
+/// left, about the normal n_a: the edge's unit tangent t has no component along the anchor's
+/// in-plane perpendicular c_a = n_a x t_a (t_a the member's direction on the target there):
+///   E = w (t . c_a)^2,  t = (x_b - x_a) / |x_b - x_a|   (t . c_a = sin of the turn about n_a).
+/// Only that component: the edge's chord of a curved lamella is tilted out of the tangent plane
+/// by up to half its turning angle, which the normal term allows; holding the whole tangent
+/// would fight it and open the connection at the anchor. One residual, sqrt(2 w) convention;
+/// parameters x_a, x_b.
 struct AnchorTangent {
-  Eigen::Vector3d tangent = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d across = Eigen::Vector3d::UnitY();  ///< c_a, unit, in the tangent plane
   double sqrt_weight = 1;
   template <typename T>
   bool operator()(const T* xa, const T* xb, T* r) const {
     const V3<T> e = load(xb) - load(xa);
-    store<T>(T(sqrt_weight) * (e / e.norm() - tangent.cast<T>()), r);
+    r[0] = T(sqrt_weight) * (e / e.norm()).dot(across.cast<T>());
     return true;
   }
 };

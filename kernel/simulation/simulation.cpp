@@ -134,7 +134,9 @@ struct Joint {
 struct AnchorTarget {
   Vec3 position = Vec3::Zero();  // scaled
   Vec3 normal = Vec3::UnitZ();
-  Vec3 tangent[2] = {Vec3::UnitX(), Vec3::UnitY()};  // of the g and h lamellas, at the start
+  /// Per lamella (g, h): the unit direction in the tangent plane across the lamella, n x t_a
+  /// (t_a its direction at the start, which lies on the target's geodesics).
+  Vec3 across[2] = {Vec3::UnitY(), Vec3::UnitX()};
 };
 
 struct Stiffness {
@@ -451,11 +453,13 @@ void Deployment::bind_anchors(const std::vector<Anchor>& anchors) {
     if (joints_[found].anchor >= 0) continue;  // the same crossing anchored twice
     joints_[found].anchor = static_cast<int>(anchors_.size());
     AnchorTarget target{a.position * scale_, a.normal.normalized()};
-    // The lamellas start on their geodesics: the edges' directions there are the target's.
+    // The lamellas start on their geodesics: the edges' directions there are the target's
+    // (their components in the tangent plane; AnchorTangent holds only the turn about n).
     for (int end = 0; end < 2; ++end) {
       const Slider& s = joints_[found].end[end];
       const Rod& rod = rods_[s.rod];
-      target.tangent[end] = (rod.x[s.edge + 1] - rod.x[s.edge]).normalized();
+      const Vec3 t = (rod.x[s.edge + 1] - rod.x[s.edge]).normalized();
+      target.across[end] = target.normal.cross(t).normalized();
     }
     anchors_.push_back(target);
   }
@@ -497,6 +501,7 @@ rod_terms::AnchorResidual Deployment::anchor_residual(const Joint& joint, const 
   anchor.h = h.edge;
   anchor.position = target.position;
   anchor.normal = target.normal;
+  anchor.thickness = thickness_;
   anchor.sqrt_position = std::sqrt(2 * w_anchor_position_);
   anchor.sqrt_direction = std::sqrt(2 * w_anchor_direction_);
   return anchor;
@@ -598,7 +603,7 @@ Deployment::Terms Deployment::build_terms() {
       add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
       if (options_.anchor_tangents)
         for (int end = 0; end < 2; ++end) {
-          const rod_terms::AnchorTangent tangent{anchors_[joint.anchor].tangent[end],
+          const rod_terms::AnchorTangent tangent{anchors_[joint.anchor].across[end],
                                                  std::sqrt(2 * w_anchor_direction_)};
           const Binding& b = end == 0 ? bg : bh;
           add(new rod_terms::AnchorTangentCost(tangent), {b.parameters[0], b.parameters[1]});
@@ -995,8 +1000,11 @@ DeploymentRun Deployment::results() {
       Vec3 m1 = Vec3::Zero(), m2 = Vec3::Zero();
       if (v > 0) m1 += frames[v - 1].m1, m2 += frames[v - 1].m2;
       if (v < rod.n) m1 += frames[v].m1, m2 += frames[v].m2;
-      lamella.normals.push_back(m1.normalized());
-      lamella.widths.push_back(m2.normalized());
+      // Averages of the two edges' frames, made orthonormal again (the average of two
+      // orthonormal frames is orthogonal only to second order in the angle between them).
+      m1.normalize();
+      lamella.normals.push_back(m1);
+      lamella.widths.push_back((m2 - m2.dot(m1) * m1).normalized());
       const double d = distance_.distance(p);
       lamella.deviation.push_back(d);
       sum_sq += d * d;
@@ -1043,12 +1051,13 @@ DeploymentRun Deployment::results() {
     Slider& b = joint.end[1];
     const Rod& ra = rods_[a.rod];
     const Rod& rb = rods_[b.rod];
-    double r[9];
+    double r[rod_terms::AnchorResidual::kResiduals];
     const Binding bg = bind(a), bh = bind(b);
     rod_terms::ConnectionResidual{bg.edge, bh.edge, thickness_, position, direction}.evaluate(
         const_cast<const double* const*>(bg.parameters.data()),
         const_cast<const double* const*>(bh.parameters.data()), r);
-    for (double v : r) energy["connection"] += 0.5 * v * v;
+    for (int i = 0; i < rod_terms::ConnectionResidual::kResiduals; ++i)
+      energy["connection"] += 0.5 * r[i] * r[i];
     SimulatedConnection c;
     c.g = joint.g;
     c.h = joint.h;
@@ -1070,10 +1079,10 @@ DeploymentRun Deployment::results() {
       if (options_.anchor_tangents)
         for (const Slider* s : {&a, &b}) {
           const Rod& rod = rods_[s->rod];
-          rod_terms::AnchorTangent{anchors_[joint.anchor].tangent[s == &a ? 0 : 1],
+          rod_terms::AnchorTangent{anchors_[joint.anchor].across[s == &a ? 0 : 1],
                                    std::sqrt(2 * w_anchor_direction_)}(
               rod.x[s->edge].data(), rod.x[s->edge + 1].data(), r);
-          for (int i = 0; i < 3; ++i) energy["anchor"] += 0.5 * r[i] * r[i];
+          energy["anchor"] += 0.5 * r[0] * r[0];
         }
     }
     for (const Slider* s : {&a, &b}) {

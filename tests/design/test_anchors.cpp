@@ -244,7 +244,7 @@ TEST(PlaceAnchors, NormalsAreUnitAndMatchTheSurface) {
   for (std::size_t k = 0; k < anchors.size(); ++k) {
     const Anchor& a = anchors[k];
     EXPECT_NEAR(a.normal.norm(), 1.0, 1e-12) << k;
-    // On the surface, with the surface's normal there (the anchors use the nearest vertex's).
+    // On the surface, with the surface's normal there.
     EXPECT_LT(surface.distance(a.position), 1e-9 * size) << k;
     EXPECT_GT(a.normal.dot(surface.normal_at_closest(a.position)), 0.99) << k;
     // The face normal of the closest face agrees in orientation too.
@@ -254,6 +254,26 @@ TEST(PlaceAnchors, NormalsAreUnitAndMatchTheSurface) {
                        .cross(patch.mesh.vertices()[f[2]] - patch.mesh.vertices()[f[0]])
                        .normalized();
     EXPECT_GT(a.normal.dot(n), 0.95) << k;
+  }
+}
+
+// The supports hold the lamellas' orientation rigidly in the simulation, whose rods start
+// framed by the surface's normal interpolated over its faces (SurfaceDistance::normal_at_closest):
+// an anchor's normal is that same normal at the crossing itself, not a nearby vertex's, so that
+// the supports do not twist the grid out of its start state.
+TEST(PlaceAnchors, NormalsAreTheSurfaceNormalAtTheCrossing) {
+  const ExampleSurface example = make_example("sphere");
+  DesignOptions design_options;
+  design_options.maps.resolution = 48;
+  design_options.anchors.interior = 4;
+  const Design d =
+      make_design(example.mesh, CornerSpec::at_vertices(example.corners), design_options);
+  const SurfaceDistance surface(d.target.patch.mesh);
+  ASSERT_GE(d.anchors.size(), 5u);
+  for (std::size_t k = 0; k < d.anchors.size(); ++k) {
+    const Anchor& a = d.anchors[k];
+    EXPECT_LT((a.normal - surface.normal_at_closest(a.position)).norm(), 1e-9)
+        << "anchor " << k << " at (" << a.g << ", " << a.h << ")";
   }
 }
 

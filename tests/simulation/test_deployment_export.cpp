@@ -421,8 +421,8 @@ TEST(DeploymentExport, RealSimulationBoxesAndDeviations) {
       const Vec3 t = (l.centerline[k + 1] - l.centerline[k]).normalized();
       EXPECT_NEAR(l.normals[k].norm(), 1.0, 1e-9);
       EXPECT_NEAR(l.widths[k].norm(), 1.0, 1e-9);
-      // Vertex frames are averages of the two edges' frames, orthogonal only up to ~1e-3.
-      EXPECT_NEAR(l.normals[k].dot(l.widths[k]), 0.0, 1e-3);
+      // Vertex frames are the two edges' frames averaged and made orthonormal again.
+      EXPECT_NEAR(l.normals[k].dot(l.widths[k]), 0.0, 1e-12);
       EXPECT_GT(t.cross(l.normals[k]).dot(l.widths[k]), 0.9);
     }
   expect_boxes(run, s.design.lamella_width, s.design.lamella_thickness, 1e-8 * size);

@@ -220,10 +220,11 @@ struct SmallGrid {
     anchor.h = h;
     anchor.position = Vec3(1.7, 0, 0);
     anchor.normal = Vec3(0.1, -0.05, 1).normalized();
+    anchor.thickness = thickness;
     anchor.sqrt_position = std::sqrt(2 * 5.0);
     anchor.sqrt_direction = std::sqrt(2 * 2.0);
     using Anchor = rod_terms::PairFunctor<rod_terms::AnchorResidual, 6, 4>;
-    add(new AutoDiffCostFunction<Anchor, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1>(new Anchor{anchor}),
+    add(new AutoDiffCostFunction<Anchor, 12, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1>(new Anchor{anchor}),
         parameters);
   }
 

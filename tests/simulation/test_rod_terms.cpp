@@ -176,8 +176,8 @@ TEST(RodTermAnalyticJacobian, AnchorTangentMatchesAutomaticAndDifferences) {
   std::mt19937 rng(13);
   for (int trial = 0; trial < 5; ++trial) {
     const Vec3 a = random_vector(rng), b = a + Vec3(1, 0.2, -0.3) + random_vector(rng, 0.4);
-    const rod_terms::AnchorTangent term{Vec3(1, 0.1, 0.2).normalized(), 3.5};
-    ceres::AutoDiffCostFunction<rod_terms::AnchorTangent, 3, 3, 3> automatic(
+    const rod_terms::AnchorTangent term{Vec3(0.1, 1, 0.2).normalized(), 3.5};
+    ceres::AutoDiffCostFunction<rod_terms::AnchorTangent, 1, 3, 3> automatic(
         new rod_terms::AnchorTangent(term));
     rod_terms::AnchorTangentCost analytic(term);
     expect_same_jacobians(analytic, automatic, {v3(a), v3(b)}, 1e-12);
@@ -218,18 +218,19 @@ void check_pair(Residual residual, MemberSetup& g, MemberSetup& h) {
   std::vector<std::vector<double>> parameters = g.parameters;
   parameters.insert(parameters.end(), h.parameters.begin(), h.parameters.end());
   using Functor = rod_terms::PairFunctor<Residual, G, H>;
+  constexpr int R = Residual::kResiduals;
   std::unique_ptr<ceres::CostFunction> cost;
   if constexpr (G == 4 && H == 4)
     cost.reset(
-        new ceres::AutoDiffCostFunction<Functor, 9, 3, 3, 1, 1, 3, 3, 1, 1>(new Functor{residual}));
+        new ceres::AutoDiffCostFunction<Functor, R, 3, 3, 1, 1, 3, 3, 1, 1>(new Functor{residual}));
   else if constexpr (G == 6 && H == 4)
-    cost.reset(new ceres::AutoDiffCostFunction<Functor, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1>(
+    cost.reset(new ceres::AutoDiffCostFunction<Functor, R, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1>(
         new Functor{residual}));
   else if constexpr (G == 4 && H == 6)
-    cost.reset(new ceres::AutoDiffCostFunction<Functor, 9, 3, 3, 1, 1, 3, 3, 1, 1, 3, 1>(
+    cost.reset(new ceres::AutoDiffCostFunction<Functor, R, 3, 3, 1, 1, 3, 3, 1, 1, 3, 1>(
         new Functor{residual}));
   else
-    cost.reset(new ceres::AutoDiffCostFunction<Functor, 9, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1, 3, 1>(
+    cost.reset(new ceres::AutoDiffCostFunction<Functor, R, 3, 3, 1, 1, 3, 1, 3, 3, 1, 1, 3, 1>(
         new Functor{residual}));
   expect_jacobian_matches_differences(*cost, parameters);
   // The hand-derived Jacobian (rod_derivatives.h) against the automatic one and differences.
@@ -260,11 +261,15 @@ TEST(RodTermJacobian, Anchor) {
   rod_terms::AnchorResidual anchor;
   anchor.position = Vec3(0.2, 0.1, 0.3);
   anchor.normal = Vec3(0.1, 0.2, 1).normalized();
+  anchor.thickness = 0.1;
   anchor.sqrt_position = 2;
   anchor.sqrt_direction = 5;
   MemberSetup g = member_setup(rng, Vec3(0, 0, 0), Vec3(1, 0, 0), +1, 0.9);
   MemberSetup h = member_setup(rng, Vec3(0.3, -0.5, 0.1), Vec3(0, 1, 0), 0, 0.0);
   check_pair<rod_terms::AnchorResidual, 6, 4>(anchor, g, h);
+  MemberSetup g4 = member_setup(rng, Vec3(0, 0, 0), Vec3(1, 0, 0), 0, 0.4);
+  MemberSetup h6 = member_setup(rng, Vec3(0.3, -0.5, 0.1), Vec3(0, 1, 0), -1, 0.3);
+  check_pair<rod_terms::AnchorResidual, 4, 6>(anchor, g4, h6);
 }
 
 TEST(RodTermJacobian, FrictionAndNotchLimit) {

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <ostream>
 
@@ -12,6 +13,7 @@
 #include "gridshell/example_surfaces.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
+#include "gridshell/simulation/auto_anchors.h"
 #include "gridshell/simulation/simulation.h"
 
 namespace gridshell {
@@ -88,6 +90,9 @@ TEST(Simulation, ParallelMemberLinkageShearsInPlaneAtZeroEnergy) {
   PlanarGrid p = planar_grid(n, L);
   SimulationOptions options;
   options.notches = false;
+  // A mechanism only while its supports let the lamellas turn about the normal: held in their
+  // directions (the default, anchor_tangents) the corner members cannot shear.
+  options.anchor_tangents = false;
   const double EI = options.material.young_modulus * 0.05 * std::pow(0.005, 3) / 12;
   const double scale = options.reference_extent / 20;  // the plate is 20 wide
   // Reference: the bending energy of one member bent into a quarter circle (scaled units).
@@ -286,6 +291,9 @@ TEST(Simulation, ConnectionPulledIntoARodVertexIsHeldThere) {
   options.notches = true;
   options.edges_per_interval = 1;
   options.max_iterations = 600;
+  // The equilibrium with the kink is the one reached with anchors free to turn about their
+  // normals; held in direction (the default) torus-wide settles with no end at a vertex.
+  options.anchor_tangents = false;
   const DeploymentRun run =
       simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
                           design.lamella_width, design.lamella_thickness, options);
@@ -338,6 +346,61 @@ TEST(Simulation, AnchorsHoldingTheLamellasDirectionsBringTheGridCloserToTheTarge
   ASSERT_TRUE(free_direction.converged) << free_direction.termination;
   ASSERT_TRUE(held.converged) << held.termination;
   EXPECT_LT(held.rms, 0.95 * free_direction.rms);
+}
+
+// `--interior-anchors auto` (issue 18): held at its boundary only, waves-bump snaps into a dome
+// (RMS2 3.3); inner anchors are added one at a time at the crossing deployed farthest from the
+// target while each lowers the RMS by 5% or more. The first lands on the bump and keeps the
+// waves; the search stops at the first anchor that does not help enough, which is not kept.
+TEST(Simulation, AutomaticInnerAnchorsKeepWavesBumpFromSnappingIntoADome) {
+  const ExampleSurface example = make_example("waves-bump");
+  const Design design = make_design(example.mesh, CornerSpec::at_vertices(example.corners), {});
+  SimulationOptions options;
+  options.notches = true;
+  std::atomic<int> reports{0};
+  double last = -1;
+  bool monotone = true;
+  const Progress progress([&](std::string_view, double f) {
+    monotone = monotone && f >= last - 1e-12 && f <= 1;
+    last = f;
+    ++reports;
+  });
+  const AutoAnchorResult result =
+      auto_interior_anchors(design.grid, design.anchors, design.target.patch.mesh,
+                            design.lamella_width, design.lamella_thickness, options, {}, progress);
+  std::printf("  RMS2 per trial:");
+  for (double r : result.rms_trials) std::printf(" %.3f", r);
+  std::printf(" (%d inner anchors kept)\n", result.added);
+  ASSERT_GE(result.added, 1);
+  ASSERT_EQ(result.anchors.size(), design.anchors.size() + result.added);
+  ASSERT_GE(result.rms_trials.size(), static_cast<size_t>(result.added + 1));
+  const double boundary_only = result.rms_trials.front();
+  EXPECT_GT(boundary_only, 2.0);   // the dome
+  EXPECT_LT(result.run.rms, 0.5);  // the waves kept (0.29 with one anchor at the bump)
+  EXPECT_EQ(result.run.rms, result.rms_trials[result.added]);
+  for (int k = 1; k <= result.added; ++k)  // each kept anchor helped by 5% or more
+    EXPECT_LE(result.rms_trials[k], 0.95 * result.rms_trials[k - 1]) << k;
+  if (result.added < AutoAnchorOptions{}.max_anchors) {  // stopped by the rule
+    ASSERT_EQ(result.rms_trials.size(), static_cast<size_t>(result.added + 2));
+    EXPECT_GT(result.rms_trials.back(), 0.95 * result.run.rms);
+  }
+  const int ng = static_cast<int>(design.grid.g.size()),
+            nh = static_cast<int>(design.grid.h.size());
+  for (size_t k = design.anchors.size(); k < result.anchors.size(); ++k) {
+    const Anchor& a = result.anchors[k];
+    EXPECT_TRUE(a.g > 0 && a.g < ng - 1 && a.h > 0 && a.h < nh - 1) << "inner";
+    EXPECT_EQ(a.side, -1);
+    EXPECT_NEAR(a.normal.norm(), 1.0, 1e-12);
+  }
+  EXPECT_TRUE(monotone);
+  EXPECT_GT(reports.load(), 2);
+  EXPECT_EQ(last, 1.0);
+  // Cancelled: stops with Cancelled, not a partial answer.
+  std::atomic<bool> cancel{true};
+  EXPECT_THROW(auto_interior_anchors(design.grid, design.anchors, design.target.patch.mesh,
+                                     design.lamella_width, design.lamella_thickness, options, {},
+                                     Progress(nullptr, &cancel)),
+               Cancelled);
 }
 
 // The paper-like examples (Table 1) and the shared meshes: converged without and with notches,

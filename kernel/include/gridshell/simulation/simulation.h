@@ -70,17 +70,20 @@ struct SimulationOptions {
   double notch_limit_weight = 0.1;  // the paper's 1/10 in E_n
   /// Connection and anchor weights, relative to the stiffness of a rod edge in stretching
   /// (position terms, EA / l̄) and in strong-axis bending (direction terms, EI_strong / l̄).
+  /// Anchors are supports, rigid against the grid: their direction terms 100 x a rod edge's
+  /// stiffness (at 1 the lamella turned at its support about as readily as along one edge
+  /// of itself, and the sphere deployed 0.84 from its target instead of 0.62; from 10 up the
+  /// result changes by less than 1%, docs/decisions.md, issue 18).
   double connection_position_weight = 1;
   double connection_direction_weight = 1;
   double anchor_position_weight = 1;
-  double anchor_direction_weight = 1;
-  /// Anchors hold the lamellas' directions (their tangents, the members' geodesic directions on
-  /// the target at the start) as well as position and normal, as the paper's supports do with
-  /// their inclined contact areas; with the same weight as the normals. Lowers RMS2 on five of
-  /// the seven examples (sphere 1.035 -> 0.816, torus-wide 0.327 -> 0.173), but some connection
-  /// gaps then exceed 1% of the thickness; default false until that is resolved
-  /// (docs/decisions.md, issue 18).
-  bool anchor_tangents = false;
+  double anchor_direction_weight = 100;
+  /// Anchors hold each lamella's direction about the surface normal too (its geodesic direction
+  /// on the target, the start's), not only position and normal: the paper's supports
+  /// "provide correct orientation for the lamellas by inclined contact areas" (Section 6.1).
+  /// Without it each anchored lamella may turn about the normal at its support and doubly
+  /// curved grids sag between their anchors (sphere 1.035 -> 0.617 with it). Default true.
+  bool anchor_tangents = true;
   /// Rod resolution: edges per interval between consecutive crossings along a member (on
   /// average; every rod has uniform edges). Default 2.
   double edges_per_interval = 2;
