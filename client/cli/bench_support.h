@@ -32,4 +32,11 @@ int bench_resolution(const std::vector<double>& edges, int repeats, const std::s
 int bench_fabricate(int repeats, int scan_points, const std::string& out, bool no_write,
                     bool compare_only = false);
 
+/// `gridshell bench scale` (bench_scale.cpp, issue 17): whole designs of `examples` at each of
+/// `sizes` vertices in their own processes (the largest size for the first `largest_examples`
+/// only), side by side with `baseline` if given; section "scale".
+int bench_scale(const std::vector<std::string>& examples, const std::vector<int>& sizes,
+                int largest_examples, const std::string& baseline, const std::string& out,
+                bool no_write);
+
 }  // namespace gridshell::cli

@@ -45,6 +45,9 @@ struct BenchArguments {
   int redesign_threads = 0;   // interactive: --redesign-threads of the daemon it starts
   int scan_points = 1000000;  // fabricate: points of the synthetic scans
   bool compare_only = false;  // fabricate: the scan comparison alone
+  std::vector<std::string> examples{"double-vault", "waves-bump", "sphere"};  // scale
+  int largest_examples = 1;  // scale: examples that also run the largest size
+  std::string baseline;      // scale: another gridshell build, run side by side
 };
 
 /// CPU time of the whole process (all threads) in s.
@@ -287,10 +290,18 @@ Command add_bench_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
   sub->add_option("WHAT", args->what,
                   "geodesic | design | simulate | resolution | service | interactive | sweep | "
-                  "fabricate")
+                  "fabricate | scale")
       ->required()
       ->check(CLI::IsMember({"geodesic", "design", "simulate", "resolution", "service",
-                             "interactive", "sweep", "fabricate"}));
+                             "interactive", "sweep", "fabricate", "scale"}));
+  sub->add_option("--examples", args->examples, "scale: examples to design")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--largest-examples", args->largest_examples,
+                  "scale: how many of the examples also run the largest size")
+      ->capture_default_str();
+  sub->add_option("--baseline", args->baseline,
+                  "scale: another gridshell program run side by side (e.g. an older build)");
   sub->add_option("--scan-points", args->scan_points, "fabricate: points of the synthetic scans")
       ->capture_default_str();
   sub->add_flag("--compare-only", args->compare_only,
@@ -341,6 +352,9 @@ Command add_bench_command(CLI::App& app) {
       return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
     }
     if (args->what == "service") return bench_service(args->out, args->no_write, args->repeats);
+    if (args->what == "scale")
+      return bench_scale(args->examples, args->sizes, args->largest_examples, args->baseline,
+                         args->out, args->no_write);
     if (args->what == "sweep") return bench_sweep(args->out, args->no_write, args->repeats);
     if (args->what == "interactive") {
       if (args->request_threads < 0 || args->request_threads > 1024)

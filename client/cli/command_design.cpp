@@ -62,6 +62,11 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
       ->capture_default_str();
   sub->add_option("--k-min", flags.k_min, "lower slope bound of the cladding functions (0.1)");
   sub->add_option("--k-max", flags.k_max, "upper slope bound of the cladding functions (10)");
+  sub->add_option("--map-vertices", flags.map_vertices,
+                  "distance maps of a patch with more vertices on a copy simplified to about "
+                  "this many (0 = 4000; members stay exact; a number above the patch's vertex "
+                  "count gives exact maps)")
+      ->capture_default_str();
 }
 
 v1::DesignRequest design_request(const DesignFlags& flags) {
@@ -88,6 +93,7 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
   options.set_suggest(flags.suggest);
   if (flags.k_min) options.set_k_min(*flags.k_min);
   if (flags.k_max) options.set_k_max(*flags.k_max);
+  options.set_map_vertices(flags.map_vertices);
   return request;
 }
 

@@ -55,6 +55,7 @@ struct DesignFlags {
   std::string corner_angles;  // "MIN,MAX" degrees for automatic corners, "" = 45,135
   int suggest = 3;            // feasible suggestions when infeasible
   std::optional<double> k_min, k_max;
+  int map_vertices = 0;  // 0 = default (4000): maps on a simplified copy of larger patches
 };
 void add_design_flags(CLI::App* sub, DesignFlags& flags);
 /// Loads the mesh and builds the request (InvalidInput names the flag).

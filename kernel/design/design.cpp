@@ -42,11 +42,15 @@ PatchWork prepare_patch_work(TargetPatch target, const DesignOptions& options,
   work.target = std::move(target);
   const auto start = std::chrono::steady_clock::now();
   // The automatic corners' search computed these maps already (same patch, same options).
+  // Otherwise the coverability's simplified copy serves the maps too if smoothing left the patch
+  // as it was (compute_distance_maps checks that it fits); the work keeps it only through the maps.
+  std::shared_ptr<const MapCopy> copy = std::move(work.target.coverability.map_copy);
+  if (work.target.smoothing.iterations > 0) copy.reset();
   if (work.target.maps && work.target.maps_options.resolution == options.maps.resolution) {
     work.maps = *work.target.maps;
   } else {
     const GeodesicSolver solver(work.target.patch.mesh, options.patch.geodesic);
-    work.maps = compute_distance_maps(work.target.patch, solver, options.maps, progress);
+    work.maps = compute_distance_maps(work.target.patch, solver, options.maps, progress, copy);
   }
   work.target.maps.reset();
   work.maps_seconds = seconds_since(start);
@@ -119,6 +123,24 @@ Design design_on_patch(const PatchWork& work, const DesignOptions& options,
                            progress, work.members.get());
   design.anchors = place_anchors(patch, design.grid, options.anchors);
   design.stage_seconds["grid"] = seconds_since(start);
+
+  // How far the maps put the members' ends from where exact distances put them, and (on a
+  // copy) how far the copy's distances are off there.
+  std::vector<BoundaryDistance> checks;
+  for (const auto& [members, positions] :
+       {std::pair{&design.grid.g, &g_members}, std::pair{&design.grid.h, &h_members}})
+    for (std::size_t k = 0; k < positions->size(); ++k) {
+      const Member& m = (*members)[k + 1];
+      design.member_end_shift =
+          std::max(design.member_end_shift, std::abs(m.u_end - (*positions)[k].u2));
+      checks.push_back({m.family, m.u_start, m.u_end, m.length});
+    }
+  if (design.maps.copy) {
+    start = std::chrono::steady_clock::now();
+    design.map_error =
+        map_copy_error(*design.maps.copy, patch, checks, options.grid.threads, progress.checker());
+    design.stage_seconds["map_check"] = seconds_since(start);
+  }
   return design;
 }
 

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -111,15 +112,32 @@ int distance_map_resolution(const Patch& patch, const DistanceMapOptions& option
 }
 
 DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& solver,
-                                   const DistanceMapOptions& options, const Progress& progress) {
+                                   const DistanceMapOptions& options, const Progress& progress,
+                                   std::shared_ptr<const MapCopy> copy) {
   if (options.threads < 0) {
     throw InvalidInput("options.threads", "must be >= 0 (0 = hardware concurrency), got " +
                                               std::to_string(options.threads));
   }
+  if (options.max_vertices < 0) {
+    throw InvalidInput("options.max_vertices", "must be >= 0 (0 = exact maps), got " +
+                                                   std::to_string(options.max_vertices));
+  }
   check_patch(patch);
   const int R = distance_map_resolution(patch, options);
-  const TriangleMesh& mesh = patch.mesh;
   progress.report(kStage, 0.0);
+
+  // Above max_vertices the maps are computed on a simplified copy whose boundary holds the R
+  // sample points of each chain as vertices (distance_map_copy.h); a copy made for the same
+  // size and samples (the coverability's, on the same patch) is reused.
+  const bool on_copy = options.max_vertices > 0 && patch.mesh.vertex_count() > options.max_vertices;
+  if (on_copy && !(copy && copy->samples == R && copy->max_vertices == options.max_vertices &&
+                   copy->patch_vertices == patch.mesh.vertex_count()))
+    copy = std::make_shared<const MapCopy>(
+        make_map_copy(patch, options.max_vertices, R, progress.checker()));
+  std::optional<GeodesicSolver> copy_solver;
+  if (on_copy) copy_solver.emplace(copy->patch.mesh, GeodesicOptions{solver.method()});
+  const TriangleMesh& mesh = on_copy ? copy->patch.mesh : patch.mesh;
+  const GeodesicSolver& engine = on_copy ? *copy_solver : solver;
 
   // Sources and targets of both families, computed up front on the calling thread.
   std::array<std::vector<SurfacePoint>, 2> sources;
@@ -133,8 +151,13 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
     targets[f].keep_windows = false;
     for (int i = 0; i < R; ++i) {
       const double t = static_cast<double>(i) / (R - 1);
-      sources[f][i] = point_on_chain(mesh, first, t);
-      targets[f].targets[i] = point_on_chain(mesh, second, t);
+      if (on_copy) {  // the same points, as vertices of the copy
+        sources[f][i] = SurfacePoint::at_vertex(mesh, copy->chains[f][i]);
+        targets[f].targets[i] = SurfacePoint::at_vertex(mesh, copy->chains[2 + f][i]);
+      } else {
+        sources[f][i] = point_on_chain(mesh, first, t);
+        targets[f].targets[i] = point_on_chain(mesh, second, t);
+      }
     }
   }
 
@@ -143,6 +166,7 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
   maps.h.family = Family::H;
   maps.g.distances.resize(R, R);
   maps.h.distances.resize(R, R);
+  maps.mesh_vertices = mesh.vertex_count();
   std::array<Eigen::MatrixXd*, 2> out{&maps.g.distances, &maps.h.distances};
 
   // The 2R single-source solves in parallel, each into its own row (deterministic for any thread
@@ -154,11 +178,30 @@ DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& sol
       2 * static_cast<std::size_t>(R),
       [&](std::size_t task, const Progress& inner) {
         const int f = static_cast<int>(task) / R, i = static_cast<int>(task) % R;
-        const DistanceField field = solver.solve(sources[f][i], targets[f], inner);
+        const DistanceField field = engine.solve(sources[f][i], targets[f], inner);
         const std::vector<double>& row = field.target_distances();
         for (int j = 0; j < R; ++j) (*out[f])(i, j) = row[j];
       },
       progress, parallel);
+
+  if (on_copy) {
+    // The corner entries are the side lengths, exactly on the patch (its sides are its shortest
+    // geodesics); the cladding functions pass through them and demand agreement to 1e-9.
+    // G: (0,0) = d(c0, c3) = side 3, (R-1,R-1) = d(c1, c2) = side 1; H: (0,0) = d(c1, c0) =
+    // side 0, (R-1,R-1) = d(c2, c3) = side 2.
+    const std::array<double, 4> sides = side_lengths(patch);
+    const std::array<std::array<int, 2>, 2> corner_sides{{{3, 1}, {0, 2}}};
+    for (int f = 0; f < 2; ++f)
+      for (int end = 0; end < 2; ++end) {
+        const int k = end * (R - 1);
+        const double exact = sides[corner_sides[f][end]];
+        double& entry = (*out[f])(k, k);
+        if (exact > 0)
+          maps.corner_error = std::max(maps.corner_error, std::abs(entry - exact) / exact);
+        entry = exact;
+      }
+    maps.copy = std::move(copy);
+  }
   return maps;
 }
 

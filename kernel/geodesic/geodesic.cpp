@@ -4,7 +4,11 @@
 // geodesic_heat.cpp).
 #include "gridshell/geodesic/geodesic.h"
 
+#include <array>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
 #include <sstream>
 
 #include "geodesic_fast.h"
@@ -148,12 +152,81 @@ std::vector<double> GeodesicSolver::distances(const SurfacePoint& source,
   return solve(source, options, progress).vertex_distances();
 }
 
+namespace {
+
+// The goal of a solve that needs the exact answer at `to` only (shortest_path, distance).
+SolveOptions::Goal point_goal(const TriangleMesh& mesh, const SurfacePoint& from,
+                              const SurfacePoint& to) {
+  SolveOptions::Goal goal;
+  const double bound = edge_path_bound(mesh, from, to);
+  if (!std::isfinite(bound)) return goal;  // no pruning: the solve finds out what is reachable
+  goal.center = to.position(mesh);
+  goal.radius = 0;
+  // The bound is the length of a real path; a little more keeps rounding from pruning the
+  // shortest one when they are equal (a path along an edge line).
+  goal.bound = bound * (1 + 1e-9) + 1e-12 * bounding_box_size(mesh).norm();
+  return goal;
+}
+
+}  // namespace
+
 std::vector<SurfacePoint> GeodesicSolver::shortest_path(const SurfacePoint& from,
-                                                        const SurfacePoint& to) const {
-  return solve(from).path_to(to);
+                                                        const SurfacePoint& to,
+                                                        const Progress& progress) const {
+  const SurfacePoint a = geodesic_detail::normalize_surface_point(impl_->mesh, from, "from");
+  const SurfacePoint b = geodesic_detail::normalize_surface_point(impl_->mesh, to, "to");
+  SolveOptions options;
+  options.goal = point_goal(impl_->mesh, a, b);
+  return solve(a, options, progress).path_to(b);
+}
+
+double GeodesicSolver::distance(const SurfacePoint& from, const SurfacePoint& to,
+                                const Progress& progress) const {
+  const SurfacePoint a = geodesic_detail::normalize_surface_point(impl_->mesh, from, "from");
+  const SurfacePoint b = geodesic_detail::normalize_surface_point(impl_->mesh, to, "to");
+  SolveOptions options;
+  options.keep_windows = false;
+  options.targets = {b};
+  options.goal = point_goal(impl_->mesh, a, b);
+  return solve(a, options, progress).target_distances()[0];
 }
 
 // ---------------------------------------------------------------------------------------------
+
+double edge_path_bound(const TriangleMesh& mesh, const SurfacePoint& from, const SurfacePoint& to) {
+  const SurfacePoint a = geodesic_detail::normalize_surface_point(mesh, from, "from");
+  const SurfacePoint b = geodesic_detail::normalize_surface_point(mesh, to, "to");
+  const Vec3 pa = a.position(mesh), pb = b.position(mesh);
+  const MeshTopology& topology = mesh.topology();
+  std::vector<double> d(mesh.vertex_count(), std::numeric_limits<double>::infinity());
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+  for (int v : mesh.faces()[a.face]) {
+    const double start = (mesh.vertices()[v] - pa).norm();
+    if (start < d[v]) queue.push({d[v] = start, v});
+  }
+  std::array<int, 3> goal = mesh.faces()[b.face];
+  int settled_goals = 0;
+  double best = a.face == b.face ? (pb - pa).norm() : std::numeric_limits<double>::infinity();
+  while (!queue.empty() && settled_goals < 3) {
+    const auto [dv, v] = queue.top();
+    queue.pop();
+    if (dv > d[v]) continue;
+    if (dv >= best) break;  // no path through later vertices is shorter
+    for (int g : goal)
+      if (g == v) {
+        ++settled_goals;
+        best = std::min(best, dv + (pb - mesh.vertices()[v]).norm());
+      }
+    for (int f : topology.vertex_faces[v])
+      for (int w : mesh.faces()[f]) {
+        if (w == v) continue;
+        const double dw = dv + (mesh.vertices()[w] - mesh.vertices()[v]).norm();
+        if (dw < d[w]) queue.push({d[w] = dw, w});
+      }
+  }
+  return best;
+}
 
 double path_length(const TriangleMesh& mesh, const std::vector<SurfacePoint>& path) {
   double length = 0;

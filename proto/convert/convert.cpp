@@ -110,6 +110,9 @@ v1::DesignReport to_report(const Design& design, const std::string& input_name, 
   for (const std::string& w : design.target.warnings) report.add_warnings(w);
   report.set_recuts(design.target.smoothing.recuts);
   for (double e : design.target.boundary_excess) report.add_boundary_geodesic_excess(e);
+  report.set_map_vertices(design.maps.mesh_vertices);
+  report.set_map_error(design.map_error);
+  report.set_member_end_shift(design.member_end_shift);
   return report;
 }
 

@@ -72,6 +72,8 @@ PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
     h.number(options.cladding.k_max);
     h.number(options.cladding.min_planar_angle);
   }
+  h.integer(options.maps.max_vertices);
+  h.integer(patch.coverability.max_vertices);
   PatchKey key;
   key.hash[0] = h.a();
   key.hash[1] = h.b();
@@ -111,6 +113,7 @@ std::size_t memory_bytes(const PatchWork& work) {
   bytes += heap(patch.input_vertex);
   for (const DistanceMap* map : {&work.maps.g, &work.maps.h})
     bytes += heap(static_cast<std::size_t>(map->distances.size()) * sizeof(double));
+  if (work.maps.copy) bytes += heap(sizeof(MapCopy)) + 16 + work.maps.copy->memory_bytes();
   bytes += 96 * work.target.stage_seconds.size();  // map nodes with their strings
   if (work.members) bytes += heap(sizeof(MemberMemo)) + work.members->max_bytes();  // its bound
   return bytes;

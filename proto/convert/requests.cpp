@@ -1,10 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "gridshell/requests.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <numbers>
 #include <utility>
 
@@ -25,11 +29,30 @@ namespace {
 // Generous caps that keep one request from asking for unbounded work; far above every example.
 constexpr int kMaxMembers = 1000;
 constexpr int kMaxInteriorAnchors = 100;
+// Below this a simplified copy has hardly more than its 4 x 100 boundary samples.
+constexpr int kMinMapVertices = 500;
 constexpr int kMaxSmoothingIterations = 100000;
 constexpr int kMaxSuggestions = 20;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// CPU time of the whole process (all threads), s.
+double process_cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+         1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+/// Peak resident memory of the process (VmHWM of /proc/self/status), bytes; 0 if unknown.
+long long peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::atoll(line.c_str() + 6) * 1024LL;
+  return 0;
 }
 
 std::string indexed(const std::string& name, long long index) {
@@ -580,6 +603,13 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
     throw InvalidInput("options.suggest",
                        "must be between 0 (none) and " + std::to_string(kMaxSuggestions));
   in.suggest = o.has_suggest() ? o.suggest() : 3;
+  if (o.map_vertices() != 0 && o.map_vertices() < kMinMapVertices)
+    throw InvalidInput("options.map_vertices",
+                       "must be 0 (default " + std::to_string(kDefaultMapVertices) +
+                           ") or at least " + std::to_string(kMinMapVertices) + ", got " +
+                           std::to_string(o.map_vertices()));
+  options.maps.max_vertices = options.patch.coverability.max_vertices =
+      o.map_vertices() != 0 ? o.map_vertices() : kDefaultMapVertices;
 
   v1::DesignOptions& record = in.record;
   record.set_corners(corner_label(request.corners()));
@@ -596,6 +626,7 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
   record.set_geodesic_method(to_string(options.patch.geodesic.method));
   record.set_length_tolerance(options.grid.length_tolerance);
   record.set_interior_anchors(options.anchors.interior);
+  record.set_map_vertices(options.maps.max_vertices);
   return in;
 }
 
@@ -603,6 +634,7 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
                             const RunSettings& settings) {
   {
     const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = process_cpu_seconds();
     DesignInputs in = prepare_design(request);
     in.options.maps.threads = in.options.grid.threads = settings.threads;
     in.options.patch.coverability.threads = settings.threads;
@@ -625,6 +657,8 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     add_view("maps.svg", maps_svg(design));
     *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
     out.mutable_report()->set_distance_maps_cached(cached);
+    out.mutable_report()->set_cpu_seconds(process_cpu_seconds() - cpu_start);
+    out.mutable_report()->set_peak_memory_bytes(peak_resident_bytes());
     out.mutable_report()->set_patch_key(patch_routing_key(in.mesh, in.corners, in.options));
     if (design.target.auto_corners)
       *out.mutable_report()->mutable_auto_corners() = to_proto(

@@ -102,6 +102,36 @@ void expect_grid_criteria(const Design& design, const std::string& name) {
   for (const Anchor& a : design.anchors) EXPECT_NEAR(a.normal.norm(), 1.0, 1e-9);
 }
 
+// Issue 17: above DistanceMapOptions::max_vertices the maps come from a simplified copy; the
+// grid criteria still hold exactly on the patch, the design stays close to the one on exact maps
+// and is deterministic.
+TEST(Design, MapsOnASimplifiedCopyKeepTheGridCriteria) {
+  const ExampleSurface example = make_example("double-vault", 1.2);  // ~800 vertices
+  const CornerSpec corners = CornerSpec::at_vertices(example.corners);
+  DesignOptions exact_options;
+  exact_options.maps.resolution = 40;
+  exact_options.maps.max_vertices = exact_options.patch.coverability.max_vertices = 0;
+  DesignOptions copy_options = exact_options;
+  copy_options.maps.max_vertices = copy_options.patch.coverability.max_vertices = 400;
+  const Design exact = make_design(example.mesh, corners, exact_options);
+  const Design copy = make_design(example.mesh, corners, copy_options);
+  expect_grid_criteria(copy, "maps on a copy");
+  EXPECT_EQ(exact.maps.mesh_vertices, exact.target.patch.mesh.vertex_count());
+  EXPECT_EQ(exact.map_error, 0.0);
+  ASSERT_NE(copy.maps.copy, nullptr);
+  EXPECT_LT(copy.maps.mesh_vertices, exact.maps.mesh_vertices);
+  EXPECT_GT(copy.map_error, 0.0);
+  EXPECT_LT(copy.map_error, 1e-2);
+  ASSERT_EQ(copy.grid.g.size(), exact.grid.g.size());
+  ASSERT_EQ(copy.grid.h.size(), exact.grid.h.size());
+  for (size_t k = 0; k < exact.grid.g.size(); ++k)
+    EXPECT_NEAR(copy.grid.g[k].u_start, exact.grid.g[k].u_start, 1e-2);
+  const Design again = make_design(example.mesh, corners, copy_options);
+  ASSERT_EQ(again.grid.crossings.size(), copy.grid.crossings.size());
+  for (size_t k = 0; k < copy.grid.crossings.size(); ++k)
+    EXPECT_EQ(again.grid.crossings[k].s_g, copy.grid.crossings[k].s_g);
+}
+
 TEST(Design, GridCriteriaOnEveryExample) {
   for (const std::string& name : example_names()) {
     const ExampleSurface example = make_example(name);

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "gridshell/design/distance_map.h"
+#include "gridshell/design/distance_map_copy.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/design/planar_patch.h"
 #include "gridshell/example_surfaces.h"
@@ -367,6 +368,62 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<DevelopableCase>& info) {
       return info.param.name + (info.param.grid_corners.empty() ? "" : "_interior_corners");
     });
+
+// Issue 17: the maps of a large patch on a simplified copy. The copy keeps the maps' sample
+// points as vertices at exactly the positions point_on_chain gives on the patch, has about the
+// asked vertex count, and its maps stay close to the exact ones (measured: 2.3e-3 relative here,
+// on a coarse 441-vertex bump simplified to 150; 5e-5 at 15k -> 4k, docs/decisions.md).
+TEST(MapCopy, KeepsTheSamplePointsAndApproximatesTheMaps) {
+  const Patch& patch = bump_patch();
+  constexpr int kSamples = 12;
+  const MapCopy copy = make_map_copy(patch, 150, kSamples);
+  EXPECT_LT(copy.patch.mesh.vertex_count(), patch.mesh.vertex_count() / 2);
+  EXPECT_LE(copy.patch.mesh.vertex_count(), 160);
+  for (int c = 0; c < 4; ++c) {
+    const std::vector<int> chain = family_boundary(patch, static_cast<Family>(c % 2), c / 2);
+    ASSERT_EQ(copy.chains[c].size(), static_cast<size_t>(kSamples));
+    for (int i = 0; i < kSamples; ++i) {
+      const Vec3 exact =
+          point_on_chain(patch.mesh, chain, i / (kSamples - 1.0)).position(patch.mesh);
+      EXPECT_EQ(copy.patch.mesh.vertices()[copy.chains[c][i]], exact) << c << " " << i;
+    }
+  }
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(copy.patch.mesh.vertices()[copy.patch.corners[i]], corner(patch, i));
+
+  const GeodesicSolver solver(patch.mesh);
+  const DistanceMaps exact =
+      compute_distance_maps(patch, solver, {.resolution = kSamples, .max_vertices = 0});
+  const DistanceMaps coarse =
+      compute_distance_maps(patch, solver, {.resolution = kSamples, .max_vertices = 150});
+  EXPECT_EQ(exact.mesh_vertices, patch.mesh.vertex_count());
+  EXPECT_EQ(exact.copy, nullptr);
+  ASSERT_NE(coarse.copy, nullptr);
+  EXPECT_EQ(coarse.mesh_vertices, coarse.copy->patch.mesh.vertex_count());
+  double worst = 0;
+  for (const auto& [e, c] : {std::pair{&exact.g, &coarse.g}, std::pair{&exact.h, &coarse.h}})
+    for (int i = 0; i < kSamples; ++i)
+      for (int j = 0; j < kSamples; ++j)
+        worst =
+            std::max(worst, std::abs(c->distances(i, j) - e->distances(i, j)) / e->distances(i, j));
+  EXPECT_GT(worst, 0.0);   // it is a different mesh
+  EXPECT_LT(worst, 1e-2);  // but close
+  // The corner entries are the patch's side lengths (its sides are shortest geodesics).
+  const std::array<double, 4> sides = side_lengths(patch);
+  EXPECT_EQ(coarse.g.distances(0, 0), sides[3]);
+  EXPECT_EQ(coarse.h.distances(kSamples - 1, kSamples - 1), sides[2]);
+  EXPECT_NEAR(coarse.g.distances(0, 0), exact.g.distances(0, 0), 1e-12 * sides[3]);
+  // Deterministic.
+  const MapCopy again = make_map_copy(patch, 150, kSamples);
+  EXPECT_EQ(again.patch.mesh.vertices(), copy.patch.mesh.vertices());
+
+  EXPECT_THROW(make_map_copy(patch, 150, 1), InvalidInput);
+  EXPECT_THROW(make_map_copy(patch, 0, kSamples), InvalidInput);
+  EXPECT_THROW(compute_distance_maps(patch, solver, {.resolution = kSamples, .max_vertices = -1}),
+               InvalidInput);
+  std::atomic<bool> cancel{true};
+  EXPECT_THROW(make_map_copy(patch, 150, kSamples, Progress(nullptr, &cancel)), Cancelled);
+}
 
 }  // namespace
 }  // namespace gridshell

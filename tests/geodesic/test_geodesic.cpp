@@ -785,6 +785,13 @@ TEST(Geodesic, ShortestPathShorthandAndPathLength) {
   const SurfacePoint a = SurfacePoint::at_vertex(mesh, 3), b = face_point(200, 0.1, 0.2);
   const auto path = solver.shortest_path(a, b);
   EXPECT_NEAR(path_length(mesh, path), solver.solve(a).distance_to(b), 1e-12);
+  // shortest_path and distance are goal-pruned by the edge-path bound (issue 17): the bound is a
+  // real path, never shorter, and the pruned solves give the complete field's answer.
+  EXPECT_GE(edge_path_bound(mesh, a, b), solver.solve(a).distance_to(b));
+  EXPECT_DOUBLE_EQ(solver.distance(a, b), solver.solve(a).distance_to(b));
+  for (int v : {0, 57, 311})
+    EXPECT_NEAR(path_length(mesh, solver.shortest_path(b, SurfacePoint::at_vertex(mesh, v))),
+                solver.solve(b).vertex_distances()[v], 1e-12);
   // Symmetry of the distance.
   EXPECT_NEAR(solver.solve(b).distance_to(a), solver.solve(a).distance_to(b), 1e-12);
   // A path from a point to itself.

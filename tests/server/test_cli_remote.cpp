@@ -27,7 +27,9 @@ using testing::TestDaemon;
 
 nlohmann::json without_timings(const std::string& text) {
   auto json = nlohmann::json::parse(text);
-  for (const char* key : {"seconds", "t_smooth", "t_grid", "stage_seconds"}) json.erase(key);
+  for (const char* key :
+       {"seconds", "t_smooth", "t_grid", "stage_seconds", "cpu_seconds", "peak_memory_bytes"})
+    json.erase(key);
   return json;
 }
 

@@ -8,8 +8,10 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <vector>
 
+#include "gridshell/design/distance_map_copy.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/progress.h"
@@ -26,6 +28,10 @@ struct CoverabilityOptions {
   /// Worker threads for those sources' solves; 0 = hardware concurrency (the result does not
   /// depend on it).
   int threads = 0;
+  /// A patch with more vertices than this has its longest member distance measured on a copy
+  /// simplified to about this many vertices (distance_map_copy.h, the one its distance maps can
+  /// then use); the gap factor stays exact. 0 = never. Default 4000.
+  int max_vertices = kDefaultMapVertices;
 };
 
 /// The gap factor (paper 3.3) for one curvature peak.
@@ -43,6 +49,10 @@ struct CoverabilityReport {
   double longest_member_distance = 0;  ///< max geodesic distance between opposite sides (sampled)
   bool injectivity_ok = true;          ///< longest_member_distance < injectivity_bound
   GapFactor gap;
+  /// Vertices of the mesh the longest member distance was measured on: the patch's own count,
+  /// or that of its simplified copy (`map_copy`, kept for the distance maps).
+  int longest_member_vertices = 0;
+  std::shared_ptr<const MapCopy> map_copy;
 };
 
 /// The gap factor at the vertex of maximal Gaussian curvature. With the paper's notation:

@@ -44,6 +44,15 @@ struct Design {
   CladdingFunction cladding_g, cladding_h;
   Grid grid;
   std::vector<Anchor> anchors;
+  /// Maps computed on a simplified copy (maps.copy): the largest relative difference, over the
+  /// inner members, between the copy's distance between a member's two ends and its exact
+  /// length on the patch (map_copy_error), i.e. how far off the maps are where the design reads
+  /// them. 0 for exact maps.
+  double map_error = 0;
+  /// The largest |u2 - u2 of the cladding function| of an inner member's end, by which its
+  /// refinement on exact distances (criterion i) moved it: the maps' sampling and, on a copy,
+  /// its error, seen in the design's own parameters.
+  double member_end_shift = 0;
   std::map<std::string, double> stage_seconds;  ///< timings; not part of the design's value
 };
 

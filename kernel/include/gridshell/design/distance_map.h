@@ -6,8 +6,10 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <vector>
 
+#include "gridshell/design/distance_map_copy.h"
 #include "gridshell/design/family.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/geodesic/geodesic.h"
@@ -33,6 +35,11 @@ struct DistanceMapOptions {
   /// Worker threads for the R single-source solves per family; 0 = hardware concurrency.
   /// The result does not depend on it.
   int threads = 0;
+  /// A patch with more vertices than this gets its maps on a copy simplified to about this many
+  /// vertices (distance_map_copy.h): its R sample points per boundary are the patch's own, its
+  /// interior is approximated. 0 = never: exact maps on every patch. Default 4000 (all seven
+  /// paper examples at their own resolution are below it).
+  int max_vertices = kDefaultMapVertices;
 };
 
 /// D(u1,u2) of one family on a grid: distances(i, j) = exact geodesic distance between the
@@ -46,13 +53,25 @@ struct DistanceMap {
 struct DistanceMaps {
   DistanceMap g;  ///< D_u
   DistanceMap h;  ///< D_v
+  /// Vertices of the mesh the maps were computed on: the patch's own count, or its copy's.
+  int mesh_vertices = 0;
+  /// The simplified copy they were computed on; null when they are exact (on the patch). Kept so
+  /// that the design can measure the copy's error at its members' ends (map_copy_error).
+  std::shared_ptr<const MapCopy> copy;
+  /// On a copy: the largest relative difference between the copy's distance and the exact side
+  /// length at the maps' four corner entries (0,0) and, which are then set to the exact
+  /// side lengths (the cladding functions start and end there). 0 for exact maps.
+  double corner_error = 0;
 };
 
 /// Both surface distance maps, computed in parallel over sources with `solver` (built on
-/// patch.mesh). Reports progress; throws Cancelled when cancelled.
+/// patch.mesh), or on a simplified copy of a patch above options.max_vertices: `copy` if it is
+/// one made with this many vertices and R samples (e.g. the coverability's), else a new one.
+/// Reports progress; throws Cancelled when cancelled.
 DistanceMaps compute_distance_maps(const Patch& patch, const GeodesicSolver& solver,
                                    const DistanceMapOptions& options = {},
-                                   const Progress& progress = {});
+                                   const Progress& progress = {},
+                                   std::shared_ptr<const MapCopy> copy = nullptr);
 
 /// The resolution `options` asks for on this patch (resolves 0 = adaptive).
 int distance_map_resolution(const Patch& patch, const DistanceMapOptions& options);
