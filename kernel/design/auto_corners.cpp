@@ -315,9 +315,11 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
               "a side is not a shortest geodesic of the patch (excess " + fixed(excess, 12) + ")";
           continue;
         }
+        // The maps are the design's own if this candidate wins: their progress is the
+        // design's "distance maps" stage (clients wait for it, e.g. to offer Cancel).
         const GeodesicSolver solver(target.patch.mesh, options.geodesic);
         auto maps = std::make_shared<DistanceMaps>(
-            compute_distance_maps(target.patch, solver, o.maps, progress.checker()));
+            compute_distance_maps(target.patch, solver, o.maps, progress));
         const AlphaRange range =
             feasible_alpha_range(*maps, side_lengths(target.patch), o.cladding, progress.checker());
         c.alpha_range = std::array<double, 2>{range.min, range.max};
