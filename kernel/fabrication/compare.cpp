@@ -476,8 +476,14 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   auto t0 = clock();
   ScanComparison out;
   const std::vector<Vec3> coarse_points = subset(1500);
-  const auto [scan_mean, scan_axes] = principal_axes(subset(20000));
-  const auto [ref_mean, ref_axes] = principal_axes(patch.samples);
+  // Named variables, not structured bindings: the lambda below uses them, and Clang 14 (the
+  // fuzzing build) does not capture structured bindings.
+  const std::pair<Vec3, Eigen::Matrix3d> scan_frame = principal_axes(subset(20000));
+  const std::pair<Vec3, Eigen::Matrix3d> ref_frame = principal_axes(patch.samples);
+  const Vec3& scan_mean = scan_frame.first;
+  const Eigen::Matrix3d& scan_axes = scan_frame.second;
+  const Vec3& ref_mean = ref_frame.first;
+  const Eigen::Matrix3d& ref_axes = ref_frame.second;
   struct Orientation {
     IcpResult icp;
     int flip = 0, turn = 0;
