@@ -305,6 +305,9 @@ class UnreachableTest(unittest.TestCase):
             thread.join(30)
             self.assertNotIn("error", outcome)
             self.assertIn("examples", outcome["result"])
+            # The daemon logs a request after it answered: wait for the line, then count.
+            logged = daemon.wait_for(lambda e: e.get("method") == "Examples" and "status" in e, 10)
+            self.assertIsNotNone(logged, daemon.log)
             self.assertEqual(len(daemon.requests("Examples")), 1)
 
     def test_unavailable_is_retried_a_bounded_number_of_times(self):
