@@ -37,4 +37,4 @@ mkdir -p "$tmp/freecadcmd"
 mkdir -p "$tmp/freecad/Mod"
 python3 -m zipfile -e "$build/gridshell_freecad.zip" "$tmp/freecad/Mod/"
 timed "freecad window" env FREECAD_USER_HOME="$tmp/freecad" QTWEBENGINE_DISABLE_SANDBOX=1 \
-  bash -c "$(declare -f quiet_freecad xvfb); quiet_freecad xvfb freecad tests/cad/test_freecad_gui.py"
+  bash -c "set -o pipefail; $(declare -f quiet_freecad xvfb); quiet_freecad xvfb freecad tests/cad/test_freecad_gui.py"
