@@ -3,6 +3,7 @@
 // process or on a daemon (--server). The design flags are shared with `gridshell run`.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <numbers>
 
@@ -53,7 +54,8 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
   sub->add_option("--eta-max", flags.eta_max, "gap factor threshold")->capture_default_str();
   sub->add_option("--interior-anchors", flags.interior_anchors,
                   "also pin up to N inner crossings at the target's bumps and dips (0 = boundary "
-                  "anchors only, as in the paper)")
+                  "anchors only, as in the paper); auto (run only): add them one at a time where "
+                  "the deployment strays farthest while RMS falls by 5% or more")
       ->capture_default_str();
   add_corner_angles_flag(sub, flags.corner_angles);
   sub->add_option("--suggest", flags.suggest,
@@ -67,6 +69,10 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
                   "this many (0 = 4000; members stay exact; a number above the patch's vertex "
                   "count gives exact maps)")
       ->capture_default_str();
+}
+
+bool automatic_interior_anchors(const DesignFlags& flags) {
+  return flags.interior_anchors == "auto";
 }
 
 v1::DesignRequest design_request(const DesignFlags& flags) {
@@ -88,7 +94,15 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
   options.set_resolution(flags.resolution);
   options.set_geodesic_method(flags.method);
   options.set_eta_max(flags.eta_max);
-  options.set_interior_anchors(flags.interior_anchors);
+  // auto: the design places none; the simulation adds them (run, simulate).
+  if (!automatic_interior_anchors(flags)) {
+    char* end = nullptr;
+    const long n = std::strtol(flags.interior_anchors.c_str(), &end, 10);
+    if (flags.interior_anchors.empty() || *end != '\0' || n < 0 || n > 100)
+      throw InvalidInput("--interior-anchors", "expected a number from 0 to 100 or auto, got '" +
+                                                   flags.interior_anchors + "'");
+    options.set_interior_anchors(static_cast<int>(n));
+  }
   set_corner_angles(flags.corner_angles, options.mutable_auto_corner_angles());
   options.set_suggest(flags.suggest);
   if (flags.k_min) options.set_k_min(*flags.k_min);
@@ -129,6 +143,11 @@ struct DesignArguments {
 };
 
 int run_design(const DesignArguments& args) {
+  if (automatic_interior_anchors(args.design))
+    throw InvalidInput("--interior-anchors",
+                       "auto finds inner anchors by simulating the deployment: use gridshell run "
+                       "... --interior-anchors auto, or gridshell simulate DESIGN.json "
+                       "--interior-anchors auto");
   const v1::DesignRequest request = design_request(args.design);
   prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);

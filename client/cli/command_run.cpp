@@ -84,7 +84,9 @@ int run_run(const RunArguments& args) {
   // a simulation that is cancelled or fails leaves it in --out.
   const v1::DesignRequest design_request_message = design_request(args.design);
   v1::SimulateRequest simulate_request;
-  *simulate_request.mutable_options() = simulation_options_from_flags(args.simulation);
+  SimulationFlags simulation = args.simulation;
+  if (automatic_interior_anchors(args.design)) simulation.interior_anchors = "auto";
+  *simulate_request.mutable_options() = simulation_options_from_flags(simulation);
   simulate_request.set_design_name("design.json");
   prepare_output_folder(args.output.out);  // fail early on an unusable --out
   const Progress progress = make_progress(args.output.quiet);

@@ -79,6 +79,9 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
   if (!(flags.edges_per_interval >= 1 && flags.edges_per_interval <= 64))
     throw InvalidInput("--edges-per-interval", "must be between 1 and 64");
   o.set_edges_per_interval(flags.edges_per_interval);
+  if (!flags.interior_anchors.empty() && flags.interior_anchors != "auto")
+    throw InvalidInput("--interior-anchors", "expected auto, got '" + flags.interior_anchors + "'");
+  o.set_interior_anchors(flags.interior_anchors);
   if (flags.max_iterations < 1) throw InvalidInput("--max-iterations", "must be at least 1");
   o.set_max_iterations(flags.max_iterations);
   return o;
@@ -109,7 +112,6 @@ static std::string stress_line(const v1::SimulationRun& r, const v1::SimulationO
 void print_deployment_summary(const v1::Deployment& d) {
   for (const v1::SimulationRun* r : {&d.without_notches(), &d.with_notches()}) {
     if (r->grid_vertices() == 0) continue;  // not run
-    const auto& rods = r->notches() ? d.rods() : d.rods_without_notches();
     std::printf(
         "  %-16s RMS %.4f (max %.4f)  %d rod vertices  %d iterations  %.3f s  %s (|g| %.1e)\n",
         r->notches() ? "with notches" : "without notches", r->rms(), r->max_deviation(),
@@ -117,14 +119,28 @@ void print_deployment_summary(const v1::Deployment& d) {
         r->converged() ? "converged" : "NOT converged", r->gradient_norm());
     std::printf("  %-16s %s\n", "", stress_line(*r, d.options()).c_str());
   }
-  if (d.has_rms_with_notches() && d.has_rms_without_notches() &&
-      d.rms_with_notches() > d.rms_without_notches())
+  if (d.options().interior_anchors() == "auto") {
+    std::string trials;
+    char buffer[64];
+    for (double rms : d.anchor_trial_rms()) {
+      std::snprintf(buffer, sizeof buffer, "%s%.4f", trials.empty() ? "" : " -> ", rms);
+      trials += buffer;
+    }
+    std::printf(
+        "  inner anchors   %d added automatically (RMS of the trials %s; kept while it "
+        "fell by 5%% or more)\n",
+        d.added_anchors_size(), trials.c_str());
+    for (const v1::Anchor& a : d.added_anchors())
+      std::printf("                  g%d x h%d at (%.4g, %.4g, %.4g)\n", a.g(), a.h(),
+                  a.position(0), a.position(1), a.position(2));
+  } else if (d.has_rms_with_notches() && d.has_rms_without_notches() &&
+             d.rms_with_notches() > d.rms_without_notches())
     std::printf(
         "  note            the grid with notches deviates more than without: it has likely "
         "snapped into\n"
         "                  another shape than the target's (an inner bump popping through); "
         "inner anchors\n"
-        "                  can hold it (gridshell design ... --interior-anchors 1, see "
+        "                  can hold it (--interior-anchors auto finds them, see "
         "docs/decisions.md)\n");
 }
 
@@ -169,6 +185,11 @@ Command add_simulate_command(CLI::App& app) {
       "simulate", "Simulate the deployment of a design (discrete elastic rods, paper Section 5)");
   sub->add_option("DESIGN", args->design, "design.json written by 'gridshell design'")->required();
   add_simulation_flags(sub, args->flags);
+  // `run` has --interior-anchors among its design flags (N or auto).
+  sub->add_option("--interior-anchors", args->flags.interior_anchors,
+                  "auto: add inner anchors one at a time where the deployment strays farthest "
+                  "while RMS falls by 5% or more; writes design-anchored.json with them")
+      ->check(CLI::IsMember({"auto"}));
   add_output_flags(sub, args->output);
   return [args] { return run_simulate(*args); };
 }

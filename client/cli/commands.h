@@ -51,9 +51,9 @@ struct DesignFlags {
   int resolution = 100;
   std::string method = "fast";
   double eta_max = 1.0015;
-  int interior_anchors = 0;
-  std::string corner_angles;  // "MIN,MAX" degrees for automatic corners, "" = 45,135
-  int suggest = 3;            // feasible suggestions when infeasible
+  std::string interior_anchors = "0";  // N (0..100) placed by the design, or auto (`run` only)
+  std::string corner_angles;           // "MIN,MAX" degrees for automatic corners, "" = 45,135
+  int suggest = 3;                     // feasible suggestions when infeasible
   std::optional<double> k_min, k_max;
   int map_vertices = 0;  // 0 = default (4000): maps on a simplified copy of larger patches
 };
@@ -63,6 +63,8 @@ v1::DesignRequest design_request(const DesignFlags& flags);
 /// The same with the mesh loaded already (`gridshell sweep` loads each mesh once for many rows).
 v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& input);
 void print_design_summary(const v1::DesignResult& result);
+/// --interior-anchors asks for automatic inner anchors (found by simulating: `run`, `simulate`).
+bool automatic_interior_anchors(const DesignFlags& flags);
 
 /// Simulation flags shared by `simulate` and `run`.
 struct SimulationFlags {
@@ -75,6 +77,7 @@ struct SimulationFlags {
   double edges_per_interval = 2;
   int max_iterations = 2000;
   std::string solver = "newton";
+  std::string interior_anchors;  // "auto" or "" (the design's anchors)
 };
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
 /// Resolved and validated (InvalidInput names the flag).

@@ -6,8 +6,10 @@
 #include <exception>
 
 #include "gridshell/convert_deployment.h"
+#include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/parallel.h"
+#include "gridshell/simulation/auto_anchors.h"
 #include "gridshell/simulation/deployment_export.h"
 
 namespace gridshell {
@@ -112,6 +114,8 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
           "edges_per_interval", "must be between 1 and 64");
   require(o.max_iterations() >= 1 && o.max_iterations() <= 1000000, "max_iterations",
           "must be between 1 and 1000000");
+  require(o.interior_anchors().empty() || o.interior_anchors() == "auto", "interior_anchors",
+          "expected auto or nothing (the design's anchors), got '" + o.interior_anchors() + "'");
   if (o.unit_in_meters() == 0) o.set_unit_in_meters(parse_length_unit(o.unit()));
   require(o.unit_in_meters() == 0 || within(o.unit_in_meters(), 1e-9, 1e6), "unit_in_meters",
           "must be between 1e-9 and 1e6 metres (or 0 for unknown)");
@@ -177,7 +181,42 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
       throw;
     }
   };
-  if (without && with && available >= 2) {
+  std::vector<Anchor> added;
+  if (options.interior_anchors() == "auto") {
+    // The search simulates the main run (with notches if it is asked for) once per trial
+    // anchor; the other run then holds the anchors found.
+    const SimulationOptions& search = with ? with_options : without_options;
+    AutoAnchorResult found;
+    try {
+      found = auto_interior_anchors(design.grid, design.anchors, target, design.lamella_width,
+                                    design.lamella_thickness, search, {}, progress);
+    } catch (const InvalidInput& e) {
+      if (e.field() == "lamella_width" || e.field() == "lamella_thickness")
+        throw InvalidInput("design.options." + e.field(), e.message());
+      throw;
+    }
+    added.assign(found.anchors.begin() + static_cast<std::ptrdiff_t>(design.anchors.size()),
+                 found.anchors.end());
+    design.anchors = found.anchors;
+    (with ? job.with_notches : job.without_notches) = std::move(found.run);
+    if (with && without) job.without_notches = simulate(without_options);
+    job.deployment =
+        to_proto(job.without_notches ? &*job.without_notches : nullptr,
+                 job.with_notches ? &*job.with_notches : nullptr, options, design_name);
+    for (const Anchor& a : added) {
+      v1::Anchor* anchor = job.deployment.add_added_anchors();
+      anchor->set_g(a.g);
+      anchor->set_h(a.h);
+      anchor->set_side(-1);
+      for (int k = 0; k < 3; ++k) anchor->add_position(a.position[k]);
+      for (int k = 0; k < 3; ++k) anchor->add_normal(a.normal[k]);
+    }
+    for (double rms : found.rms_trials) job.deployment.add_anchor_trial_rms(rms);
+    // The design as simulated: what fabrication's supports and a later simulation need.
+    v1::Design anchored = design_message;
+    for (const v1::Anchor& a : job.deployment.added_anchors()) *anchored.add_anchors() = a;
+    job.anchored_design = to_json(anchored) + "\n";
+  } else if (without && with && available >= 2) {
     without_options.threads = with_options.threads = std::max(1, available / 2);
     ParallelOptions parallel;
     parallel.threads = 2;
@@ -195,8 +234,10 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
     if (without) job.without_notches = simulate(without_options);
     if (with) job.with_notches = simulate(with_options);
   }
-  job.deployment = to_proto(job.without_notches ? &*job.without_notches : nullptr,
-                            job.with_notches ? &*job.with_notches : nullptr, options, design_name);
+  if (options.interior_anchors() != "auto")
+    job.deployment =
+        to_proto(job.without_notches ? &*job.without_notches : nullptr,
+                 job.with_notches ? &*job.with_notches : nullptr, options, design_name);
   // One colour scale for both runs so the two PLY files compare at a glance.
   double top = 0;
   for (const auto* run : {&job.without_notches, &job.with_notches})

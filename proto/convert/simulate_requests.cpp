@@ -27,6 +27,7 @@ v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOption
   add_view("deviation.ply", std::move(job.deviation_ply));
   add_view("deployed_without_notches.obj", std::move(job.deployed_without_notches_obj));
   add_view("deviation_without_notches.ply", std::move(job.deviation_without_notches_ply));
+  add_view("design-anchored.json", std::move(job.anchored_design));
   if (files) add_view("deployment.json", simulate_files(out).at("deployment.json"));
   return out;
 }

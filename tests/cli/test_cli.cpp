@@ -150,6 +150,79 @@ TEST(CliDesign, ReflexCornerIsInfeasibleAndBadOptionsInvalid) {
   EXPECT_NE(result.err.find("--interior-anchors"), std::string::npos) << result.err;
 }
 
+// `--interior-anchors auto` (issue 18): waves-bump held at its boundary only snaps into a dome;
+// the search adds an inner anchor that holds the waves, both runs hold it, and the anchored
+// design is a file of its own that fabrication turns into a support.
+TEST(CliRun, AutomaticInnerAnchorsAreAddedReportedAndFabricated) {
+  const std::string out = testing::temp_dir() + "/out";
+  auto result = run_cli(
+      "run example:waves-bump --quiet --interior-anchors auto --notches both "
+      "--edges-per-interval 1 --out '" +
+      out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json design = json::parse(testing::read_text(out + "/design.json"));
+  const json deployment = json::parse(testing::read_text(out + "/deployment.json"));
+  EXPECT_EQ(deployment["options"]["interior_anchors"], "auto");
+  const json& added = deployment["added_anchors"];
+  const json& trials = deployment["anchor_trial_rms"];
+  ASSERT_GE(added.size(), 1u) << deployment.dump().substr(0, 400);
+  // One trial per kept anchor plus the design's own anchors, and one more that was not kept
+  // unless the cap (8) was reached; every kept one lowered RMS by 5 % or more.
+  ASSERT_TRUE(trials.size() == added.size() + 2 || added.size() == 8u) << trials.dump();
+  for (size_t k = 0; k < added.size(); ++k)
+    EXPECT_LE(trials[k + 1].get<double>(), 0.95 * trials[k].get<double>()) << trials.dump();
+  EXPECT_DOUBLE_EQ(deployment["rms_with_notches"].get<double>(),
+                   trials[added.size()].get<double>());
+  EXPECT_LT(deployment["rms_with_notches"].get<double>(), 0.5 * trials[0].get<double>());
+  for (const json& a : added) {
+    EXPECT_EQ(a["side"], -1);
+    EXPECT_GT(a["g"].get<int>(), 0);
+    EXPECT_GT(a["h"].get<int>(), 0);
+  }
+  EXPECT_NE(result.out.find("inner anchors   " + std::to_string(added.size()) + " added"),
+            std::string::npos)
+      << result.out;
+  // design.json stays the design; design-anchored.json is it plus the added anchors.
+  const json anchored = json::parse(testing::read_text(out + "/design-anchored.json"));
+  ASSERT_EQ(anchored["anchors"].size(), design["anchors"].size() + added.size());
+  for (size_t k = 0; k < added.size(); ++k)
+    EXPECT_EQ(anchored["anchors"][design["anchors"].size() + k], added[k]);
+  json rest = anchored;
+  rest["anchors"] = design["anchors"];
+  EXPECT_EQ(rest, design);
+  // Simulating the anchored design without the search gives the same deployment.
+  result = run_cli("simulate '" + out +
+                   "/design-anchored.json' --quiet --notches on "
+                   "--edges-per-interval 1 --out '" +
+                   out + "/again'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json again = json::parse(testing::read_text(out + "/again/deployment.json"));
+  EXPECT_NEAR(again["rms_with_notches"].get<double>(), deployment["rms_with_notches"].get<double>(),
+              1e-9 * deployment["rms_with_notches"].get<double>());
+  // Fabrication lists the added anchors as inner supports.
+  result = run_cli("fabricate '" + out + "/design-anchored.json' --quiet --unit cm --out '" + out +
+                   "/kit'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string supports = testing::read_text(out + "/kit/supports.csv");
+  size_t inner = 0;
+  for (size_t at = supports.find(",inner,"); at != std::string::npos;
+       at = supports.find(",inner,", at + 1))
+    ++inner;
+  EXPECT_EQ(inner, added.size()) << supports;
+}
+
+TEST(CliRun, AutomaticInnerAnchorsNeedASimulation) {
+  auto result =
+      run_cli("design example:plane --quiet --interior-anchors auto --out " + testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--interior-anchors"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("gridshell run"), std::string::npos) << result.err;
+  result =
+      run_cli("design example:plane --quiet --interior-anchors some --out " + testing::temp_dir());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--interior-anchors"), std::string::npos) << result.err;
+}
+
 TEST(CliGeodesic, JsonComparesWithCgal) {
   const auto result =
       run_cli("geodesic example:double-vault --source 5 --compare cgal --repeat 3 --json");

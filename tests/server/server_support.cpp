@@ -445,6 +445,9 @@ std::vector<BadInput> bad_inputs() {
   simulate_case(
       "UnknownSolver", [](auto& r) { r.mutable_options()->set_solver("guess"); }, "options.solver");
   simulate_case(
+      "UnknownInteriorAnchors", [](auto& r) { r.mutable_options()->set_interior_anchors("3"); },
+      "options.interior_anchors: expected auto or nothing");
+  simulate_case(
       "CrossingOutOfRange", [](auto& r) { r.mutable_design()->mutable_crossings(3)->set_h(999); },
       "design.crossings[3].h");
   simulate_case(

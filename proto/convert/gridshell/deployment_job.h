@@ -34,6 +34,8 @@ struct DeploymentJob {
   std::string deviation_ply;
   std::string deployed_without_notches_obj;  ///< only when both ran
   std::string deviation_without_notches_ply;
+  /// options.interior_anchors = "auto": design.json with the inner anchors added, else empty.
+  std::string anchored_design;
 };
 
 /// Simulates the design (runs without and/or with notches as options.notches says) with
