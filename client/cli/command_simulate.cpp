@@ -45,6 +45,10 @@ void add_simulation_flags(CLI::App* sub, SimulationFlags& flags) {
                   "newton (default) | ceres (Levenberg-Marquardt, the reference)")
       ->check(CLI::IsMember({"newton", "ceres"}))
       ->capture_default_str();
+  sub->add_option("--anchor-goal", flags.anchor_goal,
+                  "with --interior-anchors auto: no (further) inner anchor once RMS is at most "
+                  "this percentage of the patch diagonal (default 0.25; 0: add while each "
+                  "lowers RMS by 5%)");
 }
 
 v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags) {
@@ -82,6 +86,14 @@ v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags
   if (!flags.interior_anchors.empty() && flags.interior_anchors != "auto")
     throw InvalidInput("--interior-anchors", "expected auto, got '" + flags.interior_anchors + "'");
   o.set_interior_anchors(flags.interior_anchors);
+  if (flags.anchor_goal) {
+    if (flags.interior_anchors != "auto")
+      throw InvalidInput("--anchor-goal", "applies to --interior-anchors auto only");
+    if (!(*flags.anchor_goal >= 0 && *flags.anchor_goal <= 100))
+      throw InvalidInput("--anchor-goal",
+                         "must be a percentage of the patch diagonal between 0 and 100");
+    o.set_anchor_goal(*flags.anchor_goal);
+  }
   if (flags.max_iterations < 1) throw InvalidInput("--max-iterations", "must be at least 1");
   o.set_max_iterations(flags.max_iterations);
   return o;
@@ -126,10 +138,16 @@ void print_deployment_summary(const v1::Deployment& d) {
       std::snprintf(buffer, sizeof buffer, "%s%.4f", trials.empty() ? "" : " -> ", rms);
       trials += buffer;
     }
+    std::string goal = "no goal";
+    if (d.anchor_goal_rms() > 0) {
+      std::snprintf(buffer, sizeof buffer, "until RMS <= %.4g = %.4g%% of the patch diagonal",
+                    d.anchor_goal_rms(), d.options().anchor_goal());
+      goal = buffer;
+    }
     std::printf(
         "  inner anchors   %d added automatically (RMS of the trials %s; kept while it "
-        "fell by 5%% or more)\n",
-        d.added_anchors_size(), trials.c_str());
+        "fell by 5%% or more, %s)\n",
+        d.added_anchors_size(), trials.c_str(), goal.c_str());
     for (const v1::Anchor& a : d.added_anchors())
       std::printf("                  g%d x h%d at (%.4g, %.4g, %.4g)\n", a.g(), a.h(),
                   a.position(0), a.position(1), a.position(2));

@@ -77,7 +77,8 @@ struct SimulationFlags {
   double edges_per_interval = 2;
   int max_iterations = 2000;
   std::string solver = "newton";
-  std::string interior_anchors;  // "auto" or "" (the design's anchors)
+  std::string interior_anchors;       // "auto" or "" (the design's anchors)
+  std::optional<double> anchor_goal;  // percent of the patch diagonal (auto anchors only)
 };
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
 /// Resolved and validated (InvalidInput names the flag).

@@ -53,7 +53,10 @@ AutoAnchorResult auto_interior_anchors(const Grid& grid, std::vector<Anchor> anc
   result.rms_trials.push_back(result.run.rms);
   const bool complete = static_cast<int>(grid.crossings.size()) == ng * nh;
   const SurfaceDistance surface(target);
-  while (complete && result.added < auto_options.max_anchors) {
+  const auto reached = [&] {
+    return auto_options.goal_rms > 0 && result.run.rms <= auto_options.goal_rms;
+  };
+  while (complete && result.added < auto_options.max_anchors && !reached()) {
     // The farthest inner crossing not yet anchored.
     const SimulatedConnection* worst = nullptr;
     double worst_deviation = -1;

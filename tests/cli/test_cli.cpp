@@ -148,6 +148,12 @@ TEST(CliDesign, ReflexCornerIsInfeasibleAndBadOptionsInvalid) {
       run_cli("design example:plane --quiet --interior-anchors -1 --out " + testing::temp_dir());
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.err.find("--interior-anchors"), std::string::npos) << result.err;
+  for (const std::string bad : {"--anchor-goal 1", "--interior-anchors auto --anchor-goal 101",
+                                "--interior-anchors auto --anchor-goal nan"}) {
+    result = run_cli("run example:plane --quiet " + bad + " --out " + testing::temp_dir());
+    EXPECT_EQ(result.exit_code, 2) << bad;
+    EXPECT_NE(result.err.find("--anchor-goal"), std::string::npos) << bad << ": " << result.err;
+  }
 }
 
 // `--interior-anchors auto` (issue 18): waves-bump held at its boundary only snaps into a dome;
@@ -167,8 +173,17 @@ TEST(CliRun, AutomaticInnerAnchorsAreAddedReportedAndFabricated) {
   const json& trials = deployment["anchor_trial_rms"];
   ASSERT_GE(added.size(), 1u) << deployment.dump().substr(0, 400);
   // One trial per kept anchor plus the design's own anchors, and one more that was not kept
-  // unless the cap (8) was reached; every kept one lowered RMS by 5 % or more.
-  ASSERT_TRUE(trials.size() == added.size() + 2 || added.size() == 8u) << trials.dump();
+  // unless the cap (8) or the goal (0.25 % of the patch diagonal by default) was reached; every
+  // kept one lowered RMS by 5 % or more.
+  const double goal = deployment["anchor_goal_rms"].get<double>();
+  EXPECT_EQ(deployment["options"]["anchor_goal"], 0.25);
+  EXPECT_GT(goal, 0.0025 * 100);  // waves-bump: 100 x 100 x 12.7
+  EXPECT_LT(goal, 0.0025 * 145);
+  ASSERT_TRUE(trials.size() == added.size() + 2 || added.size() == 8u ||
+              (trials.size() == added.size() + 1 && trials.back().get<double>() <= goal))
+      << trials.dump();
+  for (size_t k = 0; k + 1 < trials.size(); ++k)  // no trial once the goal was reached
+    EXPECT_GT(trials[k].get<double>(), goal) << trials.dump();
   for (size_t k = 0; k < added.size(); ++k)
     EXPECT_LE(trials[k + 1].get<double>(), 0.95 * trials[k].get<double>()) << trials.dump();
   EXPECT_DOUBLE_EQ(deployment["rms_with_notches"].get<double>(),

@@ -12,6 +12,7 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <mutex>
 #include <ostream>
@@ -447,6 +448,16 @@ std::vector<BadInput> bad_inputs() {
   simulate_case(
       "UnknownInteriorAnchors", [](auto& r) { r.mutable_options()->set_interior_anchors("3"); },
       "options.interior_anchors: expected auto or nothing");
+  simulate_case(
+      "AnchorGoalWithoutAutomaticAnchors", [](auto& r) { r.mutable_options()->set_anchor_goal(1); },
+      "options.anchor_goal: applies to interior_anchors auto only");
+  simulate_case(
+      "AnchorGoalOutOfRange",
+      [](auto& r) {
+        r.mutable_options()->set_interior_anchors("auto");
+        r.mutable_options()->set_anchor_goal(std::nan(""));
+      },
+      "options.anchor_goal: must be a percentage");
   simulate_case(
       "CrossingOutOfRange", [](auto& r) { r.mutable_design()->mutable_crossings(3)->set_h(999); },
       "design.crossings[3].h");

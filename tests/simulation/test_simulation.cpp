@@ -395,6 +395,25 @@ TEST(Simulation, AutomaticInnerAnchorsKeepWavesBumpFromSnappingIntoADome) {
   EXPECT_TRUE(monotone);
   EXPECT_GT(reports.load(), 2);
   EXPECT_EQ(last, 1.0);
+  // A goal: no anchor when the design's anchors already reach it, and no trial past it.
+  AutoAnchorOptions goal;
+  goal.goal_rms = 1.01 * boundary_only;
+  const AutoAnchorResult none =
+      auto_interior_anchors(design.grid, design.anchors, design.target.patch.mesh,
+                            design.lamella_width, design.lamella_thickness, options, goal);
+  EXPECT_EQ(none.added, 0);
+  EXPECT_EQ(none.anchors.size(), design.anchors.size());
+  ASSERT_EQ(none.rms_trials.size(), 1u);
+  EXPECT_NEAR(none.run.rms, boundary_only, 1e-9 * boundary_only);
+  goal.goal_rms = 1.01 * result.rms_trials[1];  // reached with the first anchor
+  const AutoAnchorResult one =
+      auto_interior_anchors(design.grid, design.anchors, design.target.patch.mesh,
+                            design.lamella_width, design.lamella_thickness, options, goal);
+  EXPECT_EQ(one.added, 1);
+  ASSERT_EQ(one.rms_trials.size(), 2u);
+  EXPECT_NEAR(one.run.rms, result.rms_trials[1], 1e-9 * result.rms_trials[1]);
+  EXPECT_EQ(one.anchors.back().g, result.anchors[design.anchors.size()].g);
+  EXPECT_EQ(one.anchors.back().h, result.anchors[design.anchors.size()].h);
   // Cancelled: stops with Cancelled, not a partial answer.
   std::atomic<bool> cancel{true};
   EXPECT_THROW(auto_interior_anchors(design.grid, design.anchors, design.target.patch.mesh,

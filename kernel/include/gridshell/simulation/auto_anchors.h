@@ -17,6 +17,9 @@ struct AutoAnchorOptions {
   /// An added anchor is kept only if the RMS deviation falls by at least this fraction.
   double min_improvement = 0.05;
   int max_anchors = 8;  ///< at most this many inner anchors added
+  /// No (further) anchor once the RMS deviation is at most this (0: no goal). Every anchor is a
+  /// support to build: a grid that deploys well enough on the design's anchors gets none.
+  double goal_rms = 0;
 };
 
 struct AutoAnchorResult {
@@ -31,7 +34,8 @@ struct AutoAnchorResult {
 /// Simulates the grid held at `anchors`, then repeatedly pins the inner crossing (not on a
 /// boundary member, not yet anchored) whose deployed position lies farthest from the target to
 /// its target position and surface normal and simulates again; the anchor is kept if the RMS
-/// deviation fell by at least `min_improvement`, else the search stops. Progress spans all
+/// deviation fell by at least `min_improvement`, else the search stops; it also stops (or does
+/// not start) once the RMS deviation is at most `goal_rms`. Progress spans all
 /// simulations; cancelling stops after the current one.
 AutoAnchorResult auto_interior_anchors(const Grid& grid, std::vector<Anchor> anchors,
                                        const TriangleMesh& target, double lamella_width,
