@@ -129,6 +129,7 @@ class BlenderAddonTest(unittest.TestCase):
         s.material = "lime-wood"
         s.unit = "SCENE"
         s.lamella_width = 0
+        s.auto_anchors = False
 
     def test_dome_design_then_simulate(self):
         obj = dome("dome.obj")
@@ -249,6 +250,43 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertEqual(top["rms_without_notches"], deployment["rms_without_notches"])
         lamellas = [o for o in bpy.data.collections[results.DEPLOYED].objects]
         self.assertEqual(sorted(o["notches"] for o in lamellas), [False, True])
+
+    def test_inner_anchors_found_by_the_simulation(self):
+        """waves-bump held at its boundary snaps into a dome: "Find inner anchors" adds one."""
+        loaded = self.client.load(gs.mesh_example("waves-bump"))
+        p, f = loaded["mesh"]["positions"], loaded["mesh"]["indices"]
+        data = bpy.data.meshes.new("waves-bump")
+        data.from_pydata([p[k : k + 3] for k in range(0, len(p), 3)], [], [f[k : k + 3] for k in range(0, len(f), 3)])
+        obj = bpy.data.objects.new("waves-bump", data)
+        bpy.context.scene.collection.objects.link(obj)
+        select(obj, loaded["example_corners"]["vertices"])
+        s = self.settings
+        s.resolution = 100
+        s.auto_anchors = True
+        self.assertEqual(s.simulation_options(bpy.context.scene)["interior_anchors"], "auto")
+        self.assertEqual(bpy.ops.gridshell.run(), {"FINISHED"})
+        top = bpy.data.collections[results.COLLECTION]
+        answer = self.client.simulate(
+            results.design_json(bpy.context), s.simulation_options(bpy.context.scene), design_name="design.json"
+        )
+        deployment = answer["deployment"]
+        added = deployment["added_anchors"]
+        self.assertGreaterEqual(len(added), 1, deployment["anchor_trial_rms"])
+        self.assertEqual(top["rms_with_notches"], deployment["rms_with_notches"])
+        self.assertEqual(top["added_anchors"], len(added))
+        self.assertEqual(list(top["anchor_trial_rms"]), deployment["anchor_trial_rms"])
+        empties = [o for o in bpy.data.collections[results.ANCHORS].objects if o.get("added")]
+        self.assertEqual(sorted(o.name for o in empties), sorted("added anchor g%d h%d" % (a["g"], a["h"]) for a in added))
+        for a in added:
+            e = bpy.data.objects["added anchor g%d h%d" % (a["g"], a["h"])]
+            self.assertLess(math.dist(tuple(e.location), a["position"]), 1e-4 * 100)
+        self.assertIn(("Anchors", "%d, %d added by the simulation" % (len(design_of_scene()["anchors"]), len(added))),
+                      results.summary(bpy.context.scene))
+        # Simulating again without the search removes them.
+        s.auto_anchors = False
+        self.assertEqual(bpy.ops.gridshell.simulate(), {"FINISHED"})
+        self.assertEqual([o for o in bpy.data.collections[results.ANCHORS].objects if o.get("added")], [])
+        self.assertEqual(top["added_anchors"], 0)
 
     def test_errors_are_reports(self):
         grid = dome("flat.obj", n=8, height=0.0)

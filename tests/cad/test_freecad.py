@@ -208,6 +208,38 @@ class FreeCADWorkbenchTest(unittest.TestCase):
         deployed = self.doc.getObject(core.DEPLOYED.replace(" ", "_"))
         self.assertEqual(sorted(o.Notches for o in deployed.Group), [False, True])
 
+    def test_inner_anchors_found_by_the_simulation(self):
+        """waves-bump held at its boundary snaps into a dome: "Find inner anchors" adds one."""
+        loaded = self.client.load(gs.mesh_example("waves-bump"))
+        positions, indices = loaded["mesh"]["positions"], loaded["mesh"]["indices"]
+        obj = mesh_feature(self.doc, "waves_bump", positions, indices)
+        picked = [Vector(*positions[3 * v : 3 * v + 3]) for v in loaded["example_corners"]["vertices"]]
+        self.settings.resolution = 100
+        self.settings.auto_anchors = True
+        self.assertEqual(self.settings.simulation_options()["interior_anchors"], "auto")
+        top = core.run(self.doc, obj, self.settings, corners=picked)
+        answer = self.client.simulate(top.DesignJson, self.settings.simulation_options(), design_name="design.json")
+        deployment = answer["deployment"]
+        added = deployment["added_anchors"]
+        self.assertGreaterEqual(len(added), 1, deployment["anchor_trial_rms"])
+        self.assertEqual(top.RmsWithNotches, deployment["rms_with_notches"])
+        self.assertEqual(top.AddedAnchors, len(added))
+        self.assertEqual(list(top.AnchorTrialRms), deployment["anchor_trial_rms"])
+        vertices = [o for o in members_of(self.doc, core.ANCHORS) if "Added" in o.PropertiesList and o.Added]
+        self.assertEqual(sorted(o.Label for o in vertices), sorted("added anchor g%d h%d" % (a["g"], a["h"]) for a in added))
+        for o in vertices:
+            a = next(a for a in added if o.Label == "added anchor g%d h%d" % (a["g"], a["h"]))
+            self.assertLess((o.Shape.Vertexes[0].Point - Vector(*a["position"])).Length, 1e-9 * 100)
+        # The setting is kept with the others (FreeCAD's parameters), as a bool.
+        self.settings.save()
+        self.assertIs(core.Settings.load().auto_anchors, True)
+        self.settings.auto_anchors = False
+        self.settings.save()
+        # Simulating again without the search removes them.
+        core.simulate(self.doc, self.settings)
+        self.assertEqual([o for o in members_of(self.doc, core.ANCHORS) if "Added" in o.PropertiesList and o.Added], [])
+        self.assertEqual(top.AddedAnchors, 0)
+
     def test_errors(self):
         positions, indices, corners = dome_arrays(n=8, height=0.0)
         obj = mesh_feature(self.doc, "flat", positions, indices)

@@ -424,6 +424,39 @@ test('a redesign after the simulation shows the design again, not the old deploy
   assert.doesNotMatch(await text('summary'), /RMS/);
 });
 
+test('inner anchors found by the simulation (waves-bump): listed, in design-anchored.json and in the kit\'s supports', async () => {
+  const { unzipSync } = createRequire(path.join(web, 'package.json'))('fflate');
+  await byId('example-select').selectOption('waves-bump');
+  await until(async () => /waves-bump: \d+ vertices/.test(await text('mesh-info')), 15000, 'waves-bump');
+  await byId('corners-example').click();
+  await until(async () => /η = /.test(await text('patch-info')), 30000, 'the patch on the suggested corners');
+  const n = await designCount();
+  await byId('design').click();
+  await until(async () => (await designCount()) === n + 1, 60000, 'its design');
+  await byId('auto-anchors').check();
+  assert.match(page.url(), /aa=1/); // kept in the URL with the other options
+  await byId('simulate').click();
+  await until(async () => /inner anchors:/.test(await text('summary')), 120000, 'the simulation with the anchor search');
+  const { bytes } = await downloadJson('download-deployment');
+  const dep = JSON.parse(bytes.toString('utf8'));
+  assert.equal(dep.options.interior_anchors, 'auto');
+  // Held at its boundary only, waves-bump snaps into a dome; the search keeps an inner anchor.
+  assert.ok(dep.added_anchors.length >= 1, JSON.stringify(dep.anchor_trial_rms));
+  assert.match(await text('summary'), new RegExp(`inner anchors: ${dep.added_anchors.length} added automatically`));
+  assert.ok(dep.rms_with_notches < 0.5 * dep.anchor_trial_rms[0]);
+  const design = JSON.parse((await downloadJson('download-design')).bytes.toString('utf8'));
+  const anchored = JSON.parse((await downloadJson('download-design-anchored-json')).bytes.toString('utf8'));
+  assert.deepEqual(anchored.anchors, [...design.anchors, ...dep.added_anchors]);
+  // The kit is cut for the anchored design: a support for each inner anchor.
+  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), byId('kit').click()]);
+  const zip = unzipSync(new Uint8Array(readFileSync(await download.path())));
+  const supports = Buffer.from(zip['kit/supports.csv']).toString('utf8');
+  const inner = anchored.anchors.filter((a) => !a.corner && a.side === -1).length;
+  assert.equal(supports.split('\n').filter((l) => l.includes(',inner,')).length, inner, supports);
+  assert.ok(inner >= dep.added_anchors.length);
+  await byId('auto-anchors').uncheck();
+});
+
 /** A small curved height field as OBJ (n x n vertices), optionally far from the origin. */
 function smallObj(n = 13, [ox, oy, oz] = [0, 0, 0]) {
   const lines = ['# bump'];

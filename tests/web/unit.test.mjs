@@ -59,6 +59,14 @@ test('deployment summary: each run with its stresses against the material', () =
   const over = f.deploymentSummary({ ...dep, with_notches: { ...run, bending_utilization: 1.2,
                                                              overstressed_lamellas: 3 } });
   assert.match(over, /= 120% of 60 MPa EXCEEDED.*3 lamellas overstressed/);
+  assert.doesNotMatch(text, /inner anchors/); // no search asked
+  const anchor = { corner: false, side: -1, position: [0, 0, 1] };
+  const searched = f.deploymentSummary({ ...dep, added_anchors: [anchor], anchor_trial_rms: [3.332, 0.2867, 0.2886] });
+  assert.match(searched, /inner anchors: 1 added automatically \(RMS of the trials 3\.33 → 0\.287 → 0\.289; kept while it fell by 5% or more\)/);
+  const goal = f.deploymentSummary({ ...dep, added_anchors: [anchor], anchor_trial_rms: [3.332, 0.2867], anchor_goal_rms: 0.355 });
+  assert.match(goal, /RMS of the trials 3\.33 → 0\.287; kept while it fell by 5% or more, until RMS ≤ 0\.355\)/);
+  const none = f.deploymentSummary({ ...dep, added_anchors: [], anchor_trial_rms: [0.2, 0.199] });
+  assert.match(none, /inner anchors: none added \(RMS of the trials 0\.2 → 0\.199;/);
 });
 
 test('errors go next to the control their field names', () => {
@@ -72,7 +80,7 @@ test('errors go next to the control their field names', () => {
 });
 
 test('URL state round-trips', () => {
-  const s = { example: 'double-vault', corners: [1, 20, 300, 4000], alpha: 71.5, design: true, options: { mu: '5', mat: 'steel' } };
+  const s = { example: 'double-vault', corners: [1, 20, 300, 4000], alpha: 71.5, design: true, options: { mu: '5', mat: 'steel', aa: '1' } };
   const back = f.decodeState('#' + f.encodeState(s));
   assert.deepEqual(back, s);
   const up = { file: { name: 'my mesh.obj', hash: '0123456789abcdef' }, corners: [1, 2, 3, 4], options: {} };

@@ -61,6 +61,7 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
         box.prop(settings, "material")
         row = box.row()
         row.prop(settings, "notches", expand=True)
+        box.prop(settings, "auto_anchors")
 
         if STATE["call"] is not None:
             box = layout.box()

@@ -5,7 +5,7 @@ import math
 import os
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, StringProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
 DEFAULT_SERVER = "http://127.0.0.1:8080"
 
@@ -109,6 +109,12 @@ class GridshellSettings(bpy.types.PropertyGroup):
         min=0,
         max=100,
     )
+    auto_anchors: BoolProperty(
+        name="Find inner anchors",
+        description="Simulate with inner anchors added one by one where each lowers the deviation by "
+        "5% or more (one more simulation per anchor tried); they appear as empties 'added anchor'",
+        default=False,
+    )
     unit: EnumProperty(name="Unit", description="Length unit of the model", items=UNITS, default="SCENE")
     material: EnumProperty(name="Material", items=MATERIALS, default="lime-wood")
     notches: EnumProperty(
@@ -145,6 +151,8 @@ class GridshellSettings(bpy.types.PropertyGroup):
 
     def simulation_options(self, scene):
         options = {"notches": self.notches, "material": self.material}
+        if self.auto_anchors:
+            options["interior_anchors"] = "auto"
         if self.unit == "SCENE":
             units = scene.unit_settings
             if units.system != "NONE":

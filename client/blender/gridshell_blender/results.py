@@ -219,6 +219,26 @@ def show_deployment(scene, result, call_seconds):
             del top[key]
     top["converged"] = bool(deployment.get("converged", False))
     top["simulate_call_seconds"] = call_seconds
+    # Inner anchors the simulation added (interior_anchors "auto"): empties beside the design's.
+    anchors = collection(scene, ANCHORS, top)
+    for obj in [o for o in anchors.objects if o.get("added", False)]:
+        bpy.data.objects.remove(obj, do_unlink=True)
+    added = deployment.get("added_anchors", [])
+    size = max((o.empty_display_size for o in anchors.objects), default=1.0)  # the design's anchors
+    for anchor in added:
+        empty = bpy.data.objects.new("added anchor g%d h%d" % (anchor["g"], anchor["h"]), None)
+        empty.empty_display_type = "CUBE"
+        empty.empty_display_size = 1.5 * size
+        empty.location = anchor["position"]
+        empty["g"], empty["h"] = anchor["g"], anchor["h"]
+        empty["side"] = anchor.get("side", -1)
+        empty["added"] = True
+        anchors.objects.link(empty)
+    top["added_anchors"] = len(added)
+    if "anchor_trial_rms" in deployment:
+        top["anchor_trial_rms"] = list(deployment["anchor_trial_rms"])
+    elif "anchor_trial_rms" in top:
+        del top["anchor_trial_rms"]
     return deployed
 
 
@@ -233,7 +253,8 @@ def summary(scene):
         ("α, ᾱ", "%.2f°, %.2f°" % (top["alpha"] * deg, top["alpha_bar"] * deg)),
         ("Feasible ᾱ", "%.2f° to %.2f°" % (top["alpha_bar_min"] * deg, top["alpha_bar_max"] * deg)),
         ("Members", "%d, %d crossings" % (top["members"], top["crossings"])),
-        ("Anchors", "%d" % top["anchors"]),
+        ("Anchors", "%d" % top["anchors"]
+         + (", %d added by the simulation" % top["added_anchors"] if top.get("added_anchors") else "")),
         ("Design", "%.1f s, call %.1f s" % (top["design_seconds"], top["design_call_seconds"])),
     ]
     if "rms_without_notches" in top:

@@ -74,6 +74,7 @@ class Settings:
         "unit": "mm",
         "material": "lime-wood",
         "notches": "both",
+        "auto_anchors": False,  # simulate with interior_anchors "auto"
     }
 
     def __init__(self, **values):
@@ -92,6 +93,8 @@ class Settings:
         for name, default in cls.FIELDS.items():
             if isinstance(default, str):
                 values[name] = p.GetString(name, default)
+            elif isinstance(default, bool):
+                values[name] = p.GetBool(name, default)
             elif isinstance(default, int):
                 values[name] = p.GetInt(name, default)
             else:
@@ -104,6 +107,8 @@ class Settings:
             value = getattr(self, name)
             if isinstance(default, str):
                 p.SetString(name, str(value))
+            elif isinstance(default, bool):
+                p.SetBool(name, bool(value))
             elif isinstance(default, int):
                 p.SetInt(name, int(value))
             else:
@@ -133,6 +138,8 @@ class Settings:
 
     def simulation_options(self):
         options = {"notches": self.notches, "material": self.material}
+        if self.auto_anchors:
+            options["interior_anchors"] = "auto"
         if self.unit:
             options["unit"] = self.unit
         return options
@@ -318,6 +325,20 @@ def show_deployment(doc, result, call_seconds):
             top.removeProperty(name)
     _set(top, "Converged", "App::PropertyBool", bool(deployment.get("converged", False)))
     _set(top, "SimulateCallSeconds", "App::PropertyFloat", call_seconds)
+    # Inner anchors the simulation added (interior_anchors "auto"): vertices beside the design's.
+    anchors = _group(doc, ANCHORS, top)
+    for obj in list(anchors.Group):
+        if "Added" in obj.PropertiesList and obj.Added:
+            doc.removeObject(obj.Name)
+    added = deployment.get("added_anchors", [])
+    for anchor in added:
+        f = _feature(doc, anchors, "added anchor g%d h%d" % (anchor["g"], anchor["h"]),
+                     Part.Vertex(_vector(anchor["position"])))
+        _set(f, "Corner", "App::PropertyBool", False)
+        _set(f, "Side", "App::PropertyInteger", anchor.get("side", -1))
+        _set(f, "Added", "App::PropertyBool", True)
+    _set(top, "AddedAnchors", "App::PropertyInteger", len(added))
+    _set(top, "AnchorTrialRms", "App::PropertyFloatList", list(deployment.get("anchor_trial_rms", [])))
     doc.recompute()
     return deployed
 

@@ -113,6 +113,9 @@ class TaskPanel:
             self.notches.addItems(["both", "on", "off"])
             self.notches.setCurrentText(s.notches)
             layout.addRow("Notches", self.notches)
+            self.auto_anchors = QtWidgets.QCheckBox("where each lowers the deviation by 5% or more")
+            self.auto_anchors.setChecked(bool(s.auto_anchors))
+            layout.addRow("Find inner anchors", self.auto_anchors)
         self.progress = QtWidgets.QProgressBar()
         self.progress.setRange(0, 1000)
         self.progress.setValue(0)
@@ -134,6 +137,7 @@ class TaskPanel:
         if self.mode in ("simulate", "run"):
             s.material = self.material.currentText()
             s.notches = self.notches.currentText()
+            s.auto_anchors = self.auto_anchors.isChecked()
         s.save()
 
     def getStandardButtons(self):

@@ -191,6 +191,10 @@ export interface Deployment {
   rods_without_notches: Lamella[];
   with_notches?: SimulationRun;
   without_notches?: SimulationRun;
+  /** Inner anchors the simulation added (options.interior_anchors "auto"), and the RMS of each trial. */
+  added_anchors?: Design['anchors'];
+  anchor_trial_rms?: number[];
+  anchor_goal_rms?: number; // no anchor added once RMS is at most this (0: no goal)
 }
 
 export interface SimulateResult {

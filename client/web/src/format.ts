@@ -78,6 +78,13 @@ export function deploymentSummary(dep: Deployment): string {
              (dep.options.bending_strength > 0 ? `, bending strength ${stress(dep.options.bending_strength)}` : '') +
              (dep.options.shear_strength > 0 ? `, shear strength ${stress(dep.options.shear_strength)}` : '') +
              (dep.options.unit ? `; unit ${dep.options.unit}` : ''));
+  const trials = dep.anchor_trial_rms ?? [];
+  if (trials.length) {
+    const added = dep.added_anchors?.length ?? 0;
+    lines.push(`inner anchors: ${added ? `${added} added automatically` : 'none added'} ` +
+               `(RMS of the trials ${trials.map(formatNumber).join(' → ')}; kept while it fell by 5% or more` +
+               `${dep.anchor_goal_rms ? `, until RMS ≤ ${formatNumber(dep.anchor_goal_rms)}` : ''})`);
+  }
   lines.push(`grid vertices ${dep.grid_vertices}; ${dep.converged ? 'every run converged' : 'a run did NOT converge'}`);
   return lines.join('\n');
 }
@@ -116,7 +123,7 @@ export interface UrlState {
   options: Record<string, string>;
 }
 
-export const OPTION_KEYS = ['mu', 'mv', 'w', 't', 'ia', 'unit', 'mat'] as const;
+export const OPTION_KEYS = ['mu', 'mv', 'w', 't', 'ia', 'unit', 'mat', 'aa'] as const;
 
 export function encodeState(s: UrlState): string {
   const p = new URLSearchParams();

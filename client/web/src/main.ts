@@ -57,6 +57,7 @@ const ui = {
   width: el<HTMLInputElement>('lamella-width'),
   thickness: el<HTMLInputElement>('lamella-thickness'),
   anchors: el<HTMLInputElement>('interior-anchors'),
+  autoAnchors: el<HTMLInputElement>('auto-anchors'),
   design: el<HTMLButtonElement>('design'),
   unit: el<HTMLSelectElement>('unit'),
   material: el<HTMLSelectElement>('material'),
@@ -512,7 +513,7 @@ ui.alpha.addEventListener('input', () => {
 for (const input of [ui.membersU, ui.membersV, ui.width, ui.thickness, ui.anchors]) {
   input.addEventListener('input', () => redesignSoon(350));
 }
-for (const s of [ui.unit, ui.material]) s.addEventListener('change', () => saveUrl());
+for (const s of [ui.unit, ui.material, ui.autoAnchors]) s.addEventListener('change', () => saveUrl());
 
 // ---- simulate -----------------------------------------------------------------------------------
 
@@ -523,6 +524,7 @@ async function simulate(): Promise<void> {
   if (!d) return;
   const options: Record<string, unknown> = { notches: 'both', material: ui.material.value };
   if (ui.unit.value) options['unit'] = ui.unit.value;
+  if (ui.autoAnchors.checked) options['interior_anchors'] = 'auto';
   const result = await run<SimulateResult>('simulate', 'simulate', {
     design: d.design, options, design_name: 'design.json', files: true,
   });
@@ -559,7 +561,11 @@ ui.kit.addEventListener('click', () => void downloadKit());
 async function downloadKit(): Promise<void> {
   const d = state.design;
   if (!d) return;
-  const result = await run<FabricateResult>('fabricate', 'fabricate', fabricateRequest(d.design, ui.unit.value));
+  // Inner anchors that the simulation added need supports too: the kit is then cut for the
+  // anchored design (the CLI's design-anchored.json: the design plus the added anchors).
+  const added = state.simulation?.deployment.added_anchors ?? [];
+  const design = added.length ? { ...d.design, anchors: [...d.design.anchors, ...added] } : d.design;
+  const result = await run<FabricateResult>('fabricate', 'fabricate', fabricateRequest(design, ui.unit.value));
   if (!result) return;
   const a = document.createElement('a');
   a.href = URL.createObjectURL(new Blob([kitZip(result.files)], { type: 'application/zip' }));
@@ -617,7 +623,8 @@ function saveUrl(): void {
   if (restoring) return;
   const s: UrlState = {
     options: { mu: ui.membersU.value, mv: ui.membersV.value, w: ui.width.value, t: ui.thickness.value,
-               ia: ui.anchors.value, unit: ui.unit.value, mat: ui.material.value },
+               ia: ui.anchors.value, unit: ui.unit.value, mat: ui.material.value,
+               ...(ui.autoAnchors.checked ? { aa: '1' } : {}) },
   };
   if (state.source?.kind === 'example') s.example = state.source.name;
   if (state.source?.kind === 'file' && state.source.hash) s.file = { name: state.source.name, hash: state.source.hash };
@@ -635,6 +642,7 @@ async function restore(): Promise<void> {
   const set = (input: HTMLInputElement | HTMLSelectElement, v: string | undefined) => { if (v !== undefined) input.value = v; };
   set(ui.membersU, o['mu']); set(ui.membersV, o['mv']); set(ui.width, o['w']); set(ui.thickness, o['t']);
   set(ui.anchors, o['ia']); set(ui.unit, o['unit']); set(ui.material, o['mat']);
+  ui.autoAnchors.checked = o['aa'] === '1';
   if (s.file && !s.example) {
     // The bytes of an uploaded file are not in the URL: ask for the file, restore when it comes.
     pendingFileState = s;

@@ -379,6 +379,17 @@ export class Viewer {
     g.setIndex(pos.length / 3 > 65535 ? new THREE.Uint32BufferAttribute(idx, 1) : new THREE.Uint16BufferAttribute(idx, 1));
     g.computeVertexNormals();
     this.deployment.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
+    // Inner anchors the simulation added (interior_anchors "auto"): orange cubes at their targets.
+    const added = deployment.added_anchors ?? [];
+    if (added.length) {
+      const r = this.radius * 0.015;
+      const cubes = new THREE.InstancedMesh(new THREE.BoxGeometry(r * 2, r * 2, r * 2),
+                                            new THREE.MeshStandardMaterial({ color: 0xe66101 }), added.length);
+      cubes.name = 'added-anchors';
+      const m = new THREE.Matrix4();
+      added.forEach((a, i) => cubes.setMatrixAt(i, m.makeTranslation(this.localPoint(a.position))));
+      this.deployment.add(cubes);
+    }
     this.requestRender();
   }
 
