@@ -15,6 +15,16 @@ void add_point(ListValue* list, std::initializer_list<double> values) {
 
 }  // namespace
 
+void to_proto(const Anchor& a, v1::Anchor* anchor) {
+  anchor->set_g(a.g);
+  anchor->set_h(a.h);
+  anchor->set_corner(a.corner);
+  anchor->set_side(a.side);
+  for (int k = 0; k < 3; ++k) anchor->add_position(a.position[k]);
+  for (int k = 0; k < 3; ++k) anchor->add_normal(a.normal[k]);
+  anchor->set_boundary_curvature(a.boundary_curvature);
+}
+
 v1::Design to_proto(const Design& design, const v1::DesignOptions& options,
                     const std::string& input_name) {
   v1::Design out;
@@ -53,16 +63,7 @@ v1::Design to_proto(const Design& design, const v1::DesignOptions& options,
     c->set_notch_h(x.notch_h());
     c->set_on_boundary(x.on_boundary);
   }
-  for (const Anchor& a : design.anchors) {
-    v1::Anchor* anchor = out.add_anchors();
-    anchor->set_g(a.g);
-    anchor->set_h(a.h);
-    anchor->set_corner(a.corner);
-    anchor->set_side(a.side);
-    for (int k = 0; k < 3; ++k) anchor->add_position(a.position[k]);
-    for (int k = 0; k < 3; ++k) anchor->add_normal(a.normal[k]);
-    anchor->set_boundary_curvature(a.boundary_curvature);
-  }
+  for (const Anchor& a : design.anchors) to_proto(a, out.add_anchors());
   const Patch& patch = design.target.patch;
   for (const Vec3& v : patch.mesh.vertices())
     add_point(out.mutable_patch()->mutable_vertices(), {v.x(), v.y(), v.z()});

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
+#include <optional>
 
+#include "gridshell/convert.h"
 #include "gridshell/convert_deployment.h"
 #include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
@@ -29,13 +31,6 @@ bool within(double value, double lo, double hi) { return value >= lo && value <=
 /// accuracy bar of issue 18 (0.5 %); the paper's built models reached 0.22-0.55 % (Table 1 RMS2
 /// over their patch diagonals). docs/decisions.md, "--interior-anchors auto".
 constexpr double kDefaultAnchorGoalPercent = 0.25;
-
-double bounding_box_diagonal(const TriangleMesh& mesh) {
-  if (mesh.vertices().empty()) return 0;
-  Vec3 lo = mesh.vertices().front(), hi = lo;
-  for (const Vec3& v : mesh.vertices()) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
-  return (hi - lo).norm();
-}
 
 }  // namespace
 
@@ -190,55 +185,37 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   // Both runs are independent: with two or more threads they run side by side, half the threads
   // each (results do not depend on the thread count).
   const int available = resolve_threads(threads);
-  auto simulate = [&](const SimulationOptions& o) {
+  // The lamella's cross-section comes from the design's options: its errors name them there.
+  const auto in_design_options = [](auto&& run) {
     try {
-      return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
-                                 design.lamella_thickness, o, progress);
+      return run();
     } catch (const InvalidInput& e) {
-      // The lamella's cross-section comes from the design's options.
       if (e.field() == "lamella_width" || e.field() == "lamella_thickness")
         throw InvalidInput("design.options." + e.field(), e.message());
       throw;
     }
   };
-  std::vector<Anchor> added;
+  auto simulate = [&](const SimulationOptions& o) {
+    return in_design_options([&] {
+      return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
+                                 design.lamella_thickness, o, progress);
+    });
+  };
+  std::optional<AutoAnchorResult> found;
+  AutoAnchorOptions auto_options;
+  const size_t design_anchors = design.anchors.size();
   if (options.interior_anchors() == "auto") {
     // The search simulates the main run (with notches if it is asked for) once per trial
     // anchor; the other run then holds the anchors found.
     const SimulationOptions& search = with ? with_options : without_options;
-    AutoAnchorResult found;
-    AutoAnchorOptions auto_options;
-    auto_options.goal_rms = options.anchor_goal() / 100 * bounding_box_diagonal(target);
-    try {
-      found = auto_interior_anchors(design.grid, design.anchors, target, design.lamella_width,
-                                    design.lamella_thickness, search, auto_options, progress);
-    } catch (const InvalidInput& e) {
-      if (e.field() == "lamella_width" || e.field() == "lamella_thickness")
-        throw InvalidInput("design.options." + e.field(), e.message());
-      throw;
-    }
-    added.assign(found.anchors.begin() + static_cast<std::ptrdiff_t>(design.anchors.size()),
-                 found.anchors.end());
-    design.anchors = found.anchors;
-    (with ? job.with_notches : job.without_notches) = std::move(found.run);
+    auto_options.goal_rms = options.anchor_goal() / 100 * bounding_box_size(target).norm();
+    found = in_design_options([&] {
+      return auto_interior_anchors(design.grid, design.anchors, target, design.lamella_width,
+                                   design.lamella_thickness, search, auto_options, progress);
+    });
+    design.anchors = found->anchors;
+    (with ? job.with_notches : job.without_notches) = std::move(found->run);
     if (with && without) job.without_notches = simulate(without_options);
-    job.deployment =
-        to_proto(job.without_notches ? &*job.without_notches : nullptr,
-                 job.with_notches ? &*job.with_notches : nullptr, options, design_name);
-    for (const Anchor& a : added) {
-      v1::Anchor* anchor = job.deployment.add_added_anchors();
-      anchor->set_g(a.g);
-      anchor->set_h(a.h);
-      anchor->set_side(-1);
-      for (int k = 0; k < 3; ++k) anchor->add_position(a.position[k]);
-      for (int k = 0; k < 3; ++k) anchor->add_normal(a.normal[k]);
-    }
-    for (double rms : found.rms_trials) job.deployment.add_anchor_trial_rms(rms);
-    job.deployment.set_anchor_goal_rms(auto_options.goal_rms);
-    // The design as simulated: what fabrication's supports and a later simulation need.
-    v1::Design anchored = design_message;
-    for (const v1::Anchor& a : job.deployment.added_anchors()) *anchored.add_anchors() = a;
-    job.anchored_design = to_json(anchored) + "\n";
   } else if (without && with && available >= 2) {
     without_options.threads = with_options.threads = std::max(1, available / 2);
     ParallelOptions parallel;
@@ -257,10 +234,18 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
     if (without) job.without_notches = simulate(without_options);
     if (with) job.with_notches = simulate(with_options);
   }
-  if (options.interior_anchors() != "auto")
-    job.deployment =
-        to_proto(job.without_notches ? &*job.without_notches : nullptr,
-                 job.with_notches ? &*job.with_notches : nullptr, options, design_name);
+  job.deployment = to_proto(job.without_notches ? &*job.without_notches : nullptr,
+                            job.with_notches ? &*job.with_notches : nullptr, options, design_name);
+  if (found) {
+    v1::Design anchored = design_message;  // the design as simulated: for supports, re-runs
+    for (size_t k = design_anchors; k < design.anchors.size(); ++k) {
+      to_proto(design.anchors[k], job.deployment.add_added_anchors());
+      to_proto(design.anchors[k], anchored.add_anchors());
+    }
+    for (double rms : found->rms_trials) job.deployment.add_anchor_trial_rms(rms);
+    job.deployment.set_anchor_goal_rms(auto_options.goal_rms);
+    job.anchored_design = to_json(anchored) + "\n";
+  }
   // One colour scale for both runs so the two PLY files compare at a glance.
   double top = 0;
   for (const auto* run : {&job.without_notches, &job.with_notches})

@@ -444,6 +444,7 @@ test('inner anchors found by the simulation (waves-bump): listed, in design-anch
   assert.ok(dep.added_anchors.length >= 1, JSON.stringify(dep.anchor_trial_rms));
   assert.match(await text('summary'), new RegExp(`inner anchors: ${dep.added_anchors.length} added automatically`));
   assert.ok(dep.rms_with_notches < 0.5 * dep.anchor_trial_rms[0]);
+  await page.screenshot({ path: path.join(outDir, 'inner-anchors.png') });
   const design = JSON.parse((await downloadJson('download-design')).bytes.toString('utf8'));
   const anchored = JSON.parse((await downloadJson('download-design-anchored-json')).bytes.toString('utf8'));
   assert.deepEqual(anchored.anchors, [...design.anchors, ...dep.added_anchors]);

@@ -8,7 +8,7 @@ import './style.css';
 import {
   ApiError, base64ToBytes, bytesToBase64, call, isCancelled, setToken,
   type DesignResult, type ExampleInfo, type FileJson, type LoadResult, type MeshJson, type PatchResult,
-  type Progress, type SimulateResult,
+  type Design, type Progress, type SimulateResult,
 } from './api';
 import { diverging, drawBar, formatNumber, sequential, symmetricRange } from './colormap';
 import {
@@ -562,9 +562,9 @@ async function downloadKit(): Promise<void> {
   const d = state.design;
   if (!d) return;
   // Inner anchors that the simulation added need supports too: the kit is then cut for the
-  // anchored design (the CLI's design-anchored.json: the design plus the added anchors).
-  const added = state.simulation?.deployment.added_anchors ?? [];
-  const design = added.length ? { ...d.design, anchors: [...d.design.anchors, ...added] } : d.design;
+  // anchored design the daemon returned with the deployment (design-anchored.json).
+  const anchored = state.simulation?.views.find((f) => f.name === 'design-anchored.json');
+  const design = anchored ? JSON.parse(new TextDecoder().decode(base64ToBytes(anchored.content))) as Design : d.design;
   const result = await run<FabricateResult>('fabricate', 'fabricate', fabricateRequest(design, ui.unit.value));
   if (!result) return;
   const a = document.createElement('a');

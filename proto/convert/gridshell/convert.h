@@ -15,6 +15,9 @@ namespace gridshell {
 v1::Design to_proto(const Design& design, const v1::DesignOptions& options,
                     const std::string& input_name);
 
+/// One anchor as design.json writes it (also a deployment's added inner anchors).
+void to_proto(const Anchor& anchor, v1::Anchor* out);
+
 /// Timings and summary numbers of a design run.
 v1::DesignReport to_report(const Design& design, const std::string& input_name, int mesh_vertices,
                            double seconds);
