@@ -77,8 +77,8 @@ TargetPatch target_patch_from_cut(Patch patch, const std::array<SurfacePoint, 4>
   // is covered by shortest geodesics as it is; only otherwise is the gap measured by eta and
   // smoothed away (and the boundary re-cut on the smoothed surface, smooth_until_coverable).
   if (options.smooth && !result.coverability.injectivity_ok) {
-    result.smoothing =
-        smooth_until_coverable(result.patch, options.geodesic, options.coverability, progress);
+    result.smoothing = smooth_until_coverable(result.patch, options.geodesic, options.coverability,
+                                              progress, result.coverability.gap.eta);
   } else {
     result.smoothing.eta_before = result.smoothing.eta_after = result.coverability.gap.eta;
   }
@@ -101,7 +101,8 @@ TargetPatch target_patch_from_cut(Patch patch, const std::array<SurfacePoint, 4>
   }
   // The four sides must be shortest geodesics of the final patch: measured, not assumed.
   start = std::chrono::steady_clock::now();
-  result.boundary_excess = boundary_geodesic_excess(result.patch, options.geodesic, progress);
+  result.boundary_excess = boundary_geodesic_excess(result.patch, options.geodesic, progress,
+                                                    options.coverability.threads);
   result.stage_seconds["boundary_check"] = seconds_since(start);
   for (int i = 0; i < 4; ++i)
     if (result.boundary_excess[i] > kBoundaryGeodesicTolerance) {

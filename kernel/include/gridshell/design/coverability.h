@@ -9,6 +9,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "gridshell/design/distance_map_copy.h"
@@ -82,10 +83,12 @@ struct SmoothingResult {
 
 /// Relative excess of each side over the exact shortest geodesic between its corners on the
 /// patch itself: (polyline length of sides[i] - d(c_i, c_i+1)) / polyline length; 0 when the
-/// side is a shortest geodesic of the patch (rounding aside). Four exact solves.
+/// side is a shortest geodesic of the patch (rounding aside). Four exact solves, each pruned to
+/// the paths no longer than its side (which is itself a path between the corners), on `threads`
+/// workers (0 = all cores).
 std::array<double, 4> boundary_geodesic_excess(const Patch& patch,
                                                const GeodesicOptions& geodesic = {},
-                                               const Progress& progress = {});
+                                               const Progress& progress = {}, int threads = 0);
 
 /// A side counts as a shortest geodesic of the patch when its excess is at most this.
 constexpr double kBoundaryGeodesicTolerance = 1e-9;
@@ -97,10 +100,12 @@ constexpr double kBoundaryGeodesicTolerance = 1e-9;
 /// if the re-cut patch has eta > eta_max again, it is smoothed and re-cut again. Ends when both
 /// hold. Throws Infeasible (field "corners") with eta and the boundary excess when the
 /// iteration cap (CoverabilityOptions::max_smoothing_iterations, over all rounds) or
-/// kMaxRecuts re-cuts are reached first.
+/// kMaxRecuts re-cuts are reached first. `eta`: the gap factor of `patch` as given, if the caller
+/// has measured it already (else it is measured here).
 SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic = {},
                                        const CoverabilityOptions& options = {},
-                                       const Progress& progress = {});
+                                       const Progress& progress = {},
+                                       std::optional<double> eta = std::nullopt);
 
 /// Re-cuts in one smoothing run, at most.
 constexpr int kMaxRecuts = 12;
