@@ -1,12 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "gridshell/files.h"
 
-#include <google/protobuf/descriptor.h>
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
-#include <google/protobuf/util/json_util.h>
-#include <google/protobuf/util/type_resolver_util.h>
-
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -60,34 +54,6 @@ void write_files(const FileBundle& files, const std::string& dir) {
       throw InvalidInput(dir, "result file name '" + name + "' is not a plain file name");
     write_file_atomically((fs::path(dir) / file).string(), contents);
   }
-}
-
-std::string to_json(const google::protobuf::Message& message, bool pretty) {
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.add_whitespace = pretty;
-  options.always_print_primitive_fields = true;
-  // MessageToJsonString serializes the message first without the deterministic flag, so maps
-  // (energies, stage_seconds) came out in the hash order of the process: a file's bytes changed
-  // from run to run. The same conversion over a deterministic serialization sorts map keys.
-  namespace pb = google::protobuf;
-  std::string binary;
-  {
-    pb::io::StringOutputStream stream(&binary);
-    pb::io::CodedOutputStream coded(&stream);
-    coded.SetSerializationDeterministic(true);
-    if (!message.SerializeToCodedStream(&coded))
-      throw std::runtime_error("JSON conversion failed: cannot serialize " + message.GetTypeName());
-  }
-  static const std::unique_ptr<pb::util::TypeResolver> resolver(
-      pb::util::NewTypeResolverForDescriptorPool("type.googleapis.com",
-                                                 pb::DescriptorPool::generated_pool()));
-  std::string json;
-  const auto status = pb::util::BinaryToJsonString(
-      resolver.get(), "type.googleapis.com/" + message.GetDescriptor()->full_name(), binary, &json,
-      options);
-  if (!status.ok()) throw std::runtime_error("JSON conversion failed: " + status.ToString());
-  return json;
 }
 
 }  // namespace gridshell
