@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <map>
+#include <random>
 #include <set>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "gridshell/mesh/errors.h"
@@ -197,6 +200,138 @@ TEST(MeshTopology, TwoTrianglesShareOneEdge) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// check_manifold against the hash-map implementation it replaced (kept here as the oracle):
+// the same first problem on random face soups and on damaged meshes.
+
+std::uint64_t key(int a, int b) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+         static_cast<std::uint32_t>(b);
+}
+
+TopologyProblem reference_check_manifold(int nv, const std::vector<Face>& faces) {
+  TopologyProblem problem;
+  const int nf = static_cast<int>(faces.size());
+  std::unordered_map<std::uint64_t, int> directed;  // directed edge -> count
+  std::unordered_map<std::uint64_t, int> undirected;
+  directed.reserve(faces.size() * 3);
+  undirected.reserve(faces.size() * 3);
+  for (int f = 0; f < nf; ++f) {
+    const Face& t = faces[f];
+    for (int i = 0; i < 3; ++i) {
+      if (t[i] < 0 || t[i] >= nv || t[i] == t[(i + 1) % 3]) {
+        problem.kind = TopologyProblem::Kind::InvalidIndex;
+        problem.element = f;
+        return problem;
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      const int a = t[i], b = t[(i + 1) % 3];
+      if (++undirected[key(std::min(a, b), std::max(a, b))] > 2) {
+        problem.kind = TopologyProblem::Kind::NonManifoldEdge;
+        problem.element = std::min(a, b);
+        problem.other = std::max(a, b);
+        return problem;
+      }
+      if (++directed[key(a, b)] > 1) {
+        problem.kind = TopologyProblem::Kind::InconsistentOrientation;
+        problem.element = f;
+        return problem;
+      }
+    }
+  }
+  // Vertex manifoldness: the faces around a vertex must form one fan (a single chain or cycle).
+  std::vector<std::vector<int>> vertex_faces(nv);
+  for (int f = 0; f < nf; ++f)
+    for (int v : faces[f]) vertex_faces[v].push_back(f);
+  for (int v = 0; v < nv; ++v) {
+    const auto& fan = vertex_faces[v];
+    if (fan.size() <= 1) continue;
+    // For each incident face: the "next" vertex (after v) and "previous" vertex (before v).
+    std::unordered_map<int, int> next_of_prev;  // prev vertex -> face index in list
+    std::vector<int> nextv(fan.size()), prevv(fan.size());
+    for (size_t k = 0; k < fan.size(); ++k) {
+      const Face& t = faces[fan[k]];
+      const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+      nextv[k] = t[(i + 1) % 3];
+      prevv[k] = t[(i + 2) % 3];
+      next_of_prev[prevv[k]] = static_cast<int>(k);
+    }
+    // Walk from a start face (a face whose next vertex is no one's prev, if the fan is open).
+    std::unordered_map<int, int> by_next;
+    for (size_t k = 0; k < fan.size(); ++k) by_next[nextv[k]] = static_cast<int>(k);
+    int start = 0;
+    for (size_t k = 0; k < fan.size(); ++k)
+      if (!by_next.count(prevv[k])) {
+        start = static_cast<int>(k);
+        break;
+      }
+    size_t visited = 0;
+    int k = start;
+    std::vector<char> seen(fan.size(), 0);
+    while (k >= 0 && !seen[k]) {
+      seen[k] = 1;
+      ++visited;
+      auto it = next_of_prev.find(nextv[k]);
+      k = it == next_of_prev.end() ? -1 : it->second;
+    }
+    if (visited != fan.size()) {
+      problem.kind = TopologyProblem::Kind::NonManifoldVertex;
+      problem.element = v;
+      return problem;
+    }
+  }
+  return problem;
+}
+
+void expect_same_problem(int nv, const std::vector<Face>& faces) {
+  const TopologyProblem ours = check_manifold(nv, faces);
+  const TopologyProblem reference = reference_check_manifold(nv, faces);
+  EXPECT_EQ(ours.kind, reference.kind) << reference.message();
+  EXPECT_EQ(ours.element, reference.element) << reference.message();
+  EXPECT_EQ(ours.other, reference.other) << reference.message();
+  if (reference.kind == TopologyProblem::Kind::None) {
+    const MeshTopology top = build_topology(nv, faces);
+    EXPECT_EQ(top.face_neighbors.size(), faces.size());
+  }
+}
+
+TEST(CheckManifold, SameFirstProblemAsTheHashMapVersion) {
+  std::mt19937 rng(7);
+  int kinds[5] = {0, 0, 0, 0, 0};
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int nv = 4 + static_cast<int>(rng() % 6);
+    const int nf = 1 + static_cast<int>(rng() % 10);
+    std::vector<Face> faces(nf);
+    for (Face& f : faces)
+      for (int& v : f) v = static_cast<int>(rng() % (nv + 1)) - (rng() % 40 == 0 ? nv + 1 : 0);
+    expect_same_problem(nv, faces);
+    ++kinds[static_cast<int>(reference_check_manifold(nv, faces).kind)];
+  }
+  // Damaged closed meshes: a face flipped, removed, duplicated or glued to a far vertex.
+  const TriangleMesh sphere = icosphere(1, 1.0);
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<Face> faces = sphere.faces();
+    const std::size_t f = rng() % faces.size();
+    switch (trial % 4) {
+      case 0:
+        std::swap(faces[f][0], faces[f][1]);
+        break;
+      case 1:
+        faces.erase(faces.begin() + static_cast<long>(f));
+        break;
+      case 2:
+        faces.push_back(faces[f]);
+        break;
+      case 3:
+        faces[f][rng() % 3] = static_cast<int>(rng() % sphere.vertex_count());
+        break;
+    }
+    expect_same_problem(sphere.vertex_count(), faces);
+    ++kinds[static_cast<int>(reference_check_manifold(sphere.vertex_count(), faces).kind)];
+  }
+  for (int k = 0; k < 5; ++k) EXPECT_GT(kinds[k], 5) << "problem kind " << k << " too rare";
+}
+
 // check_manifold: the problem kinds and their fields
 
 TEST(MeshTopologyProblem, NoneForAValidMesh) {
