@@ -656,7 +656,7 @@ std::vector<char> patch_region(const TriangleMesh& cut,
 // counter-clockwise.
 Patch extract_patch(const TriangleMesh& cut, const std::vector<char>& region, bool reversed,
                     const std::array<int, 4>& corners, const std::array<std::vector<int>, 4>& nodes,
-                    int input_vertex_count) {
+                    int input_vertex_count, const Progress& progress) {
   Patch patch;
   patch.corners_reversed = reversed;
   std::vector<int> new_index(cut.vertex_count(), -1);
@@ -676,6 +676,7 @@ Patch extract_patch(const TriangleMesh& cut, const std::vector<char>& region, bo
     faces.push_back(t);
   }
   patch.mesh = TriangleMesh(std::move(vertices), std::move(faces));
+  progress.report("patch: cutting", 0.99);  // the topology below is another 0.1 s at 59k
   std::array<std::vector<int>, 4> sides;
   for (int i = 0; i < 4; ++i)
     for (int v : nodes[i]) sides[i].push_back(new_index[v]);
@@ -712,16 +713,22 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   const CornerMesh corner_mesh = make_corners_vertices(input, corner_points, snap);
   const TriangleMesh& mesh = corner_mesh.mesh;
   const auto paths = boundary_geodesics(mesh, corner_mesh.corners, geodesic, snap, progress);
+  // Each step below is linear in the mesh (0.1-0.2 s at 59k vertices): a report between them
+  // keeps a cancellation within 0.2 s (it took 0.55 s through the daemon).
   progress.report("patch: cutting", 0.9);
   PathNodes path = insert_path_points(mesh, paths, snap);
   check_simple_loop(path);
+  progress.report("patch: cutting", 0.92);
   const Chords chords = find_chords(mesh, paths, path);
   std::vector<Face> faces = retriangulate(mesh, path, chords);
+  progress.report("patch: cutting", 0.94);
   const TriangleMesh cut(std::move(path.vertices), std::move(faces));
+  progress.report("patch: cutting", 0.96);
   bool reversed = false;
   const std::vector<char> region = patch_region(cut, path.nodes, &reversed);
-  Patch patch =
-      extract_patch(cut, region, reversed, corner_mesh.corners, path.nodes, input.vertex_count());
+  progress.report("patch: cutting", 0.98);
+  Patch patch = extract_patch(cut, region, reversed, corner_mesh.corners, path.nodes,
+                              input.vertex_count(), progress);
   progress.report("patch: cut", 1.0);
   return patch;
 }
