@@ -136,6 +136,10 @@ constexpr double kConeTolerance = 1e-6;
 constexpr double kSnapRelative = 1e-12;
 /// Key width of the event queue's buckets, relative to the mean edge length.
 constexpr double kBucketWidth = 0.002;
+/// Meshes with at least this many vertices reserve kUpFrontPerVertex windows per vertex at the
+/// start of a solve (see Propagator::init).
+constexpr int kUpFrontVertices = 8192;
+constexpr std::size_t kUpFrontPerVertex = 400;
 /// A new window may be split by older, better windows into at most this many pieces.
 constexpr int kMaxPieces = 4;
 
@@ -733,7 +737,14 @@ class Propagator {
     corner_.assign(m.half.size(), CornerRecord{});
     heap_.reset(m.bucket_width);
     windows_.clear();
-    windows_.reserve(m.window_hint.load(std::memory_order_relaxed));
+    // On a large mesh, room for every window up front: a growing std::vector copies its windows
+    // into a buffer twice the size, so a 59k-vertex solve briefly held 1.5-3x its windows (design
+    // peaks of 1.6-2.2 GB). Blocks this large are mapped by the allocator on demand: pages of the
+    // reservation that are never written are never resident, so the bound costs address space
+    // only. (A complete field at 60k vertices holds 170-300 windows per vertex; beyond the bound
+    // the vector grows as before.)
+    const std::size_t hint = m.window_hint.load(std::memory_order_relaxed);
+    windows_.reserve(nv >= kUpFrontVertices ? std::max(hint, kUpFrontPerVertex * nv) : hint);
     target_windows_.clear();
     batch_ = !options.stop_at_targets;
     recycle_ = batch_ && !options.keep_windows;
@@ -1643,15 +1654,16 @@ void Propagator::evaluate_targets(const SurfacePoint& source) {
 // Queries
 
 FastField::~FastField() {
-  // Hand the window storage back to the mesh's pool: at most 4 buffers and 256 MiB in all, held
-  // until the solver is destroyed.
+  // Hand the window storage back to the mesh's pool: at most 4 buffers and 256 MiB of written
+  // windows in all, held until the solver is destroyed. Counted by size, not capacity: a large
+  // mesh reserves far more than it writes (Propagator::init), and only written pages are resident.
   constexpr std::size_t kMaxBytes = std::size_t{256} << 20;
   constexpr std::size_t kMaxBuffers = 4;
-  const std::size_t bytes = windows.capacity() * sizeof(Window);
-  if (!m || bytes == 0 || bytes > kMaxBytes) return;
+  const std::size_t bytes = windows.size() * sizeof(Window);
+  if (!m || windows.capacity() == 0 || bytes > kMaxBytes) return;
   std::lock_guard<std::mutex> lock(m->pool_mutex);
   std::size_t held = bytes;
-  for (const WindowVector& b : m->pool) held += b.capacity() * sizeof(Window);
+  for (const WindowVector& b : m->pool) held += b.size() * sizeof(Window);
   if (m->pool.size() < kMaxBuffers && held <= kMaxBytes) m->pool.push_back(std::move(windows));
 }
 
