@@ -91,6 +91,15 @@ int bench_scale(const std::vector<std::string>& examples, const std::vector<int>
   load_in >> load_start;
 
   std::ostringstream table;
+  // The heading and the command, so that a rerun writes the whole section again.
+  std::string command = "gridshell bench scale --sizes";
+  for (std::size_t k = 0; k < sizes.size(); ++k)
+    command += (k ? "," : " ") + std::to_string(sizes[k]);
+  command += " --examples";
+  for (std::size_t k = 0; k < examples.size(); ++k) command += (k ? "," : " ") + examples[k];
+  command += " --largest-examples " + std::to_string(largest_examples);
+  if (!baseline.empty()) command += " --baseline " + baseline;
+  table << "## Designs at scale (issue 17)\n\n`" << command << "`\n\n";
   table << "Whole `gridshell design` (default options) in its own process on " << cpu_name() << ", "
         << today() << ". CPU = user + system time of the process (all threads, wait4), "
         << "independent of the machine's load; peak = its maximal resident memory; exponent = "
