@@ -114,6 +114,7 @@
 #include <limits>
 #include <mutex>
 #include <sstream>
+#include <stdexcept>
 
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
@@ -184,21 +185,32 @@ struct HalfEdge {
   double left_len, right_len;
 };
 
-/// A window (see the file comment). 64 bytes.
+/// A window (see the file comment). 56 bytes: a complete field on a 60k-vertex mesh holds 10-18 M
+/// of them, and the parent, the emitting vertex and the exit share one int (64 bytes before).
 struct Window {
-  double b0, b1;     ///< interval on the edge, 0 <= b0 < b1 <= L (b0 == b1: emptied)
-  double sx, sy;     ///< source image, sy <= 0
-  double sigma;      ///< distance from the source to the image
-  int he;            ///< half-edge it lies on; it propagates into face he / 3
-  int parent;        ///< window it was propagated from, -1 for a window emitted by a source
-  int root;          ///< emitting pseudo-source vertex, -1 for the true source
-  std::int8_t exit;  ///< 1: lies on the parent's right exit (B->C), 2: left exit (C->A), 0: root
-  int next;          ///< batch propagation: the next window pending on the same half-edge
+  double b0, b1;  ///< interval on the edge, 0 <= b0 < b1 <= L (b0 == b1: emptied)
+  double sx, sy;  ///< source image, sy <= 0
+  double sigma;   ///< distance from the source to the image
+  int he;         ///< half-edge it lies on; it propagates into face he / 3
+  /// parent * 4 + exit for a window propagated from `parent` (exit 1: on the parent's right exit
+  /// B->C, 2: its left exit C->A); -2 - root for a window emitted by the pseudo-source vertex
+  /// `root` (-1 for the true source).
+  int link;
+  int next;  ///< batch propagation: the next window pending on the same half-edge
+
+  int parent() const { return link >= 0 ? link >> 2 : -1; }
+  int exit() const { return link >= 0 ? link & 3 : 0; }
+  int root() const { return link < 0 ? -2 - link : -1; }
+  static int child_link(int parent, int exit) { return parent * 4 + exit; }
+  static int root_link(int root) { return -2 - root; }
 };
+static_assert(sizeof(Window) == 56);
+/// Windows are numbered in an int with two bits for the exit (Window::link).
+constexpr std::size_t kMaxWindows = std::size_t{1} << 29;
 
 /// Allocator of window storage: blocks of 4 MiB and more are 2 MiB aligned and marked for
 /// transparent huge pages (where the kernel leaves them to madvise, as on our CI machines).
-/// A complete field on a 60k-vertex mesh holds 10-18 M windows (0.6-1.2 GB): in 4 KiB pages that
+/// A complete field on a 60k-vertex mesh holds 10-18 M windows (0.56-1.0 GB): in 4 KiB pages that
 /// is up to 300k page faults, which cost more than the propagation itself on a virtual machine.
 template <class T>
 struct LargePageAllocator {
@@ -826,7 +838,7 @@ class Propagator {
   /// Batch propagation's propagate(): the same children, written straight into pending lists.
   void propagate_batch(const Window& w, int id, double x, double corner);
   void push_child(int he, double len, double b0, double b1, double sx, double sy, double sigma,
-                  int parent, int root, std::int8_t exit);
+                  int link);
   /// Goal pruning: true if no path through the window can reach the goal ball within the bound.
   bool beyond_goal(int he, double b0, double b1, double sx, double sy, double sigma) const {
     const double near = std::clamp(sx, b0, b1);
@@ -1066,6 +1078,7 @@ void Propagator::insert(Window& w) {
     w.b0 = piece[2 * p];
     w.b1 = piece[2 * p + 1];
     if (!(w.b1 > w.b0)) continue;
+    if (windows_.size() >= kMaxWindows) throw std::length_error("geodesic: too many windows");
     const int id = static_cast<int>(windows_.size());
     // Corner C visible through the window: early distance bound and barrier record.
     if (x >= w.b0 - tol && x <= w.b1 + tol) {
@@ -1101,9 +1114,7 @@ void Propagator::propagate(const Window& w, int id, double corner) {
              c.sy = sy;
              c.sigma = w.sigma;
              c.he = he;
-             c.parent = id;
-             c.root = w.root;
-             c.exit = exit;
+             c.link = Window::child_link(id, exit);
              insert(c);
            });
 }
@@ -1158,9 +1169,7 @@ void Propagator::emit_window(int h, double b0, double b1, double sigma, int root
   w.sy = g.oy;
   w.sigma = sigma;
   w.he = h;
-  w.parent = -1;
-  w.root = root;
-  w.exit = 0;
+  w.link = Window::root_link(root);
   insert(w);
 }
 
@@ -1271,9 +1280,7 @@ void Propagator::emit_from_point(const Vec3& s, int face, int skip_edge) {
     w.sy = -d.cross(ex).norm();
     w.sigma = 0;
     w.he = twin;
-    w.parent = -1;
-    w.root = -1;
-    w.exit = 0;
+    w.link = Window::root_link(-1);
     insert(w);
   }
 }
@@ -1379,12 +1386,12 @@ void Propagator::run() {
 // sets a distance, and the windows entering target faces are copied for evaluate_targets(); with
 // keep_windows every window stays, with its parent and root, for distance_to and path_to.
 void Propagator::append_pending(const Window& w) {
-  push_child(w.he, m_.half[w.he].len, w.b0, w.b1, w.sx, w.sy, w.sigma, w.parent, w.root, w.exit);
+  push_child(w.he, m_.half[w.he].len, w.b0, w.b1, w.sx, w.sy, w.sigma, w.link);
 }
 
 [[gnu::always_inline]] inline void Propagator::push_child(int he, double len, double b0, double b1,
                                                           double sx, double sy, double sigma,
-                                                          int parent, int root, std::int8_t exit) {
+                                                          int link) {
   if (sy > 0) sy = 0;
   if (b0 < 0) b0 = 0;
   if (b1 > len) b1 = len;
@@ -1395,6 +1402,7 @@ void Propagator::append_pending(const Window& w) {
     id = free_.back();
     free_.pop_back();
   } else {
+    if (windows_.size() >= kMaxWindows) throw std::length_error("geodesic: too many windows");
     id = static_cast<int>(windows_.size());
     windows_.emplace_back();
   }
@@ -1405,9 +1413,7 @@ void Propagator::append_pending(const Window& w) {
   c.sy = sy;
   c.sigma = sigma;
   c.he = he;
-  c.parent = parent;
-  c.root = root;
-  c.exit = exit;
+  c.link = link;
   HalfEdgeState& p = pending_[he];
   c.next = p.head;
   p.head = id;
@@ -1466,7 +1472,7 @@ void Propagator::children(const Window& w, double x, double corner, Emit&& emit)
 void Propagator::propagate_batch(const Window& w, int id, double x, double corner) {
   children(w, x, corner,
            [&](int he, double len, double b0, double b1, double sx, double sy, std::int8_t exit) {
-             push_child(he, len, b0, b1, sx, sy, w.sigma, id, w.root, exit);
+             push_child(he, len, b0, b1, sx, sy, w.sigma, Window::child_link(id, exit));
            });
 }
 
@@ -1786,22 +1792,22 @@ std::vector<SurfacePoint> FastField::path_to(const SurfacePoint& target) const {
       double x = py <= 0 ? px : w.sx + (px - w.sx) * (-w.sy) / (py - w.sy);
       x = std::clamp(x, w.b0, w.b1);
       out.push_back(edge_point(w.he, x));
-      if (w.parent < 0) {
+      if (w.parent() < 0) {
         window = -1;
-        vertex = w.root;
+        vertex = w.root();
         if (vertex >= 0) out.push_back(vertex_point(vertex));
         continue;
       }
-      const Window& p = windows[w.parent];
+      const Window& p = windows[w.parent()];
       const HalfEdge& ph = m->half[p.he];
-      if (w.exit == 2) {
+      if (w.exit() == 2) {
         px = x * ph.u2x;
         py = x * ph.u2y;
       } else {
         px = ph.cx + x * ph.u1x;
         py = ph.cy + x * ph.u1y;
       }
-      window = w.parent;
+      window = w.parent();
     } else {
       const int code = provenance[vertex];
       if (code == kFromSource) {

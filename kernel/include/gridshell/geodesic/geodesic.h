@@ -44,7 +44,7 @@ struct SolveOptions {
   std::vector<SurfacePoint> targets;
   /// false: the field keeps no propagation windows, so it answers vertex_distances() and
   /// target_distances() only (distance_to and path_to throw InvalidInput). Saves the windows'
-  /// memory (64 bytes each, about 40 per vertex on a 4k-vertex mesh), the query index and about
+  /// memory (56 bytes each, about 40 per vertex on a 4k-vertex mesh), the query index and about
   /// half the time. Default: true.
   bool keep_windows = true;
   /// true: the solve stops as soon as the distance field is final on every closed face that
