@@ -14,11 +14,14 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <unordered_map>
@@ -197,6 +200,43 @@ SolveOptions end_goal(const TriangleMesh& mesh, const std::vector<int>& second,
   return options;
 }
 
+/// Admission of member solves by estimated memory (GridOptions::member_memory): a solve waits
+/// while the ones in flight and its own estimate exceed the budget (one always runs). The
+/// estimate is twice the largest solve of its family so far (members of a family grow or shrink
+/// gradually across the patch), before the first a bound from the patch size.
+class MemberMemoryGate {
+ public:
+  MemberMemoryGate(std::size_t budget, std::size_t first_estimate)
+      : budget_(budget), largest_{0, 0}, first_(first_estimate) {}
+  /// Blocks until the solve may start (polling `progress` for cancellation); returns its estimate.
+  std::size_t enter(int family, const Progress& progress) {
+    std::unique_lock lock(mutex_);
+    const std::size_t estimate = largest_[family] > 0 ? 2 * largest_[family] : first_;
+    if (budget_ == 0) return 0;
+    while (in_flight_ > 0 && in_flight_ + estimate > budget_) {
+      changed_.wait_for(lock, std::chrono::milliseconds(20));
+      progress.check();
+    }
+    in_flight_ += estimate;
+    return estimate;
+  }
+  void leave(int family, std::size_t estimate, std::size_t used) {
+    {
+      std::lock_guard lock(mutex_);
+      in_flight_ -= estimate;
+      largest_[family] = std::max(largest_[family], used);
+    }
+    changed_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::size_t budget_, in_flight_ = 0;
+  std::array<std::size_t, 2> largest_;
+  std::size_t first_;
+};
+
 Infeasible no_end(Family family, int index, double u1) {
   std::ostringstream msg;
   msg << "member " << member_name(family, index) << " (u1 = " << u1
@@ -311,9 +351,15 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
       boundary_member(Family::H, static_cast<int>(grid.h.size()) - 1, 1.0, 2, false, c[2], c[3]);
 
   // Inner members, in parallel (each writes its own slot: deterministic for any thread count).
+  // Jobs alternate between the families, so that under the memory gate a cheap member of one
+  // family can run beside an expensive one of the other.
   std::vector<std::pair<int, int>> jobs;  // (family, position index)
-  for (int f = 0; f < 2; ++f)
-    for (size_t k = 0; k < positions[f]->size(); ++k) jobs.push_back({f, static_cast<int>(k)});
+  for (size_t k = 0; k < std::max(g_members.size(), h_members.size()); ++k)
+    for (int f = 0; f < 2; ++f)
+      if (k < positions[f]->size()) jobs.push_back({f, static_cast<int>(k)});
+  // Before a family's first solve: 400 windows of 56 bytes per vertex (the fast engine's bound).
+  MemberMemoryGate gate(options.member_memory,
+                        std::size_t{22400} * static_cast<std::size_t>(mesh.vertex_count()));
   const std::array<std::vector<int>, 2> first{family_boundary(patch, Family::G, 0),
                                               family_boundary(patch, Family::H, 0)};
   const std::array<std::vector<int>, 2> second{family_boundary(patch, Family::G, 1),
@@ -343,6 +389,15 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         m.family = family;
         m.index = k + 1;
         m.u_start = pos.u1;
+        std::size_t used = 0;
+        const std::size_t estimate = gate.enter(f, inner);
+        struct Leave {
+          MemberMemoryGate& gate;
+          int family;
+          std::size_t estimate;
+          const std::size_t& used;
+          ~Leave() { gate.leave(family, estimate, used); }
+        } leave{gate, f, estimate, used};
         const SurfacePoint start = point_on_chain(mesh, first[f], pos.u1);
         // First a solve that is exact only near the expected end (goal pruning, about a third of
         // the work); if the end is not within that piece of the boundary, a complete one.
@@ -365,6 +420,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         }
         if (!end) throw no_end(family, m.index, pos.u1);
         m.u_end = *end;
+        used = field.memory_bytes();
         m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
         for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
         m.length = path_length(mesh, m.surface_path);

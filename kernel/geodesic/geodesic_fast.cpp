@@ -438,6 +438,10 @@ class FastField final : public DistanceField::Impl {
 
   double distance_to(const SurfacePoint& target) const override;
   std::vector<SurfacePoint> path_to(const SurfacePoint& target) const override;
+  std::size_t memory_bytes() const override {
+    return windows.size() * sizeof(Window) +
+           (face_start.size() + face_window.size() + provenance.size()) * sizeof(int);
+  }
 
   void build_index();
 

@@ -19,6 +19,8 @@ class DistanceField::Impl {
   virtual ~Impl() = default;
   virtual double distance_to(const SurfacePoint& target) const = 0;
   virtual std::vector<SurfacePoint> path_to(const SurfacePoint& target) const = 0;
+  /// Memory the field holds for its queries (windows and their index), bytes.
+  virtual std::size_t memory_bytes() const { return 0; }
 
   SurfacePoint source;
   std::vector<double> distances;         ///< per vertex, +inf if unreachable

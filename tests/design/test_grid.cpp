@@ -332,6 +332,41 @@ TEST(BuildGrid, GoalPrunedMemberSolvesGiveTheMembersOfCompleteSolves) {
   }
 }
 
+TEST(BuildGrid, TheMemoryGateChangesNothingButHowManySolvesRunAtOnce) {
+  // GridOptions::member_memory: 1 byte lets one member solve run at a time, 0 any number; the
+  // members must be the same to the bit (each is a function of its own inputs).
+  const Design& d = double_vault();
+  const GeodesicSolver solver(d.target.patch.mesh);
+  const std::vector<MemberPosition> g = positions(d.grid.g), h = positions(d.grid.h);
+  GridOptions one_at_a_time, unlimited;
+  one_at_a_time.threads = unlimited.threads = 4;
+  one_at_a_time.member_memory = 1;
+  unlimited.member_memory = 0;
+  const Grid a = build_grid(d.target.patch, solver, d.planar, g, h, one_at_a_time);
+  const Grid b = build_grid(d.target.patch, solver, d.planar, g, h, unlimited);
+  for (const auto& [fa, fb] : {std::pair{&a.g, &b.g}, std::pair{&a.h, &b.h}}) {
+    ASSERT_EQ(fa->size(), fb->size());
+    for (std::size_t k = 0; k < fa->size(); ++k) {
+      EXPECT_EQ((*fa)[k].u_end, (*fb)[k].u_end) << k;
+      EXPECT_EQ((*fa)[k].surface, (*fb)[k].surface) << k;
+    }
+  }
+}
+
+TEST(GeodesicField, MemoryBytesCountsTheKeptWindows) {
+  const Design& d = double_vault();
+  const GeodesicSolver solver(d.target.patch.mesh);
+  const SurfacePoint source =
+      SurfacePoint::at_vertex(d.target.patch.mesh, d.target.patch.corners[0]);
+  SolveOptions keep, drop;
+  drop.keep_windows = false;
+  const std::size_t kept = solver.solve(source, keep).memory_bytes();
+  // At least one window per vertex (a complete field), at most 400 per vertex of 56 bytes.
+  EXPECT_GT(kept, 56u * d.target.patch.mesh.vertex_count());
+  EXPECT_LT(kept, 56u * 400u * d.target.patch.mesh.vertex_count());
+  EXPECT_LT(solver.solve(source, drop).memory_bytes(), kept / 10);
+}
+
 TEST(BuildGrid, RejectsPositionsOutsideTheOpenIntervalOrNotIncreasing) {
   const Design& d = double_vault();
   const GeodesicSolver solver(d.target.patch.mesh);

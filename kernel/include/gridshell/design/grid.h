@@ -68,6 +68,13 @@ struct GridOptions {
   /// about a third of a complete solve's work); false: complete solves only. Both give the same
   /// members up to rounding (tests/design/test_grid.cpp); kept for that comparison.
   bool goal_pruning = true;
+  /// Member solves run at once only while their estimated memory (twice the largest solve of
+  /// their family so far; before the first, 22 KB per patch vertex) fits in this many bytes next
+  /// to the ones in flight; one always runs. The windows a member's exact solve keeps for its
+  /// path are most of a large design's memory: at 59k vertices 80 MB for one family and up to
+  /// 0.65 GB for the other, two at once peaked at 1.4 GB. 0 = no limit. Does not change the
+  /// result. Default 768 MiB.
+  std::size_t member_memory = std::size_t{768} << 20;
 };
 
 /// Inner members already built on one patch with one solver, for redesigns that meet the same

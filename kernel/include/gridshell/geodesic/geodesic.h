@@ -94,6 +94,9 @@ class DistanceField {
   /// first, target last; interior points lie on edges or at vertices (saddle / boundary vertices
   /// the path turns around). Throws InvalidInput for the heat method.
   std::vector<SurfacePoint> path_to(const SurfacePoint& target) const;
+  /// Memory the field holds for distance_to and path_to (the exact engine's windows and their
+  /// index), bytes; 0 for the other engines.
+  std::size_t memory_bytes() const;
 
  private:
   std::shared_ptr<const Impl> impl_;
