@@ -43,8 +43,9 @@ void expect_acceptable(const TargetPatch& target, const TargetPatchOptions& opti
   for (const AutoCornerCandidate& c : report.candidates) {
     EXPECT_FALSE(c.reason.empty());
     accepted += c.accepted;
-    if (c.kind == chosen.kind && c.area > chosen.area * (1 + 1e-12) && c.eta > 0)
+    if (c.kind == chosen.kind && c.area > chosen.area * (1 + 1e-12) && c.eta > 0) {
       EXPECT_FALSE(c.accepted);
+    }
   }
   EXPECT_EQ(accepted, 1);
   EXPECT_LE(report.cuts, options.auto_corners.max_cuts);

@@ -63,7 +63,9 @@ void expect_each_works(const TriangleMesh& mesh, const CornerSpec& corners,
   for (size_t k = 0; k < found.size(); ++k) {
     SCOPED_TRACE(found[k].description);
     EXPECT_FALSE(found[k].description.empty());
-    if (k > 0) EXPECT_LE(found[k - 1].change, found[k].change);  // ranked
+    if (k > 0) {
+      EXPECT_LE(found[k - 1].change, found[k].change);  // ranked
+    }
     const auto [spec, changed] = applied(found[k], corners, options);
     const Design design = make_design(mesh, spec, changed);
     EXPECT_NEAR(design.alpha_range.min, found[k].alpha.min, 1e-12);
