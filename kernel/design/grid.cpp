@@ -202,16 +202,18 @@ SolveOptions end_goal(const TriangleMesh& mesh, const std::vector<int>& second,
 
 /// Admission of member solves by estimated memory (GridOptions::member_memory): a solve waits
 /// while the ones in flight and its own estimate exceed the budget (one always runs). The
-/// estimate is twice the largest solve of its family so far (members of a family grow or shrink
-/// gradually across the patch), before the first a bound from the patch size.
+/// estimate is twice the peak of the family's last finished solve (members of a family grow or
+/// shrink gradually across the patch; neighbours differ by up to 1.7x on the 59k double vaults,
+/// and a neighbour still in flight has not reported yet), before the first a bound from the
+/// patch size.
 class MemberMemoryGate {
  public:
   MemberMemoryGate(std::size_t budget, std::size_t first_estimate)
-      : budget_(budget), largest_{0, 0}, first_(first_estimate) {}
+      : budget_(budget), last_{0, 0}, first_(first_estimate) {}
   /// Blocks until the solve may start (polling `progress` for cancellation); returns its estimate.
   std::size_t enter(int family, const Progress& progress) {
     std::unique_lock lock(mutex_);
-    const std::size_t estimate = largest_[family] > 0 ? 2 * largest_[family] : first_;
+    const std::size_t estimate = last_[family] > 0 ? 2 * last_[family] : first_;
     if (budget_ == 0) return 0;
     while (in_flight_ > 0 && in_flight_ + estimate > budget_) {
       changed_.wait_for(lock, std::chrono::milliseconds(20));
@@ -224,7 +226,7 @@ class MemberMemoryGate {
     {
       std::lock_guard lock(mutex_);
       in_flight_ -= estimate;
-      largest_[family] = std::max(largest_[family], used);
+      last_[family] = std::max<std::size_t>(used, 1);
     }
     changed_.notify_all();
   }
@@ -233,7 +235,7 @@ class MemberMemoryGate {
   std::mutex mutex_;
   std::condition_variable changed_;
   std::size_t budget_, in_flight_ = 0;
-  std::array<std::size_t, 2> largest_;
+  std::array<std::size_t, 2> last_;
   std::size_t first_;
 };
 
@@ -357,9 +359,11 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
   for (size_t k = 0; k < std::max(g_members.size(), h_members.size()); ++k)
     for (int f = 0; f < 2; ++f)
       if (k < positions[f]->size()) jobs.push_back({f, static_cast<int>(k)});
-  // Before a family's first solve: 400 windows of 56 bytes per vertex (the fast engine's bound).
+  // Before a family's first solve: 150 windows of 56 bytes per vertex (the largest member solve
+  // of the 58653-vertex double vault peaks at 10 KB per vertex, the windows it no longer needs
+  // dropped as it goes: geodesic_fast.cpp, "Compaction").
   MemberMemoryGate gate(options.member_memory,
-                        std::size_t{22400} * static_cast<std::size_t>(mesh.vertex_count()));
+                        std::size_t{8400} * static_cast<std::size_t>(mesh.vertex_count()));
   const std::array<std::vector<int>, 2> first{family_boundary(patch, Family::G, 0),
                                               family_boundary(patch, Family::H, 0)};
   const std::array<std::vector<int>, 2> second{family_boundary(patch, Family::G, 1),
@@ -420,7 +424,7 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
         }
         if (!end) throw no_end(family, m.index, pos.u1);
         m.u_end = *end;
-        used = field.memory_bytes();
+        used = field.peak_memory_bytes();
         m.surface_path = field.path_to(point_on_chain(mesh, second[f], m.u_end));
         for (const SurfacePoint& p : m.surface_path) m.surface.push_back(p.position(mesh));
         m.length = path_length(mesh, m.surface_path);

@@ -85,6 +85,7 @@ DistanceField& DistanceField::operator=(DistanceField&&) noexcept = default;
 const SurfacePoint& DistanceField::source() const { return impl_->source; }
 const std::vector<double>& DistanceField::vertex_distances() const { return impl_->distances; }
 std::size_t DistanceField::memory_bytes() const { return impl_->memory_bytes(); }
+std::size_t DistanceField::peak_memory_bytes() const { return impl_->peak_memory_bytes(); }
 const std::vector<double>& DistanceField::target_distances() const {
   return impl_->target_distances;
 }

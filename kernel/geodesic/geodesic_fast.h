@@ -21,6 +21,8 @@ class DistanceField::Impl {
   virtual std::vector<SurfacePoint> path_to(const SurfacePoint& target) const = 0;
   /// Memory the field holds for its queries (windows and their index), bytes.
   virtual std::size_t memory_bytes() const { return 0; }
+  /// Memory the solve held at its largest (more than memory_bytes() where it dropped windows).
+  virtual std::size_t peak_memory_bytes() const { return memory_bytes(); }
 
   SurfacePoint source;
   std::vector<double> distances;         ///< per vertex, +inf if unreachable

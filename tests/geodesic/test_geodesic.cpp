@@ -1108,6 +1108,60 @@ TEST(GeodesicSolveOptions, GoalPruningDropsWork) {
   EXPECT_DOUBLE_EQ(field.vertex_distances()[target], full.vertex_distances()[target]);
 }
 
+TEST(GeodesicSolveOptions, GoalPrunedSolvesDropWindowsNoAnswerUsesAndStayExact) {
+  // A goal-pruned solve that keeps windows compacts them once it holds 2M: only the windows
+  // entering faces near the goal ball, the paths to those faces' corners and to pseudo-sources,
+  // the pending ones and their ancestors stay. A generous bound prunes little, so this solve on
+  // a 31k-vertex surface passes the threshold; inside the ball its distances and paths must
+  // still be the complete field's, and the peak it reports must exceed what it holds.
+  const TriangleMesh mesh = make_example("waves-bump", 3.0).mesh;
+  const MeshTopology& top = mesh.topology();
+  const GeodesicSolver solver(mesh);
+  const SurfacePoint source = SurfacePoint::at_vertex(mesh, 0);
+  const DistanceField full = solver.solve(source);
+  const int target = mesh.vertex_count() - 1;
+  SolveOptions options;
+  options.goal.center = mesh.vertices()[target];
+  options.goal.radius = 0.03 * diagonal(mesh);
+  double farthest = 0;
+  for (double d : full.vertex_distances()) farthest = std::max(farthest, d);
+  options.goal.bound = 1.2 * farthest;
+  const DistanceField field = solver.solve(source, options);
+  EXPECT_GT(field.peak_memory_bytes(), 2 * field.memory_bytes())
+      << "peak " << field.peak_memory_bytes() << " held " << field.memory_bytes();
+  const double floor = 1e-12 * diagonal(mesh);
+  int checked = 0;
+  for (int f = 0; f < mesh.face_count(); ++f)
+    for (const Vec3& weights :
+         {Vec3(Vec3(1, 1, 1) / 3), Vec3(0.7, 0.2, 0.1), Vec3(0.05, 0.05, 0.9)}) {
+      SurfacePoint q;
+      q.face = f;
+      q.barycentric = weights;
+      if ((q.position(mesh) - options.goal.center).norm() > options.goal.radius) continue;
+      const double exact = full.distance_to(q);
+      EXPECT_LE(rel_error(field.distance_to(q), exact, floor), 1e-12) << "face " << f;
+      if (checked++ % 7 != 0) continue;  // paths on a sample (each is a few hundred points)
+      const std::vector<SurfacePoint> path = field.path_to(q);
+      expect_valid_path(mesh, top, path, source, q, "compacted goal-pruned solve");
+      EXPECT_LE(rel_error(path_length(mesh, path), exact, floor), 1e-11) << "face " << f;
+    }
+  EXPECT_GT(checked, 100);
+  // Vertices: every distance is still an upper bound, exact at the goal.
+  for (int v = 0; v < mesh.vertex_count(); ++v)
+    EXPECT_GE(field.vertex_distances()[v], full.vertex_distances()[v] * (1 - 1e-13) - floor);
+  EXPECT_DOUBLE_EQ(field.vertex_distances()[target], full.vertex_distances()[target]);
+  // Far from the goal a path may no longer be known: a clear error naming the target, or a
+  // real path no shorter than the exact one.
+  const SurfacePoint far = SurfacePoint::at_vertex(mesh, mesh.vertex_count() / 2);
+  try {
+    const std::vector<SurfacePoint> path = field.path_to(far);
+    expect_valid_path(mesh, top, path, source, far, "far from the goal");
+    EXPECT_GE(path_length(mesh, path), full.distance_to(far) * (1 - 1e-13) - floor);
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "target");
+  }
+}
+
 TEST(GeodesicSolveOptions, EveryEngineReportsTargetDistances) {
   const TriangleMesh mesh = bump_saddle_mesh();
   SolveOptions options;

@@ -62,7 +62,9 @@ struct SolveOptions {
   /// interval to the ball is a lower bound of any continuation, as in A*. Then distance_to and
   /// path_to are exact for every surface point inside the ball whose distance is at most
   /// `bound`; every other value (vertex_distances included) is an upper bound, the length of a
-  /// real path, or +inf. Other engines ignore it (their answers are exact everywhere).
+  /// real path, or +inf. With keep_windows, the fast engine also drops, once a solve holds 2M
+  /// windows, those no answer inside the ball can use; path_to elsewhere may then throw
+  /// InvalidInput("target"). Other engines ignore it (their answers are exact everywhere).
   /// bound = +inf (default): no pruning.
   struct Goal {
     Vec3 center = Vec3::Zero();
@@ -97,6 +99,9 @@ class DistanceField {
   /// Memory the field holds for distance_to and path_to (the exact engine's windows and their
   /// index), bytes; 0 for the other engines.
   std::size_t memory_bytes() const;
+  /// Memory the solve held at its largest, bytes: more than memory_bytes() for a goal-pruned
+  /// solve of the exact engine, which drops the windows no answer can use as it goes.
+  std::size_t peak_memory_bytes() const;
 
  private:
   std::shared_ptr<const Impl> impl_;
