@@ -146,7 +146,7 @@ constexpr std::size_t kUpFrontPerVertex = 400;
 /// A new window may be split by older, better windows into at most this many pieces.
 constexpr int kMaxPieces = 4;
 /// A goal-pruned solve that keeps windows compacts them once it holds this many (see
-/// Propagator::compact), and again whenever they have grown by half since.
+/// Propagator::compact), and again whenever they have doubled since.
 constexpr std::size_t kCompactWindows = std::size_t{2} << 20;
 
 // Tables, not conditionals: the branches were mispredicted often enough to show in profiles.
@@ -1788,9 +1788,11 @@ void Propagator::evaluate_targets(const SurfacePoint& source) {
 // Queries
 
 FastField::~FastField() {
-  // Hand the window storage back to the mesh's pool: at most 4 buffers and 256 MiB of written
+  // Hand the window storage back to the mesh's pool: at most 4 buffers and 64 MiB of written
   // windows in all, held until the solver is destroyed. Counted by size, not capacity: a large
-  // mesh reserves far more than it writes (Propagator::init), and only written pages are resident.
+  // mesh reserves far more than it writes (Propagator::init), and only written pages are resident
+  // (a compacted solve returns the pages past its size, run_batch). 256 MiB of pooled buffers
+  // beside two running member solves made the peak of a 59k-vertex design (docs/decisions.md).
   constexpr std::size_t kMaxBytes = std::size_t{64} << 20;
   constexpr std::size_t kMaxBuffers = 4;
   const std::size_t bytes = windows.size() * sizeof(Window);
