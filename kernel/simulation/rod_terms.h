@@ -115,14 +115,17 @@ struct Stretch {
 /// (T > 0 stretched, T < 0 compressed: then the block is negative semidefinite). Adds it to the
 /// 6 x 6 local Hessian `H` of the parameters (x_a, x_b) (both free): +S on the diagonal blocks,
 /// -S off them. `r`: the term's one residual at (x_a, x_b). Uses term.sqrt_stiffness only.
+/// `compression_scale` multiplies a compressive force's block (1: exact).
 inline void add_stretch_curvature(const Stretch& term, const double* xa, const double* xb,
-                                  const double* r, Eigen::MatrixXd& H) {
+                                  const double* r, Eigen::MatrixXd& H,
+                                  double compression_scale = 1.0) {
   using Vec3d = Eigen::Vector3d;
   const Vec3d e = Eigen::Map<const Vec3d>(xb) - Eigen::Map<const Vec3d>(xa);
   const double length = e.norm();
   const Vec3d t = e / length;
-  const Eigen::Matrix3d S =
-      (term.sqrt_stiffness * r[0] / length) * (Eigen::Matrix3d::Identity() - t * t.transpose());
+  double force = term.sqrt_stiffness * r[0];
+  if (force < 0) force *= compression_scale;
+  const Eigen::Matrix3d S = (force / length) * (Eigen::Matrix3d::Identity() - t * t.transpose());
   H.block<3, 3>(0, 0) += S;
   H.block<3, 3>(3, 3) += S;
   H.block<3, 3>(0, 3) -= S;

@@ -203,6 +203,8 @@ void check_inputs(const Grid& grid, double width, double thickness,
     throw InvalidInput("options.edges_per_interval", "must be between 1 and 64");
   if (options.max_iterations < 1)
     throw InvalidInput("options.max_iterations", "must be at least 1");
+  if (!(options.compression_stiffness >= 0 && options.compression_stiffness <= 1))
+    throw InvalidInput("options.compression_stiffness", "must be between 0 and 1");
   int list_index = 0;  // design.members lists g then h
   for (const auto* family : {&grid.g, &grid.h})
     for (const Member& m : *family) {
@@ -294,6 +296,9 @@ class Deployment {
   std::vector<Joint> joints_;
   std::vector<AnchorTarget> anchors_;
   int moves_ = 0;
+  /// Scale of compressed edges' geometric stiffness in the Newton model: 1 except in the
+  /// Gauss-Newton phase of solve_newton (SimulationOptions::compression_stiffness).
+  double compression_scale_ = 1;
 };
 
 Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
@@ -542,8 +547,9 @@ Deployment::Terms Deployment::build_terms() {
       const rod_terms::Stretch term{stretch, rod.h};
       // Geometric stiffness of the edge: r Hess(r) = (T / |e|) (I - t t^T) on (x_a, x_b), with
       // the axial force T = sqrt(EA / l̄) r.
-      auto curvature = [xa, xb, term](const double* r, Eigen::MatrixXd& H) {
-        rod_terms::add_stretch_curvature(term, xa, xb, r, H);
+      // Compressive forces' share as the solver's phase asks (compression_scale_).
+      auto curvature = [xa, xb, term, this](const double* r, Eigen::MatrixXd& H) {
+        rod_terms::add_stretch_curvature(term, xa, xb, r, H, compression_scale_);
       };
       add(new rod_terms::StretchCost(term), {xa, xb}, curvature);
     }
@@ -797,6 +803,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
   bool sliding = false;
   for (const Joint& joint : joints_)
     for (const Slider& s : joint.end) sliding = sliding || s.sliding;
+  compression_scale_ = sliding ? 1.0 : options_.compression_stiffness;
   const double exact_below =
       sliding ? options_.exact_hessian_below : options_.exact_hessian_below_fixed;
   while (true) {
@@ -832,6 +839,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
     progress.report(stage, best);
     if (!exact && run.gradient_norm < exact_below) {
       exact = true;
+      compression_scale_ = 1;
       newton->set_exact_hessian(true);
       if (!newton->evaluate())
         throw std::runtime_error("simulation: the state left the energy's domain");

@@ -131,6 +131,23 @@ TEST(RodCurvature, StretchGeometricStiffnessMatchesCentralDifferences) {
     }
 }
 
+// The Newton model's share of compression (SimulationOptions::compression_stiffness): a
+// compressed edge's block scaled, a stretched edge's untouched.
+TEST(RodCurvature, StretchCompressionScaleAppliesToCompressedEdgesOnly) {
+  const rod_terms::Stretch stretch{3.0, 2.0};
+  const Vec3 a(0.1, -0.2, 0.3);
+  for (const double length : {1.5, 2.5}) {  // compressed, stretched
+    const Vec3 b = a + length * Vec3(1, 2, 2).normalized();
+    const double r = stretch.sqrt_stiffness * (length - stretch.rest_length);
+    Eigen::MatrixXd exact = Eigen::MatrixXd::Zero(6, 6), scaled = exact;
+    rod_terms::add_stretch_curvature(stretch, a.data(), b.data(), &r, exact);
+    rod_terms::add_stretch_curvature(stretch, a.data(), b.data(), &r, scaled, 0.25);
+    ASSERT_GT(exact.norm(), 0);
+    const double factor = length < stretch.rest_length ? 0.25 : 1.0;
+    EXPECT_LT((scaled - factor * exact).norm(), 1e-14 * exact.norm()) << "length " << length;
+  }
+}
+
 TEST(RodCurvature, FrictionBarrierCurvatureMatchesCentralDifferences) {
   // b over the edge's domain (-eps, 1 + eps), and within 1e-1 .. 1e-9 of either end (1e-12 at
   // the lower one, where b itself is small).
