@@ -133,62 +133,6 @@ void BlockCholesky::symbolic(const Eigen::SparseMatrix<double>& upper,
   x_.assign(static_cast<size_t>(n) * kMaxBlock, 0.0);
 }
 
-template <int BI, int BK>
-void BlockCholesky::eliminate(int K, int I, double* D) {
-  constexpr int M = kMaxBlock;
-  const int ci = start_[I];
-  double* x = x_.data();
-  // Y = L_II^-1 x_I (BI x BK), then x_I = 0. Rows of x are kMaxBlock wide whatever BK is (the
-  // columns beyond it hold zeros); the loops over BK columns are unrolled at compile time.
-  double y[BI * M];
-  const double* L = dx_.data() + dp_[I];
-#pragma GCC unroll 4
-  for (int a = 0; a < BI; ++a) {
-    const double inverse = 1.0 / L[a * BI + a];
-#pragma GCC unroll 4
-    for (int c = 0; c < BK; ++c) {
-      double v = x[(ci + a) * M + c];
-      for (int b = 0; b < a; ++b) v -= L[a * BI + b] * y[b * M + c];
-      y[a * M + c] = v * inverse;
-    }
-  }
-  std::fill(x + ci * M, x + (ci + BI) * M, 0.0);
-  // x_R -= L(R, I) Y for the entries of column I so far (rows above K).
-  const double* values = lx_.data();
-  for (int e = lp_[I]; e < next_[I]; ++e) {
-    const int br = size_[li_[e]];
-    const double* B = values + lv_[e];
-    double* row = x + start_[li_[e]] * M;
-    for (int a = 0; a < br; ++a, row += M, B += BI) {
-      double r[M];
-#pragma GCC unroll 4
-      for (int c = 0; c < BK; ++c) r[c] = row[c];
-#pragma GCC unroll 4
-      for (int b = 0; b < BI; ++b)
-#pragma GCC unroll 4
-        for (int c = 0; c < BK; ++c) r[c] -= B[b] * y[b * M + c];
-#pragma GCC unroll 4
-      for (int c = 0; c < BK; ++c) row[c] = r[c];
-    }
-  }
-  // D -= Y^T Y; store L(K, I) = Y^T (BK x BI).
-  for (int c = 0; c < BK; ++c)
-    for (int d = 0; d <= c; ++d) {
-      double s = 0;
-#pragma GCC unroll 4
-      for (int a = 0; a < BI; ++a) s += y[a * M + c] * y[a * M + d];
-      D[c * M + d] -= s;
-    }
-  const int e = next_[I]++, offset = vnext_[I];
-  vnext_[I] += BK * BI;
-  li_[e] = K;
-  lv_[e] = offset;
-  double* out = lx_.data() + offset;
-  for (int c = 0; c < BK; ++c)
-#pragma GCC unroll 4
-    for (int a = 0; a < BI; ++a) out[c * BI + a] = y[a * M + c];
-}
-
 bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
   ok_ = false;
   if (upper.cols() != n_ || upper.rows() != n_ || upper.nonZeros() != analysed_nonzeros_)
@@ -204,6 +148,10 @@ bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
   std::fill(flag_.begin(), flag_.end(), -1);
   double* x = x_.data();  // row r of the current block row's right-hand side: x[r * kMaxBlock]
   constexpr int M = kMaxBlock;
+  const cholesky::EliminateKernels& kernels = kernels_ ? *kernels_ : cholesky::eliminate_kernels();
+  const cholesky::EliminateState state{start_.data(), size_.data(), lp_.data(), next_.data(),
+                                       vnext_.data(), li_.data(),   lv_.data(), lx_.data(),
+                                       dx_.data(),    dp_.data(),   x};
   for (int K = 0; K < nb; ++K) {
     const int bk = size_[K], ck = start_[K];
     double D[M * M] = {};  // the diagonal block, row-major (lower part used)
@@ -227,11 +175,10 @@ bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
       }
       while (length > 0) stack_[--top] = stack_[--length];
     }
+    const cholesky::EliminateFn* row_kernels = kernels.fn + (bk - 1);
     for (int q = top; q < nb; ++q) {
       const int I = stack_[q];
-      by_block_size(size_[I], [&](auto bi) {
-        by_block_size(bk, [&](auto bk_) { eliminate<bi(), bk_()>(K, I, D); });
-      });
+      row_kernels[(size_[I] - 1) * M](state, K, I, D);
     }
     // Dense Cholesky of the diagonal block.
     double* L = dx_.data() + dp_[K];
@@ -253,8 +200,9 @@ bool BlockCholesky::factorize(const Eigen::SparseMatrix<double>& upper) {
   return true;
 }
 
-template <int BJ>
-void BlockCholesky::forward(int J, double* z, int k) const {
+template <int BJ, int KC>
+void BlockCholesky::forward(int J, double* z, int runtime_k) const {
+  const int k = KC > 0 ? KC : runtime_k;
   // z (row-major, k right-hand sides per unknown): y_J = L_JJ^-1 y_J, then y_R -= L(R, J) y_J.
   const int cj = start_[J];
   const double* L = dx_.data() + dp_[J];
@@ -282,8 +230,9 @@ void BlockCholesky::forward(int J, double* z, int k) const {
   }
 }
 
-template <int BJ>
-void BlockCholesky::backward(int J, double* z, int k) const {
+template <int BJ, int KC>
+void BlockCholesky::backward(int J, double* z, int runtime_k) const {
+  const int k = KC > 0 ? KC : runtime_k;
   // x_J = L_JJ^-T (y_J - sum_R L(R, J)^T x_R).
   const int cj = start_[J];
   double* yj = z + static_cast<size_t>(cj) * k;
@@ -315,10 +264,17 @@ Eigen::MatrixXd BlockCholesky::solve_many(const Eigen::MatrixXd& b) const {
   // Row-major copy: the k right-hand sides of one unknown are contiguous.
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> z = b;
   double* data = z.data();
+  if (k == 1) {  // the Newton step's solve: loops over one right-hand side compiled as such
+    for (int J = 0; J < blocks_; ++J)
+      by_block_size(size_[J], [&](auto bj) { forward<bj(), 1>(J, data, 1); });
+    for (int J = blocks_ - 1; J >= 0; --J)
+      by_block_size(size_[J], [&](auto bj) { backward<bj(), 1>(J, data, 1); });
+    return z;
+  }
   for (int J = 0; J < blocks_; ++J)
-    by_block_size(size_[J], [&](auto bj) { forward<bj()>(J, data, k); });
+    by_block_size(size_[J], [&](auto bj) { forward<bj(), 0>(J, data, k); });
   for (int J = blocks_ - 1; J >= 0; --J)
-    by_block_size(size_[J], [&](auto bj) { backward<bj()>(J, data, k); });
+    by_block_size(size_[J], [&](auto bj) { backward<bj(), 0>(J, data, k); });
   return z;
 }
 
@@ -336,7 +292,7 @@ Eigen::MatrixXd BlockCholesky::inverse_submatrix(const std::vector<int>& unknown
     double* z = W.col(j).data();
     z[unknown] = 1;
     for (int J = block_of_[unknown]; J != -1; J = parent_[J]) {
-      by_block_size(size_[J], [&](auto bj) { forward<bj()>(J, z, 1); });
+      by_block_size(size_[J], [&](auto bj) { forward<bj(), 1>(J, z, 1); });
       if (!on_path[J]) {
         on_path[J] = 1;
         path_blocks.push_back(J);

@@ -14,6 +14,8 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
+#include "cholesky_kernels.h"
+
 namespace gridshell {
 
 /// Sparse Cholesky on a block partition of the unknowns (consecutive groups of at most
@@ -22,7 +24,7 @@ namespace gridshell {
 /// factorization is paid once per block pair instead of once per scalar entry.
 class BlockCholesky {
  public:
-  static constexpr int kMaxBlock = 4;
+  static constexpr int kMaxBlock = cholesky::kMaxBlock;
 
   /// Symbolic analysis of a symmetric matrix given by its upper triangle (column-major, sorted,
   /// diagonal present), in elimination order, with its unknowns grouped into consecutive blocks
@@ -47,6 +49,9 @@ class BlockCholesky {
   Eigen::MatrixXd inverse_submatrix(const std::vector<int>& unknowns) const;
   /// Stored entries of the factor (dense blocks, diagonal blocks' lower triangles).
   long factor_nonzeros() const;
+  /// The elimination kernels factorize() uses (default: the best for this CPU, see
+  /// cholesky_kernels.h); the tests compare the sets.
+  void use_kernels(const cholesky::EliminateKernels& kernels) { kernels_ = &kernels; }
 
  private:
   int n_ = 0, blocks_ = 0;
@@ -60,21 +65,18 @@ class BlockCholesky {
   std::vector<double> dx_;                    // diagonal factors, row-major, lower
   /// Elimination tree, patterns and storage for the given partition (each size <= kMaxBlock).
   void symbolic(const Eigen::SparseMatrix<double>& upper, const std::vector<int>& sizes);
-  /// Block row K's step for block column I in its pattern (BI, BK: sizes of I and K): L(K, I)
-  /// from the right-hand side x_I, the updates x_R -= L(R, I) L(K, I)^T over the entries of
-  /// column I so far, and D -= L(K, I) L(K, I)^T for the diagonal block.
-  template <int BI, int BK>
-  void eliminate(int K, int I, double* D);
-  /// Forward / backward substitution for block J (size BJ) on k row-major right-hand sides.
-  template <int BJ>
-  void forward(int J, double* z, int k) const;
-  template <int BJ>
-  void backward(int J, double* z, int k) const;
+  /// Forward / backward substitution for block J (size BJ) on k row-major right-hand sides
+  /// (KC > 0: k == KC known at compile time; 0: k = runtime_k).
+  template <int BJ, int KC>
+  void forward(int J, double* z, int runtime_k) const;
+  template <int BJ, int KC>
+  void backward(int J, double* z, int runtime_k) const;
   long analysed_nonzeros_ = 0;  // of the matrix given to analyze()
   // factorize() workspaces; x_ (n x kMaxBlock) is all zero between calls, also after a failure
   // (every entry a row scatters into lies in that row's pattern and is cleared there).
   std::vector<int> flag_, stack_, next_, vnext_;
   std::vector<double> x_;
+  const cholesky::EliminateKernels* kernels_ = nullptr;
   bool ok_ = false;
 };
 

@@ -6,6 +6,7 @@
 
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
+#include <cstring>
 #include <random>
 
 #include "sparse_cholesky.h"
@@ -89,6 +90,36 @@ TEST(BlockCholesky, SolvesLikeEigensSimplicialLltForAnyBlockPartition) {
     ASSERT_TRUE(scalar.factorize(A));
     EXPECT_EQ(scalar.factor_nonzeros(), oracle.matrixL().nestedExpression().nonZeros());
     EXPECT_LT(relative_difference(scalar.solve(b), expected), 1e-12);
+  }
+}
+
+// The AVX2 kernels (cholesky_kernels.h) add in the same order without fused multiply-adds: the
+// solutions are the baseline kernels' to the bit, on every partition, and both sets reject the
+// same indefinite matrix.
+TEST(BlockCholesky, Avx2KernelsGiveTheBaselineFactorToTheBit) {
+  const cholesky::EliminateKernels* avx2 = cholesky::avx2_eliminate_kernels();
+  if (!avx2) GTEST_SKIP() << "no AVX2 kernels in this build or on this CPU";
+  EXPECT_EQ(&cholesky::eliminate_kernels(), avx2);  // the default where the CPU has it
+  const int n = 400;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Eigen::SparseMatrix<double> A = random_spd(n, 4, 300, seed == 3 ? 40 : 0, seed);
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -2.0, 1.0).array().sin();
+    for (const std::vector<int>& sizes :
+         {std::vector<int>(n, 1), std::vector<int>(n / 4, 4), random_blocks(n, seed)}) {
+      BlockCholesky baseline, wide;
+      baseline.use_kernels(cholesky::baseline_eliminate_kernels());
+      wide.use_kernels(*avx2);
+      baseline.analyze(A, sizes);
+      wide.analyze(A, sizes);
+      ASSERT_TRUE(baseline.factorize(A));
+      ASSERT_TRUE(wide.factorize(A));
+      const Eigen::VectorXd x = baseline.solve(b), y = wide.solve(b);
+      EXPECT_EQ(std::memcmp(x.data(), y.data(), sizeof(double) * n), 0) << "seed " << seed;
+      Eigen::SparseMatrix<double> indefinite = A;
+      indefinite.coeffRef(n / 2, n / 2) = -1;
+      EXPECT_FALSE(baseline.factorize(indefinite));
+      EXPECT_FALSE(wide.factorize(indefinite));
+    }
   }
 }
 
