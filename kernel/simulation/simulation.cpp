@@ -789,7 +789,11 @@ bool Deployment::move_sliders() {
 void Deployment::solve_newton(const Progress& progress, const std::string& stage,
                               DeploymentRun& run) {
   NewtonSolver::Options newton_options;
-  newton_options.threads = resolve_threads(options_.threads);
+  // One thread: evaluating the terms on two took 7% longer on this machine's 2 cores (a thread
+  // start per evaluation and the per-term copies for the ordered sum cost more than half of the
+  // evaluations' ~30% of a run; no gain at 2210 or 4386 rod vertices either). The threads of a
+  // deployment go to running the two modes side by side instead (deployment_job.cpp).
+  newton_options.threads = 1;
 
   double lambda = newton_options.initial_lambda;
   std::unique_ptr<NewtonSolver> newton;

@@ -33,6 +33,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <random>
@@ -418,6 +419,36 @@ TEST(NewtonSolverDerivatives, ExactHessianModeIsTheHessianOfTheCost) {
     std::mt19937 rng(400 + seed);
     SmallGrid grid(rng, true);
     check_assembly(grid, true, 1e-6, worst);
+  }
+}
+
+// The simulation evaluates on one thread (solve_newton); the solver's several-worker path adds
+// every term's local Hessian in term order too, so its steps are the one-worker steps to the bit.
+TEST(NewtonSolverDerivatives, SeveralWorkersTakeTheOneWorkerStepsToTheBit) {
+  for (int seed = 0; seed < 3; ++seed) {
+    std::mt19937 rng(500 + seed);
+    SmallGrid grid(rng, true);
+    const Eigen::VectorXd x0 = grid.unknowns.read();
+    std::vector<Eigen::VectorXd> ends;
+    std::vector<double> costs;
+    for (int threads : {1, 2}) {
+      grid.unknowns.write(x0);
+      NewtonSolver::Options options;
+      options.threads = threads;
+      NewtonSolver solver(grid.unknowns.blocks, grid.terms, options);
+      for (int step = 0; step < 3; ++step) {
+        ASSERT_TRUE(solver.evaluate());
+        ASSERT_TRUE(solver.step().accepted);
+      }
+      ASSERT_TRUE(solver.evaluate());
+      costs.push_back(solver.cost());
+      ends.push_back(grid.unknowns.read());
+    }
+    EXPECT_EQ(costs[0], costs[1]) << "seed " << seed;
+    ASSERT_EQ(ends[0].size(), ends[1].size());
+    EXPECT_EQ(std::memcmp(ends[0].data(), ends[1].data(), sizeof(double) * ends[0].size()), 0)
+        << "seed " << seed;
+    EXPECT_NE((ends[0] - x0).norm(), 0);  // the steps moved
   }
 }
 

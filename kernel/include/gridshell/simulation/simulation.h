@@ -112,7 +112,9 @@ struct SimulationOptions {
   double max_vertex_step = 0.25;
   double max_twist_step = 2.0;
   int max_outer_iterations = 200;  // frame updates / connection re-projections
-  int threads = 0;                 // Jacobian evaluation threads, 0 = hardware concurrency
+  /// Jacobian evaluation threads of the Ceres solver, 0 = hardware concurrency (the Newton
+  /// solver evaluates on one; see solve_newton).
+  int threads = 0;
   /// The model's length unit in metres (0 = unknown): energies are then reported in joules.
   double unit_in_meters = 0;
 };
