@@ -3,8 +3,8 @@
 // to the paper's Table 1 (|G_V|, RMS1, RMS2, t1, t2). Writes a table into docs/benchmarks.md.
 //
 // A benchmark, not a test: each example is designed once with default options, then simulated
-// without and with notches `repeats` times, one run after the other with all cores; times are
-// medians. RMS and iterations are deterministic.
+// without and with notches `repeats` times, one run after the other (the Newton solver evaluates on
+// one thread); times are medians. RMS and iterations are deterministic.
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -58,7 +58,7 @@ int bench_simulate(int repeats, const std::string& out, bool no_write) {
         << " hardware threads. Each example designed once with default options, then simulated "
            "without (1) and with (2) notches, "
         << repeats
-        << " times each, one run after the other with all cores (Newton solver, default "
+        << " times each, one run after the other (Newton solver on one thread, default "
            "options: lime wood, mu = 0.1, 2 edges per interval between crossings, gradient "
            "tolerance "
         << defaults.gradient_tolerance
