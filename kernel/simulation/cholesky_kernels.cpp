@@ -10,7 +10,7 @@ const EliminateKernels& avx2_kernels_compiled();  // cholesky_kernels_avx2.cpp
 #endif
 
 const EliminateKernels& baseline_eliminate_kernels() {
-  static constexpr EliminateKernels kernels = make_kernels("baseline");
+  static constexpr EliminateKernels kernels = make_kernels();
   return kernels;
 }
 

@@ -38,7 +38,6 @@ using EliminateFn = void (*)(const EliminateState& state, int K, int I, double* 
 /// One kernel per pair of block sizes: fn[(BI - 1) * kMaxBlock + BK - 1].
 struct EliminateKernels {
   EliminateFn fn[kMaxBlock * kMaxBlock];
-  const char* instruction_set;
 };
 
 /// The kernels for this CPU (AVX2 where it has it, else the baseline).

@@ -6,7 +6,7 @@
 
 namespace gridshell::cholesky {
 const EliminateKernels& avx2_kernels_compiled() {
-  static constexpr EliminateKernels kernels = make_kernels("avx2");
+  static constexpr EliminateKernels kernels = make_kernels();
   return kernels;
 }
 }  // namespace gridshell::cholesky

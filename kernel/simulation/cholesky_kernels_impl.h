@@ -66,13 +66,12 @@ void eliminate(const EliminateState& s, int K, int I, double* D) {
     for (int a = 0; a < BI; ++a) out[c * BI + a] = y[a * M + c];
 }
 
-constexpr EliminateKernels make_kernels(const char* instruction_set) {
+constexpr EliminateKernels make_kernels() {
   static_assert(kMaxBlock == 4);
   return {{eliminate<1, 1>, eliminate<1, 2>, eliminate<1, 3>, eliminate<1, 4>,  //
            eliminate<2, 1>, eliminate<2, 2>, eliminate<2, 3>, eliminate<2, 4>,  //
            eliminate<3, 1>, eliminate<3, 2>, eliminate<3, 3>, eliminate<3, 4>,  //
-           eliminate<4, 1>, eliminate<4, 2>, eliminate<4, 3>, eliminate<4, 4>},
-          instruction_set};
+           eliminate<4, 1>, eliminate<4, 2>, eliminate<4, 3>, eliminate<4, 4>}};
 }
 
 }  // namespace
