@@ -176,6 +176,7 @@ class FreeCADWorkbenchTest(unittest.TestCase):
             except gs.GridshellError as e:
                 outcome["error"] = e
 
+        since = len(self.daemon.log)
         thread = threading.Thread(target=work)
         thread.start()
         self.assertTrue(seen.wait(60))
@@ -183,7 +184,9 @@ class FreeCADWorkbenchTest(unittest.TestCase):
         thread.join(30)
         self.assertIsInstance(outcome.get("error"), gs.Cancelled, outcome)
         self.assertIsNotNone(
-            self.daemon.wait_for(lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30)
+            self.daemon.wait_for(
+                lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30, since=since
+            )
         )
         # The earlier results are still there.
         self.assertEqual(json.loads(top.DesignJson), design)

@@ -68,7 +68,7 @@ class Ticks:
         return max(b - a for a, b in zip(inside, inside[1:]))
 
 
-def dome(doc, n=16, size=100.0, height=25.0):
+def dome(doc, n=16, size=100.0, height=25.0, name="dome"):
     """A dome as a Mesh object (mm), and its four corner points."""
     positions = []
     for j in range(n + 1):
@@ -81,7 +81,7 @@ def dome(doc, n=16, size=100.0, height=25.0):
             a = j * (n + 1) + i
             for t in ((a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)):
                 triangles += [positions[k] for k in t]
-    obj = doc.addObject("Mesh::Feature", "dome")
+    obj = doc.addObject("Mesh::Feature", name)
     obj.Mesh = Mesh.Mesh(triangles)
     doc.recompute()
     corners = [positions[0], positions[n], positions[-1], positions[n * (n + 1)]]
@@ -177,10 +177,13 @@ def steps(daemon):
     yield 1.0
     screenshot("freecad-result.png")
 
-    # Cancel while the design runs: the daemon stops the work.
+    # Cancel while the design runs: the daemon stops the work. A finer dome at the finest maps,
+    # whose design takes several seconds, so that Cancel reaches it while it runs.
+    fine, _ = dome(doc, n=48, name="fine_dome")
     FreeCADGui.Selection.clearSelection()
-    FreeCADGui.Selection.addSelection(doc.Name, obj.Name)
+    FreeCADGui.Selection.addSelection(doc.Name, fine.Name)
     p.SetInt("resolution", 1000)
+    since = len(daemon.log)
     FreeCADGui.runCommand("Gridshell_Design")
     yield 0.5
     panel = gui.TaskPanel.current
@@ -194,7 +197,9 @@ def steps(daemon):
         yield 0.05
     check(panel.call is None, "the call ended %.2f s after Cancel" % (time.monotonic() - pressed))
     check("cancelled" in panel.status.text(), "the panel says: %s" % panel.status.text())
-    cancelled = daemon.wait_for(lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30)
+    cancelled = daemon.wait_for(
+        lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30, since=since
+    )
     check(cancelled is not None, "the daemon cancelled the work")
     FreeCADGui.Control.closeDialog()
 

@@ -75,12 +75,14 @@ class Daemon:
                 self.log.append(entry)
                 self._lines.notify_all()
 
-    def wait_for(self, predicate, timeout):
-        """The first log entry matching ``predicate`` within ``timeout`` seconds, else None."""
+    def wait_for(self, predicate, timeout, since=0):
+        """The first log entry matching ``predicate`` within ``timeout`` seconds, else None.
+        ``since``: look only at entries from that index on (``len(daemon.log)`` taken before the
+        action whose entry the test waits for)."""
         end = time.monotonic() + timeout
         with self._lines:
             while True:
-                for entry in self.log:
+                for entry in self.log[since:]:
                     if isinstance(entry, dict) and predicate(entry):
                         return entry
                 left = end - time.monotonic()

@@ -210,6 +210,7 @@ class ClientTest(unittest.TestCase):
                 outcome["at"] = time.monotonic()
 
         before = len(self.daemon.requests("Design"))
+        since = len(self.daemon.log)
         thread = threading.Thread(target=work)
         thread.start()
         end = time.monotonic() + 60
@@ -224,7 +225,7 @@ class ClientTest(unittest.TestCase):
         self.assertLess(outcome["at"] - asked, 5.0)  # returns at once, not at the work's end
         # The daemon saw the client go and cancelled the job.
         entry = self.daemon.wait_for(
-            lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30
+            lambda e: e.get("method") == "Design" and e.get("status") == "CANCELLED", 30, since=since
         )
         self.assertIsNotNone(entry, self.daemon.requests("Design")[before:])
         self.assertEqual(self.client.health(), "SERVING")
@@ -233,12 +234,13 @@ class ClientTest(unittest.TestCase):
             self.client.examples(cancel=cancel)
 
     def test_deadline(self):
+        since = len(self.daemon.log)
         with self.assertRaises(gs.DeadlineExceeded) as caught:
             self.client.design(
                 gs.mesh_example("double-vault"), options=SLOW, timeout=0.3
             )
         self.assertEqual(caught.exception.status, "DEADLINE_EXCEEDED")
-        entry = self.daemon.wait_for(lambda e: e.get("status") == "DEADLINE_EXCEEDED", 30)
+        entry = self.daemon.wait_for(lambda e: e.get("status") == "DEADLINE_EXCEEDED", 30, since=since)
         self.assertIsNotNone(entry)
         with self.assertRaises(gs.InvalidInput) as caught:
             self.client.examples(timeout=-1)

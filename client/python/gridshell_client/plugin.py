@@ -35,7 +35,11 @@ __all__ = [
 class BackgroundCall:
     """Runs ``function(progress=..., cancel=...)`` on a thread; the UI thread polls ``done``,
     reads ``progress`` (the latest Progress or None), calls ``cancel()``, and finally takes
-    ``result()`` (the return value, or the exception raised again)."""
+    ``result()`` (the return value, or the exception raised again).
+
+    Once ``cancel()`` was called, ``result()`` raises ``Cancelled`` even when the work finished
+    meanwhile: a user who pressed Esc while the answer was on its way sees nothing change (the
+    UI takes the result only at its next poll, which may come after the key)."""
 
     def __init__(self, function):
         self._function = function
@@ -84,6 +88,8 @@ class BackgroundCall:
     def result(self):
         self._done.wait()
         self._thread.join()
+        if self.cancelled and not isinstance(self._error, Cancelled):
+            raise Cancelled("cancelled by the client", "CANCELLED")
         if self._error is not None:
             raise self._error
         return self._result

@@ -1,0 +1,73 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Tests of what the CAD plugins share (client/python/gridshell_client/plugin.py): the background
+call a UI loop polls. Its result after a cancel is the contract both plugins rely on when a user
+presses Esc (Blender) or Cancel (FreeCAD) while the answer is on its way: nothing changes.
+
+    python3 -m unittest discover -s tests/python -t tests/python -v
+"""
+
+import threading
+import unittest
+
+import gridshell_testing as T  # noqa: F401,N812 (puts client/python on sys.path)
+
+import gridshell_client as gs
+from gridshell_client import plugin
+
+
+def finished(call, seconds=30):
+    if not call.wait(seconds):
+        raise AssertionError("the background call did not finish in %d s" % seconds)
+    return call
+
+
+class BackgroundCallTest(unittest.TestCase):
+    def test_result_and_progress(self):
+        def work(progress, cancel):
+            progress(gs.Progress("distance maps", 0.5, ""))
+            return {"answer": 42}
+
+        call = finished(plugin.BackgroundCall(work))
+        self.assertTrue(call.done)
+        self.assertFalse(call.cancelled)
+        self.assertEqual(call.progress.stage, "distance maps")
+        self.assertEqual(call.result(), {"answer": 42})
+        self.assertGreaterEqual(call.finished, call.started)
+
+    def test_error_is_raised_again(self):
+        def work(progress, cancel):
+            raise gs.InvalidInput("options.resolution: must be 0 (adaptive) or 8..1000", "INVALID_ARGUMENT")
+
+        call = finished(plugin.BackgroundCall(work))
+        with self.assertRaises(gs.InvalidInput) as raised:
+            call.result()
+        self.assertIn("options.resolution", str(raised.exception))
+
+    def test_cancel_after_the_answer_came_discards_it(self):
+        # The work finished, but the UI had not taken the result when the user cancelled.
+        call = finished(plugin.BackgroundCall(lambda progress, cancel: {"members": 9}))
+        call.cancel()
+        self.assertTrue(call.cancelled)
+        with self.assertRaises(gs.Cancelled):
+            call.result()
+
+    def test_cancel_reaches_the_work(self):
+        started = threading.Event()
+
+        def work(progress, cancel):
+            started.set()
+            if cancel.wait(30):  # what the client does while it waits for the daemon
+                raise gs.Cancelled("cancelled by the client", "CANCELLED")
+            return "not cancelled"
+
+        call = plugin.BackgroundCall(work)
+        self.assertTrue(started.wait(30))
+        self.assertFalse(call.done)
+        call.cancel()
+        finished(call, 5)
+        with self.assertRaises(gs.Cancelled):
+            call.result()
+
+
+if __name__ == "__main__":
+    unittest.main()
