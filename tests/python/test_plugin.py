@@ -52,11 +52,12 @@ class BackgroundCallTest(unittest.TestCase):
             call.result()
 
     def test_cancel_reaches_the_work(self):
-        started = threading.Event()
+        started, seen = threading.Event(), threading.Event()
 
         def work(progress, cancel):
             started.set()
             if cancel.wait(30):  # what the client does while it waits for the daemon
+                seen.set()
                 raise gs.Cancelled("cancelled by the client", "CANCELLED")
             return "not cancelled"
 
@@ -65,6 +66,7 @@ class BackgroundCallTest(unittest.TestCase):
         self.assertFalse(call.done)
         call.cancel()
         finished(call, 5)
+        self.assertTrue(seen.is_set(), "the work's own flag was not set")
         with self.assertRaises(gs.Cancelled):
             call.result()
 

@@ -134,11 +134,6 @@ async function run<T>(kind: CallKind, method: string, request: unknown, patchKey
       ui.status.textContent = `${kind}: ${p.stage}${p.message ? ' — ' + p.message : ''} (${Math.round(100 * p.fraction)}%)`;
     }, patchKey);
     if (current !== job) return null;
-    if (job.controller.signal.aborted) {
-      // Cancelled while the answer was on its way: a cancel means nothing changes.
-      ui.status.textContent = `${kind}: cancelled`;
-      return null;
-    }
     ui.status.textContent = `${kind}: done in ${((performance.now() - t0) / 1000).toFixed(2)} s`;
     return result;
   } catch (e) {
