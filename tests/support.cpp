@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -35,8 +36,12 @@ TempRoot& temp_root() {
 }
 }  // namespace
 
-std::vector<std::string> shared_mesh_paths() {
-  const fs::path dir = fs::path(GRIDSHELL_SHARED_DIR) / "meshes";
+std::string test_mesh_path(const std::string& name) {
+  return (fs::path(GRIDSHELL_TEST_DATA_DIR) / "meshes" / name).string();
+}
+
+std::vector<std::string> test_mesh_paths() {
+  const fs::path dir = fs::path(GRIDSHELL_TEST_DATA_DIR) / "meshes";
   return {(dir / "enneper2.obj").string(), (dir / "knet1.obj").string(),
           (dir / "pillow_1.obj").string()};
 }
@@ -55,6 +60,36 @@ std::string write_text(const std::string& dir, const std::string& name,
   const std::string path = (fs::path(dir) / name).string();
   std::ofstream(path, std::ios::binary) << contents;
   return path;
+}
+
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;  // vertex region a
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;  // vertex region b
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;  // edge ab
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;  // vertex region c
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;  // edge ac
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)  // edge bc
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denominator = 1.0 / (va + vb + vc);  // inside the face
+  return a + ab * (vb * denominator) + ac * (vc * denominator);
+}
+
+double brute_force_distance(const TriangleMesh& mesh, const Vec3& p) {
+  double best = std::numeric_limits<double>::infinity();
+  const auto& x = mesh.vertices();
+  for (const Face& f : mesh.faces())
+    best =
+        std::min(best, (p - closest_point_on_triangle(p, x[f[0]], x[f[1]], x[f[2]])).squaredNorm());
+  return std::sqrt(best);
 }
 
 std::string read_text(const std::string& path) {

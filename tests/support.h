@@ -10,8 +10,12 @@
 
 namespace gridshell::testing {
 
-/// Paths of the real freeform meshes in ../shared/meshes (enneper2, knet1, pillow_1).
-std::vector<std::string> shared_mesh_paths();
+/// Paths of the real freeform meshes in tests/data/meshes (enneper2, knet1, pillow_1; MIT, see
+/// the LICENSE-DOS there).
+std::vector<std::string> test_mesh_paths();
+
+/// Path of one file in tests/data/meshes, e.g. test_mesh_path("knet1.obj").
+std::string test_mesh_path(const std::string& name);
 
 /// A fresh empty temporary folder, removed at process exit.
 std::string temp_dir();
@@ -49,6 +53,15 @@ TriangleMesh icosphere(int subdivisions, double radius);
 /// vertices each, faces counter-clockwise seen from +z. Vertex (ring i, sector j) has index
 /// i * sectors + j. Two boundary loops.
 TriangleMesh annulus(double r0, double r1, int rings, int sectors);
+
+/// Closest point to `p` on the triangle (a, b, c), by the Voronoi regions of its vertices,
+/// edges and face (Ericson, Real-Time Collision Detection, 5.1.5). Written here, independently
+/// of the kernel's closest-point code, as the tests' oracle.
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+/// Distance from `p` to the mesh by brute force over every triangle (the tests' oracle for the
+/// kernel's AABB-tree distances: O(faces) per point).
+double brute_force_distance(const TriangleMesh& mesh, const Vec3& p);
 
 /// Reads a whole file.
 std::string read_text(const std::string& path);

@@ -224,7 +224,7 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertLess(nearest, 0.05 * 15)
 
     def test_shared_mesh_imported_and_run(self):
-        path = os.path.join(T.SHARED, "meshes", "knet1.obj")
+        path = os.path.join(T.MESHES, "knet1.obj")
         self.assertTrue(os.path.exists(path), path)
         bpy.ops.object.select_all(action="DESELECT")
         bpy.ops.wm.obj_import(filepath=path)

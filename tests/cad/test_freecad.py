@@ -192,7 +192,7 @@ class FreeCADWorkbenchTest(unittest.TestCase):
         self.assertEqual(json.loads(top.DesignJson), design)
 
     def test_shared_mesh_read_by_freecad_and_run(self):
-        path = os.path.join(T.SHARED, "meshes", "knet1.obj")
+        path = os.path.join(T.MESHES, "knet1.obj")
         self.assertTrue(os.path.exists(path), path)
         obj = self.doc.addObject("Mesh::Feature", "knet1")
         obj.Mesh = Mesh.read(path)

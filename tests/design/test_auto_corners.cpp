@@ -127,7 +127,7 @@ TEST(AutoCorners, ExamplesAreAtLeastAsLargeAsTheFormerRule) {
 }
 
 TEST(AutoCorners, SharedMeshes) {
-  for (const std::string& path : testing::shared_mesh_paths()) {
+  for (const std::string& path : testing::test_mesh_paths()) {
     SCOPED_TRACE(path);
     const TriangleMesh mesh = load_mesh(path);
     const TargetPatch target = make_target_patch(mesh, CornerSpec{});

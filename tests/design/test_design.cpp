@@ -147,7 +147,7 @@ TEST(Design, GridCriteriaOnEveryExample) {
 }
 
 TEST(Design, GridCriteriaOnTheSharedMeshes) {
-  for (const std::string& path : testing::shared_mesh_paths()) {
+  for (const std::string& path : testing::test_mesh_paths()) {
     if (path.find("enneper2") != std::string::npos) continue;  // infeasible, see below
     CornerSpec corners;                                        // auto
     DesignOptions options;
@@ -164,7 +164,7 @@ TEST(Design, EnneperSaddleIsInfeasibleWithAClearReason) {
   // Enneper's surface with its four grid corners: the boundary geodesics cut deep into the
   // saddle and meet at corner angles of about 11 degrees; no planar quadrilateral with corner
   // angles of at least 30 degrees lets both cladding functions leave their corners.
-  const std::string path = testing::shared_mesh_paths()[0];
+  const std::string path = testing::test_mesh_paths()[0];
   ASSERT_NE(path.find("enneper2"), std::string::npos);
   DesignOptions options;
   options.maps.resolution = 48;

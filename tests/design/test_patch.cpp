@@ -196,7 +196,7 @@ TEST(CutPatch, ConsistentOnEveryExampleSurface) {
 }
 
 TEST(CutPatch, ConsistentOnTheSharedMeshesWithAutoCorners) {
-  for (const std::string& path : testing::shared_mesh_paths()) {
+  for (const std::string& path : testing::test_mesh_paths()) {
     const TriangleMesh mesh = load_mesh(path);
     expect_consistent_cut(mesh, auto_corners(mesh), path);
   }

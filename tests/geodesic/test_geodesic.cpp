@@ -129,7 +129,7 @@ TriangleMesh nonconvex_mesh() {
 /// The three shared freeform quad meshes (triangulated by the loader).
 std::vector<std::pair<std::string, TriangleMesh>> shared_meshes() {
   std::vector<std::pair<std::string, TriangleMesh>> out;
-  for (const std::string& path : testing::shared_mesh_paths())
+  for (const std::string& path : testing::test_mesh_paths())
     out.emplace_back(path.substr(path.find_last_of('/') + 1), load_mesh(path));
   return out;
 }

@@ -555,7 +555,7 @@ TEST(MeshIo, ClockwiseFileOrientationIsKept) {
 // Real meshes.
 
 TEST(MeshIo, SharedRealMeshesLoadAsDisks) {
-  const std::vector<std::string> paths = testing::shared_mesh_paths();
+  const std::vector<std::string> paths = testing::test_mesh_paths();
   const int expected_vertices[] = {961, 441, 1369};
   const int expected_quads[] = {900, 400, 1296};
   for (size_t i = 0; i < paths.size(); ++i) {

@@ -19,7 +19,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 BUILD = os.environ.get("GRIDSHELL_BUILD", os.path.join(ROOT, "build"))
 GRIDSHELLD = os.environ.get("GRIDSHELLD", os.path.join(BUILD, "gridshelld"))
 GRIDSHELL = os.environ.get("GRIDSHELL", os.path.join(BUILD, "gridshell"))
-SHARED = os.environ.get("GRIDSHELL_SHARED_DIR", os.path.join(ROOT, "..", "shared"))
+MESHES = os.path.join(ROOT, "tests", "data", "meshes")  # real meshes with their licence
 CLIENT_PATH = os.path.join(ROOT, "client", "python")
 
 if CLIENT_PATH not in sys.path:

@@ -15,6 +15,7 @@
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/simulation/auto_anchors.h"
 #include "gridshell/simulation/simulation.h"
+#include "support.h"
 
 namespace gridshell {
 namespace {
@@ -494,7 +495,7 @@ TEST_P(ExampleDeployment, ConvergesAndNotchesReduceTheDeviation) {
   TriangleMesh mesh;
   CornerSpec corners;
   if (c.name.rfind("mesh:", 0) == 0) {
-    mesh = load_mesh(std::string(GRIDSHELL_SHARED_DIR) + "/meshes/" + c.name.substr(5));
+    mesh = load_mesh(testing::test_mesh_path(c.name.substr(5)));
     corners.kind = CornerSpec::Kind::Auto;
     if (!c.corner_vertices.empty())
       corners = CornerSpec::at_vertices(

@@ -474,11 +474,11 @@ function smallObj(n = 13, [ox, oy, oz] = [0, 0, 0]) {
   return Buffer.from(lines.join('\n') + '\n');
 }
 
-const sharedMeshes = path.join(process.env.GRIDSHELL_SHARED_DIR ?? path.join(root, '../shared'), 'meshes');
+const testMeshes = path.join(root, 'tests/data/meshes'); // real meshes with their licence
 
-test('a shared real mesh (knet1.obj) uploaded: Auto corners, design, slider; design.json as the CLI\'s', async () => {
-  const file = path.join(sharedMeshes, 'knet1.obj');
-  assert.ok(existsSync(file), `no ${file} (shared/meshes beside the repository)`);
+test('a real mesh (knet1.obj, tests/data) uploaded: Auto corners, design, slider; design.json as the CLI\'s', async () => {
+  const file = path.join(testMeshes, 'knet1.obj');
+  assert.ok(existsSync(file), `no ${file} (tests/data/meshes of the repository)`);
   await byId('mesh-input').setInputFiles(file);
   await until(async () => /knet1\.obj: 441 vertices, 800 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the shared mesh');
   assert.match(await text('mesh-info'), /loader: 400 polygons triangulated/); // knet1 is a quad mesh
@@ -494,7 +494,7 @@ test('a shared real mesh (knet1.obj) uploaded: Auto corners, design, slider; des
   await until(async () => (await designCount()) === n + 2, 60000, 'its redesign');
   assert.match(await text('summary'), /distance maps cached: yes/);
   const { bytes } = await downloadJson('download-design');
-  assertSameBytes(bytes, await cliDesign('knet1.obj', alpha, sharedMeshes), 'knet1');
+  assertSameBytes(bytes, await cliDesign('knet1.obj', alpha, testMeshes), 'knet1');
 });
 
 let clickedCorners;
