@@ -5,7 +5,6 @@
 #include <google/protobuf/message.h>
 #include <google/protobuf/repeated_field.h>
 
-#include <CLI/CLI.hpp>
 #include <array>
 #include <optional>
 #include <string>
@@ -20,6 +19,12 @@
 #include "gridshell/v1/requests.pb.h"
 
 namespace gridshell::cli {
+// CLI11 is heavy (4 s of compile time per file that includes it): declared here, included only
+// by the files that build the command line.
+namespace CLI {
+class App;
+}  // namespace CLI
+
 
 /// A mesh named on the command line: a file path (OBJ/OFF/PLY/STL) or `example:NAME`.
 struct InputMesh {

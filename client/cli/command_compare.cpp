@@ -4,6 +4,7 @@
 // with distances to the deployment and to the target patch: compare.json and compare.ply.
 #include <google/protobuf/util/json_util.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>

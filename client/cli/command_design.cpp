@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell design MESH --corners ... --out DIR`: the grid design of paper Section 4, in
 // process or on a daemon (--server). The design flags are shared with `gridshell run`.
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

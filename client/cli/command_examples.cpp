@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell examples list` and `gridshell examples write NAME FILE`.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 
 #include "cli_support.h"

@@ -2,6 +2,7 @@
 // `gridshell fabricate DIR/design.json --unit cm --out KIT`: the fabrication kit of a design
 // (nested DXF/SVG cut sheets, kit.json, assembly.svg, supports.csv, bom.csv), in process or on a
 // daemon (--server). docs/fabrication.md explains the files.
+#include <CLI/CLI.hpp>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell geodesic MESH --source V [--method ..] [--compare cgal] [--repeat N] [--json]`:
 // one single-source distance field, timed, optionally compared with a reference engine.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell health --server HOST:PORT`: asks a daemon whether it is serving (gRPC health check).
+#include <CLI/CLI.hpp>
 #include <cstdio>
 
 #include "commands.h"

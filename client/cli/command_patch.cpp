@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell patch MESH --corners ... --out DIR`: cut, check and smooth the target patch, in
 // process or on a daemon (--server).
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // `gridshell run MESH --corners ... --out DIR`: patch, design and simulation in one go, with a
 // summary like the paper's Table 1 (next to the paper's values for its seven models).
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <optional>

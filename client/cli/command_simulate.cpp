@@ -3,6 +3,7 @@
 // in process or on a daemon (--server). The simulation flags are shared with `gridshell run`.
 #include <google/protobuf/util/json_util.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>

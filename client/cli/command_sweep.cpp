@@ -4,6 +4,7 @@
 // `gridshell run` per manifest row, on this machine or as a Slurm job array (sweep.h).
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>

@@ -3,6 +3,7 @@
 //
 // Exit codes (docs/decisions.md): 0 success, 1 internal error, 2 invalid input, 3 infeasible
 // design, 130 cancelled (Ctrl-C). Errors are one line on stderr starting with "error:".
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <iostream>
 #include <map>

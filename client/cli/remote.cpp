@@ -3,6 +3,7 @@
 // it the options still parse and a remote run explains why it cannot happen.
 #include "remote.h"
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <condition_variable>
 #include <fstream>

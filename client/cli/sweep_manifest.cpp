@@ -3,6 +3,7 @@
 // with the same parsers and request checks that `gridshell run` applies to its command line.
 #include <csv.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
