@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_syntax.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh.h"
@@ -18,13 +19,13 @@
 #include "gridshell/v1/design.pb.h"
 #include "gridshell/v1/requests.pb.h"
 
-namespace gridshell::cli {
 // CLI11 is heavy (4 s of compile time per file that includes it): declared here, included only
 // by the files that build the command line.
 namespace CLI {
 class App;
 }  // namespace CLI
 
+namespace gridshell::cli {
 
 /// A mesh named on the command line: a file path (OBJ/OFF/PLY/STL) or `example:NAME`.
 struct InputMesh {
@@ -44,10 +45,6 @@ int mesh_vertex(const InputMesh& input, int file_vertex, const std::string& fiel
 /// with no --corners: a built-in example's own corners, else auto. `used` receives a
 /// description for the output files ("example", "auto" or the text given).
 CornerSpec resolve_corners(const InputMesh& input, const std::string& text, std::string* used);
-
-/// Parses --corners: "i,j,k,l" (vertex indices), "x,y,z;x,y,z;x,y,z;x,y,z" (points) or "auto".
-/// Throws InvalidInput (field "--corners").
-CornerSpec parse_corners(const std::string& text);
 
 /// What the CLI's error messages call the parts of a request (cli_errors.cpp).
 struct FieldContext {

@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Reads a kit's cut sheets with independent readers -- Debian's python3-ezdxf for the DXF files,
 the standard library's XML parser for the SVG files -- and prints what they contain as one JSON
-document on stdout, for tests/convert/test_fabricate.cpp to check against design.json.
+document on stdout, for tests/cli/test_cli_fabricate.cpp and tests/fabrication/test_kit.cpp to
+check against design.json.
 
 Usage: read_sheets.py KIT_FOLDER
 

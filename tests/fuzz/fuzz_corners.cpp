@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "cli_support.h"
+#include "cli_syntax.h"
 #include "fuzz_support.h"
 #include "gridshell/requests.h"
 
