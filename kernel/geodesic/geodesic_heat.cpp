@@ -32,14 +32,13 @@ using HeatMethod =
     CGAL::Heat_method_3::Surface_mesh_geodesic_distances_3<CgalMesh,
                                                            CGAL::Heat_method_3::Intrinsic_Delaunay>;
 
-/// Read-write property map vertex -> distance into a std::vector.
+/// Writable property map vertex -> distance into a std::vector (the heat method only writes it).
 struct DistanceMap {
   using key_type = VertexIndex;
   using value_type = double;
-  using reference = double&;
-  using category = boost::read_write_property_map_tag;
+  using reference = void;
+  using category = boost::writable_property_map_tag;
   std::vector<double>* values;
-  friend double get(const DistanceMap& map, key_type v) { return (*map.values)[v.idx()]; }
   friend void put(const DistanceMap& map, key_type v, double d) { (*map.values)[v.idx()] = d; }
 };
 

@@ -283,7 +283,6 @@ class Deployment {
   DeploymentRun results();
 
   const SimulationOptions& options_;
-  const TriangleMesh& target_;
   SurfaceDistance distance_;
   double scale_ = 1;                  // scaled = model * scale_
   double width_ = 0, thickness_ = 0;  // scaled
@@ -304,7 +303,7 @@ class Deployment {
 Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
                        const TriangleMesh& target, double width, double thickness,
                        const SimulationOptions& options)
-    : options_(options), target_(target), distance_(target) {
+    : options_(options), distance_(target) {
   check_inputs(grid, width, thickness, options);
   set_scale(target, width, thickness);
   build_rods(grid, thickness);

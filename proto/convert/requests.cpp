@@ -721,7 +721,7 @@ GeodesicInputs prepare_geodesic(const v1::GeodesicRequest& request) {
 }
 
 v1::GeodesicResult run_geodesic(const v1::GeodesicRequest& request, const Progress& progress,
-                                const RunSettings& settings) {
+                                const RunSettings& /*settings: one solve runs on one thread*/) {
   {
     const GeodesicInputs in = prepare_geodesic(request);
     const TriangleMesh& mesh = in.mesh;

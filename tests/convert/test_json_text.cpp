@@ -33,8 +33,9 @@ void expect_same_json(const pb::Message& message) {
     ASSERT_TRUE(status.ok()) << status.ToString() << "\n" << ours.substr(0, 400);
     EXPECT_TRUE(pb::util::MessageDifferencer::Equals(message, *back));
     EXPECT_EQ(nlohmann::json::parse(ours), nlohmann::json::parse(library));
-    if (ours.size() > 2 && ours.front() == '{')  // an object with members (not a wrapper's value)
+    if (ours.size() > 2 && ours.front() == '{') {  // an object with members, not a wrapper's value
       EXPECT_EQ(ours.find('\n') != std::string::npos, pretty);
+    }
   }
 }
 

@@ -35,7 +35,6 @@ namespace gridshell {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // ---------------------------------------------------------------------------------------------
 // Mesh generators

@@ -193,7 +193,7 @@ TEST(MixedVoronoiAreas, EquilateralLatticeCellsAreHexagons) {
   });
   // grid_mesh alternates diagonals: keep only a lattice with one diagonal direction.
   std::vector<Face> faces;
-  auto id = [n](int i, int j) { return j * (n + 1) + i; };
+  auto id = [](int i, int j) { return j * (n + 1) + i; };
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       faces.push_back({id(i, j), id(i + 1, j), id(i, j + 1)});

@@ -930,7 +930,7 @@ TEST(MeshIoTopology, OneBoundaryLoopWithAHandle) {
              std::to_string((3 + std::cos(v)) * std::sin(u)) + " " + std::to_string(std::sin(v)) +
              "\n";
     }
-  auto id = [n](int i, int j) { return std::to_string((j % n) * n + (i % n) + 1); };
+  auto id = [](int i, int j) { return std::to_string((j % n) * n + (i % n) + 1); };
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       obj += "f " + id(i, j) + " " + id(i + 1, j) + " " + id(i + 1, j + 1) + "\n";
