@@ -480,7 +480,7 @@ test('a real mesh (knet1.obj, tests/data) uploaded: Auto corners, design, slider
   const file = path.join(testMeshes, 'knet1.obj');
   assert.ok(existsSync(file), `no ${file} (tests/data/meshes of the repository)`);
   await byId('mesh-input').setInputFiles(file);
-  await until(async () => /knet1\.obj: 441 vertices, 800 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the shared mesh');
+  await until(async () => /knet1\.obj: 441 vertices, 800 faces \(obj\)/.test(await text('mesh-info')), 15000, 'the real mesh');
   assert.match(await text('mesh-info'), /loader: 400 polygons triangulated/); // knet1 is a quad mesh
   await byId('corners-auto').click();
   await until(async () => /η = /.test(await text('patch-info')), 30000, 'its patch');
@@ -701,19 +701,26 @@ test('no console errors, no traffic off loopback', () => {
 });
 
 // After the check above: the refused connections are logged by Chromium.
+// The new daemon binds the address the kernel gave the first one (port 0 at its start), once the
+// page's first call was refused.
 test('the daemon restarted during a call: the page retries and gets the answer (docs/api.md, Retries)', async () => {
   await stopDaemon(daemon);
-  const restarted = new Promise((r) => setTimeout(r, 800)).then(() => startDaemon([], address));
   let attempts = 0;
   const count = (request) => { if (request.url().endsWith('/v1/patch')) ++attempts; };
+  let refusedOnce;
+  const refused = new Promise((r) => { refusedOnce = r; });
+  const failed = (request) => { if (request.url().endsWith('/v1/patch')) refusedOnce(); };
   page.on('request', count);
+  page.on('requestfailed', failed);
   try {
     await byId('corners-auto').click(); // refused at first; retried with back-off until the new daemon answers
-    ({ proc: daemon, log: daemonLog } = await restarted);
+    await refused;
+    ({ proc: daemon, log: daemonLog } = await startDaemon([], address));
     daemons.push(daemon);
     await until(async () => /^patch: done/.test(await text('status')), 60000, 'the patch after the retries');
   } finally {
     page.off('request', count);
+    page.off('requestfailed', failed);
   }
   assert.ok(attempts >= 2, `${attempts} patch calls`);
   assert.equal(await byId('error').isVisible(), false);
