@@ -316,9 +316,10 @@ class BlenderAddonTest(unittest.TestCase):
         ):
             bpy.ops.gridshell.design()
         # No daemon there.
-        self.settings.server = "http://127.0.0.1:%d" % T.free_port()
-        with self.assertRaisesRegex(RuntimeError, "cannot reach the daemon at http://127.0.0.1"):
-            bpy.ops.gridshell.design()
+        with T.refusing_port() as port:
+            self.settings.server = "http://127.0.0.1:%d" % port
+            with self.assertRaisesRegex(RuntimeError, "cannot reach the daemon at http://127.0.0.1"):
+                bpy.ops.gridshell.design()
         self.settings.server = self.daemon.url
         # Not a mesh.
         bpy.ops.object.empty_add()

@@ -267,9 +267,10 @@ class FreeCADWorkbenchTest(unittest.TestCase):
         with self.assertRaises(gs.InvalidInput) as caught:
             core.design(self.doc, obj, wide)
         self.assertIn("Lamella width (options.lamella_width)", core.error_message(caught.exception, wide))
-        away = core.Settings(server="http://127.0.0.1:%d" % T.free_port())
-        with self.assertRaises(gs.Unavailable) as caught:
-            core.design(self.doc, obj, away)
+        with T.refusing_port() as port:
+            away = core.Settings(server="http://127.0.0.1:%d" % port)
+            with self.assertRaises(gs.Unavailable) as caught:
+                core.design(self.doc, obj, away)
         self.assertIn("cannot reach the daemon at http://127.0.0.1", core.error_message(caught.exception, away))
         self.assertEqual(self.client.health(), "SERVING")
 

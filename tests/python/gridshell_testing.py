@@ -6,6 +6,7 @@ Binaries come from $GRIDSHELL_BUILD (default: ./build of this checkout); $GRIDSH
 $GRIDSHELL override each one. Only the standard library: Blender and FreeCAD import this too.
 """
 
+import contextlib
 import json
 import os
 import signal
@@ -26,11 +27,14 @@ if CLIENT_PATH not in sys.path:
     sys.path.insert(0, CLIENT_PATH)
 
 
-def free_port():
-    """A TCP port on 127.0.0.1 that was free a moment ago (for tests that need it before use)."""
+@contextlib.contextmanager
+def refusing_port():
+    """A TCP port on 127.0.0.1 where nobody listens, for as long as the ``with`` block lasts:
+    bound here to port 0 (the kernel picks it) but never listened on, so every connection to it
+    is refused and no other program can take it meanwhile."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+        yield s.getsockname()[1]
 
 
 class Daemon:
@@ -62,6 +66,7 @@ class Daemon:
             raise RuntimeError("gridshelld did not start: %s" % "\n".join(map(str, self.log)))
         self.http = listening["http"]
         self.grpc = listening["grpc"]
+        self.http_port = int(self.http.rsplit(":", 1)[1])
         self.url = ("https://" if tls else "http://") + self.http
 
     def _read(self):

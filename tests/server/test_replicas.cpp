@@ -50,6 +50,8 @@ class Replicas {
   const std::string& grpc() const { return grpc_; }
   int http_port() const { return std::stoi(http_.substr(http_.rfind(':') + 1)); }
   void kill(int i) { shell("kill " + std::to_string(i)); }
+  /// Until haproxy's health checks mark replica i down.
+  void wait_down(int i) { shell("wait-down " + std::to_string(i)); }
   void restart(int i) { shell("restart " + std::to_string(i)); }
   std::string log(int i) const {
     return testing::read_text(state_ + "/r" + std::to_string(i) + ".log");
@@ -306,13 +308,13 @@ TEST(Replicas, FaultTestAKilledReplicaLosesNoRequestAndNoRow) {
                            "2", "--server", replicas.grpc(), "--timeout", "100"},
                           base + "/sweep-log", 300);
     });
-    // Mid-load: a third of the designs done, then one replica killed and restarted a second
-    // later.
+    // Mid-load: a third of the designs done, then one replica killed, and restarted once
+    // haproxy has noticed (the requests meanwhile go to the others).
     for (int i = 0; i < 1200 && finished < kClients * kDesigns / 3; ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const int victim = 1 + (repetition - 1) % 3;
     replicas.kill(victim);
-    std::this_thread::sleep_for(std::chrono::seconds(1));
+    replicas.wait_down(victim);
     replicas.restart(victim);
     for (auto& t : clients) t.join();
     sweeper.join();
