@@ -244,14 +244,15 @@ Vec3 point_at_rest_length(const SimulatedLamella& lamella, double s) {
   return (1 - f) * lamella.centerline[k] + f * lamella.centerline[k + 1];
 }
 
-// `--interior-anchors auto` pins the inner crossing deployed farthest from the target. On
-// waves-bump held at its boundary the grid snaps into a dome, and the crossing farthest from
-// the target is known independently: each crossing's deployed connection points on both
-// lamellas, interpolated at their rest arc lengths and measured by brute force. The first
-// anchor the search adds is that crossing, and it stands out from the runner-up by far more
-// than the error of reading the deviation at the nearest rod vertex.
+// `--interior-anchors auto` pins the inner crossing deployed farthest from the target. Which
+// crossing that is, is known independently: each crossing's deployed connection points on both
+// lamellas, interpolated at their rest arc lengths and measured by brute force. On the sphere
+// held at its boundary the crown sags; the farthest crossing, (11, 11), stands out from the
+// runner-up by 12 %, far more than the error of reading the deviation at the nearest rod vertex,
+// and it lies off the middle of its lamellas, so reading from the wrong end of a rod would pick
+// another one ((11, 3)).
 TEST(DeploymentChecks, AutomaticInnerAnchorGoesToTheCrossingFarthestFromTheTarget) {
-  const ExampleSurface example = make_example("waves-bump");
+  const ExampleSurface example = make_example("sphere");
   const Design design = make_design(example.mesh, CornerSpec::at_vertices(example.corners), {});
   const TriangleMesh& target = design.target.patch.mesh;
   SimulationOptions options;
@@ -279,7 +280,7 @@ TEST(DeploymentChecks, AutomaticInnerAnchorGoesToTheCrossingFarthestFromTheTarge
   std::printf("  farthest inner crossing (%d, %d) at %.4g, the next at %.4g\n", best_g, best_h,
               best, runner_up);
   ASSERT_GE(best_g, 0);
-  ASSERT_GT(best - runner_up, 0.02 * best);  // a clear answer
+  ASSERT_GT(best - runner_up, 0.05 * best);  // a clear answer
   AutoAnchorOptions one;
   one.max_anchors = 1;
   one.min_improvement = -1;  // keep it whatever it does
