@@ -3,25 +3,17 @@
 # Configures and builds ./build-sanitized: the one tree that serves both the sanitized tests
 # (scripts/test-sanitizers.sh) and fuzzing (scripts/fuzz.sh). clang with AddressSanitizer,
 # UndefinedBehaviorSanitizer and libFuzzer's coverage instrumentation on every target, -O1;
-# the kernel, the examples, the request converters and the CLI's parsers with their tests
-# (tests/<layer>, tests/examples, tests/convert) and the fuzz targets, but not the CLI itself. No daemon, no client
-# or benchmark tests and no layer probes: those run in the main build (scripts/test.sh).
+# the kernel, the examples, the request converters and the CLI's --corners syntax with their
+# tests (tests/<layer>, tests/examples, tests/convert) and the fuzz targets, but not the CLI
+# itself. No daemon, no client or benchmark tests and no layer probes: those run in the main
+# build (scripts/test.sh).
 # docs/testing.md, "Sanitizers and fuzzing", says why. Installs clang and libFuzzer from Debian
-# when missing. Extra arguments are ninja targets (default: all).
+# when missing (group "sanitize" of scripts/packages.txt). Extra arguments are ninja targets
+# (default: all).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-missing=()
-for p in clang libfuzzer-14-dev libclang-rt-14-dev; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  SUDO=""
-  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  echo "build-sanitized: installing ${missing[*]}" >&2
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
-fi
+bash scripts/install-packages.sh sanitize
 start=$(date +%s)
 cmake -S . -B build-sanitized -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_COMPILER=clang++ -DGRIDSHELL_SANITIZE=ON -DGRIDSHELL_FUZZ=ON \

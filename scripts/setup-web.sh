@@ -6,16 +6,17 @@
 # when the lock file changed since the last install.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+bash scripts/install-packages.sh web  # Chromium
 missing=()
 command -v node >/dev/null 2>&1 || missing+=(nodejs)
 command -v npm >/dev/null 2>&1 || missing+=(npm)
-[ -x /usr/bin/chromium ] || missing+=(chromium)
-if [ ${#missing[@]} -gt 0 ]; then
+if [ ${#missing[@]} -gt 0 ]; then  # the machine's own Node.js when it has one (see below)
   SUDO=""
   [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   echo "setup-web: installing ${missing[*]}" >&2
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+  $SUDO apt-get -o DPkg::Lock::Timeout=1800 update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get -o DPkg::Lock::Timeout=1800 install -y -qq \
+    --no-install-recommends "${missing[@]}" >&2
 fi
 # Vite 7 needs Node.js 20.19 or newer (the machine's Node.js; Debian 12's own nodejs is 18).
 node -e 'const [a,b]=process.versions.node.split(".").map(Number); if (a<20||(a===20&&b<19)) { console.error("setup-web: Node.js "+process.versions.node+" is too old for Vite 7 (need >= 20.19)"); process.exit(1); }'

@@ -16,6 +16,7 @@
 # three after it. Both commands are idempotent: start leaves running daemons alone, stop is quiet
 # when nothing runs.
 set -euo pipefail
+SCRIPTS="$(cd "$(dirname "$0")" && pwd)"
 STATE="${GRIDSHELL_SLURM_DIR:-/var/tmp/gridshell-slurm}"
 PORT="${GRIDSHELL_SLURM_PORT:-26817}"
 CTLD_PORT=$PORT SLURMD_PORT=$((PORT + 1)) DBD_PORT=$((PORT + 2)) DB_PORT=$((PORT + 3))
@@ -24,24 +25,11 @@ MUNGE_SOCKET=/run/munge/munge.socket.2
 DB_OPTIONS=(--innodb-buffer-pool-size=32M --innodb-log-file-size=4M --skip-name-resolve
   --innodb-flush-log-at-trx-commit=0 --innodb-doublewrite=0 --innodb-flush-method=nosync
   --sync-frm=0)
-PKGS=(munge slurmctld slurmd slurm-client slurmdbd mariadb-server-core mariadb-client-core)
-
 log() { echo "slurm-local: [$SECONDS s] $*" >&2; }
 
-install_missing() {
-  local missing=() p
-  for p in "${PKGS[@]}"; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-  done
-  [ ${#missing[@]} -eq 0 ] && return 0
-  local sudo=""
-  [ "$(id -u)" -ne 0 ] && sudo="sudo"
-  log "installing ${missing[*]}"
-  $sudo apt-get update -qq
-  # policy-rc.d may or may not keep the packages' own services from starting; ours are separate.
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
-    "${missing[@]}" >&2
-}
+# Group "cluster" of scripts/packages.txt. policy-rc.d may or may not keep the packages' own
+# services from starting; ours are separate.
+install_missing() { bash "$SCRIPTS/install-packages.sh" cluster; }
 
 alive() { # alive PIDFILE
   [ -s "$1" ] && kill -0 "$(cat "$1")" 2>/dev/null
