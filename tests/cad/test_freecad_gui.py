@@ -146,12 +146,12 @@ def steps(daemon):
     ended = time.monotonic()
     during = len([t for t in ticks.times if started <= t <= ended])
     # A call blocking the GUI would let no timer tick and no progress line through until it
-    # ended: the loop ran while the call did if the panel showed progress of several stages and
-    # the independent timer kept ticking.
-    stages = {m.group(1) for m in (re.match(r"(.*?) \d+%", line) for line in shown) if m}
-    check(len(stages) >= 2 and during >= 3,
-          "FreeCAD's event loop kept running: %d stages shown (%s), %d timer ticks during the call"
-          % (len(stages), ", ".join(sorted(stages)), during))
+    # ended (accept() would return with the call over): the loop ran while the call did if the
+    # independent timer ticked and the panel drew the call's progress meanwhile.
+    progress = [line for line in shown if re.match(r".*? \d+%", line)]
+    check(during >= 1 and progress,
+          "FreeCAD's event loop kept running: %d timer ticks and %d progress lines (%s) during the call"
+          % (during, len(progress), "; ".join(progress[:3])))
     top = doc.getObject("gridshell")
     check(top is not None and top.Members > 8, "the design's objects are in the document")
     members = doc.getObject("gridshell_members")
