@@ -188,14 +188,6 @@ TriangleMesh annulus(double r0, double r1, int rings, int sectors) {
   return TriangleMesh(std::move(vertices), std::move(faces));
 }
 
-double time_scale() {
-  const char* text = std::getenv("GRIDSHELL_TEST_TIME_SCALE");
-  if (!text) return 1;
-  char* end = nullptr;
-  const double scale = std::strtod(text, &end);
-  return end != text && *end == '\0' && scale >= 1 ? scale : 1;
-}
-
 CommandResult run_cli(const std::string& arguments) {
   const std::string dir = temp_dir();
   const std::string out_path = dir + "/stdout", err_path = dir + "/stderr";

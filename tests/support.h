@@ -66,9 +66,4 @@ double brute_force_distance(const TriangleMesh& mesh, const Vec3& p);
 /// Reads a whole file.
 std::string read_text(const std::string& path);
 
-/// Factor for the time bounds that the tests check (cancellation latencies): the environment's
-/// GRIDSHELL_TEST_TIME_SCALE, for slow builds (the sanitizer build sets 5), else 1. Values below 1
-/// or not numbers count as 1.
-double time_scale();
-
 }  // namespace gridshell::testing
