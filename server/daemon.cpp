@@ -169,6 +169,14 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
                              "(--tls-cert, --tls-key, --token-file), or --insecure to serve it "
                              "without them");
   }
+  // A bearer token in clear text can be read by anyone on the network path, and gRPC can check
+  // it before every service (health and reflection included) only on TLS or on loopback.
+  if (!o.token_file.empty() && !tls)
+    for (const auto& [address, option] : {std::pair{o.listen, "--listen"}, {o.http, "--http"}})
+      if (!address.empty() && !is_loopback_address(address))
+        throw InvalidInput(option, "" + address +
+                                       " is not a loopback address; a token (--token-file) is "
+                                       "only sent there over TLS (--tls-cert, --tls-key)");
   if (o.workers < 0 || o.workers > 1024) throw InvalidInput("--workers", "must be 0..1024");
   if (o.queue < 0 || o.queue > 100000) throw InvalidInput("--queue", "must be 0..100000");
   if (o.request_threads < 0 || o.request_threads > 1024)
@@ -222,22 +230,28 @@ void Daemon::start() {
     std::lock_guard lock(grpc_log_mutex);
     grpc_log_sinks.emplace_back(&d, [&d](nlohmann::json line) { d.log(std::move(line)); });
   }
+  // The token is checked by an AuthMetadataProcessor before any service sees a call, so it
+  // guards every service the server has: ours, health and reflection. gRPC runs processors only
+  // on secure credentials: TLS, or, without TLS, its local credentials (plaintext HTTP/2 that
+  // only accepts loopback peers; the Daemon constructor refuses a token without TLS elsewhere).
   std::shared_ptr<grpc::ServerCredentials> credentials;
   if (!o.tls_cert.empty()) {
     grpc::SslServerCredentialsOptions ssl;
     ssl.pem_key_cert_pairs.push_back({d.key_pem, d.cert_pem});
     credentials = grpc::SslServerCredentials(ssl);
-    if (!d.token.empty())
-      credentials->SetAuthMetadataProcessor(
-          make_token_processor(d.token, [&d](const std::string& method) {
-            d.log({{"method", method},
-                   {"transport", "grpc"},
-                   {"status", "UNAUTHENTICATED"},
-                   {"message", "missing or wrong bearer token"}});
-          }));
+  } else if (!d.token.empty()) {
+    credentials = grpc::experimental::LocalServerCredentials(LOCAL_TCP);
   } else {
     credentials = grpc::InsecureServerCredentials();
   }
+  if (!d.token.empty())
+    credentials->SetAuthMetadataProcessor(
+        make_token_processor(d.token, [&d](const std::string& method) {
+          d.log({{"method", method},
+                 {"transport", "grpc"},
+                 {"status", "UNAUTHENTICATED"},
+                 {"message", "missing or wrong bearer token"}});
+        }));
   grpc::ServerBuilder builder;
   // gRPC sets SO_REUSEPORT by default: a second daemon on the same port would start and take
   // half of the connections. One daemon per port.

@@ -6,8 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gridshell/mesh/errors.h"
 #include "gridshell/files.h"
+#include "gridshell/mesh/errors.h"
 #include "server_support.h"
 #include "support.h"
 
@@ -18,18 +18,79 @@ using testing::TestDaemon;
 
 constexpr const char* kToken = "s3cret-token-42";
 
+/// A daemon with a token, over TLS (the default) or plaintext on loopback.
 struct SecureDaemon {
   testing::Certificate certificate = testing::make_self_signed_certificate();
   std::unique_ptr<TestDaemon> daemon;
-  SecureDaemon() {
+  explicit SecureDaemon(bool tls = true) {
     const std::string dir = testing::temp_dir();
     auto options = testing::test_options();
-    options.tls_cert = testing::write_text(dir, "cert.pem", certificate.cert_pem);
-    options.tls_key = testing::write_text(dir, "key.pem", certificate.key_pem);
+    if (tls) {
+      options.tls_cert = testing::write_text(dir, "cert.pem", certificate.cert_pem);
+      options.tls_key = testing::write_text(dir, "key.pem", certificate.key_pem);
+    } else {
+      certificate = {};  // the clients connect in plaintext
+    }
     options.token_file = testing::write_text(dir, "token", std::string(kToken) + "\n");
     daemon = std::make_unique<TestDaemon>(options);
   }
 };
+
+/// A unary call by name with raw bytes (health and reflection have no stub here).
+grpc::Status raw_call(const SecureDaemon& secure, const std::string& method,
+                      const std::string& bytes, const std::string& authorization,
+                      std::string* reply = nullptr) {
+  grpc::GenericStub generic(secure.daemon->channel(secure.certificate.cert_pem));
+  grpc::Slice slice{bytes};
+  grpc::ByteBuffer request(&slice, 1), response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
+  grpc::CompletionQueue queue;
+  auto call = generic.PrepareUnaryCall(&context, method, request, &queue);
+  call->StartCall();
+  grpc::Status status;
+  call->Finish(&response, &status, reinterpret_cast<void*>(1));
+  void* tag;
+  bool ok;
+  EXPECT_TRUE(queue.Next(&tag, &ok));
+  if (reply) {
+    std::vector<grpc::Slice> slices;
+    (void)response.Dump(&slices);
+    reply->clear();
+    for (const grpc::Slice& s : slices)
+      reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
+  }
+  return status;
+}
+
+/// A streaming call by name with raw bytes; the status.
+grpc::Status raw_stream(const SecureDaemon& secure, const std::string& method,
+                        const std::string& bytes, const std::string& authorization) {
+  grpc::GenericStub generic(secure.daemon->channel(secure.certificate.cert_pem));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
+  grpc::CompletionQueue queue;
+  auto call = generic.PrepareCall(&context, method, &queue);
+  void* tag;
+  bool ok;
+  call->StartCall(reinterpret_cast<void*>(1));
+  EXPECT_TRUE(queue.Next(&tag, &ok));
+  grpc::Slice slice{bytes};
+  grpc::ByteBuffer request(&slice, 1), response;
+  call->WriteLast(request, grpc::WriteOptions(), reinterpret_cast<void*>(2));
+  EXPECT_TRUE(queue.Next(&tag, &ok));
+  for (int reads = 0; reads < 10000; ++reads) {  // progress events, then the end of the stream
+    call->Read(&response, reinterpret_cast<void*>(3));
+    EXPECT_TRUE(queue.Next(&tag, &ok));
+    if (!ok) break;
+  }
+  grpc::Status status;
+  call->Finish(&status, reinterpret_cast<void*>(4));
+  EXPECT_TRUE(queue.Next(&tag, &ok));
+  return status;
+}
 
 grpc::Status patch_with(const SecureDaemon& secure, const std::string& authorization) {
   auto stub = secure.daemon->stub(secure.certificate.cert_pem);
@@ -49,24 +110,54 @@ TEST(Security, GrpcCallsWithoutTheTokenAreUnauthenticated) {
   EXPECT_EQ(secure.daemon->daemon().stats().succeeded, 1u);  // nothing else ran
 }
 
-TEST(Security, HealthAndReflectionNeedTheTokenToo) {
-  SecureDaemon secure;
-  grpc::GenericStub generic(secure.daemon->channel(secure.certificate.cert_pem));
-  for (const bool with_token : {false, true}) {
-    grpc::Slice slice{std::string()};
-    grpc::ByteBuffer request(&slice, 1), response;
-    grpc::ClientContext context;
-    if (with_token) context.AddMetadata("authorization", std::string("Bearer ") + kToken);
-    grpc::CompletionQueue queue;
-    auto call = generic.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &queue);
-    call->StartCall();
-    grpc::Status status;
-    call->Finish(&response, &status, reinterpret_cast<void*>(1));
-    void* tag;
-    bool ok;
-    ASSERT_TRUE(queue.Next(&tag, &ok));
-    EXPECT_EQ(status.error_code(),
-              with_token ? grpc::StatusCode::OK : grpc::StatusCode::UNAUTHENTICATED);
+// Every service the gRPC server has needs the token, with TLS and in plaintext on loopback
+// (issue 33, P5: without TLS, health and reflection used to answer anyone).
+TEST(Security, EveryGrpcServiceNeedsTheToken) {
+  for (const bool tls : {true, false}) {
+    SCOPED_TRACE(tls ? "TLS" : "plaintext");
+    SecureDaemon secure(tls);
+    const std::string bearer = std::string("Bearer ") + kToken;
+    for (const std::string& header : {std::string(), std::string("Bearer wrong"), bearer}) {
+      SCOPED_TRACE(header);
+      const auto expected =
+          header == bearer ? grpc::StatusCode::OK : grpc::StatusCode::UNAUTHENTICATED;
+      // Health/Check with an empty request (the whole server).
+      std::string reply;
+      EXPECT_EQ(raw_call(secure, "/grpc.health.v1.Health/Check", "", header, &reply).error_code(),
+                expected);
+      if (header == bearer) {
+        EXPECT_EQ(reply, std::string("\x08\x01", 2));  // status: SERVING
+      }
+      // Reflection: list_services (field 7, empty string), a bidirectional stream.
+      EXPECT_EQ(raw_stream(secure, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                           std::string("\x3a\x00", 2), header)
+                    .error_code(),
+                expected);
+      // Our own service: Examples, an empty request.
+      EXPECT_EQ(raw_stream(secure, "/gridshell.v1.Gridshell/Examples", "", header).error_code(),
+                expected);
+    }
+    if (!tls) {  // the plaintext port answers a client with the token (stub, not raw bytes)
+      auto stub = secure.daemon->stub();
+      grpc::ClientContext context;
+      context.AddMetadata("authorization", bearer);
+      EXPECT_TRUE(
+          testing::call_patch(*stub, testing::patch_request("plane"), &context).status.ok());
+    }
+  }
+}
+
+TEST(Security, ATokenWithoutTlsIsRefusedOffLoopback) {
+  auto options = testing::test_options();
+  options.listen = "0.0.0.0:0";
+  options.insecure = true;
+  options.token_file = testing::write_text(testing::temp_dir(), "token", "abc\n");
+  try {
+    server::Daemon daemon(options);
+    FAIL() << "accepted a token without TLS on 0.0.0.0";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "--listen");
+    EXPECT_NE(std::string(e.what()).find("TLS"), std::string::npos) << e.what();
   }
 }
 
