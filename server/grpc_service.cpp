@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "grpc_service.h"
 
+#include <grpcpp/impl/codegen/proto_utils.h>
+
 #include <mutex>
 #include <optional>
 
@@ -22,19 +24,31 @@ grpc::Status to_grpc(const Status& status) {
                       detail.SerializeAsString());
 }
 
+grpc::ByteBuffer to_bytes(const google::protobuf::Message& message) {
+  grpc::ByteBuffer buffer;
+  bool own = false;
+  const grpc::Status status =
+      grpc::SerializationTraits<google::protobuf::Message>::Serialize(message, &buffer, &own);
+  if (!status.ok()) throw std::runtime_error("cannot serialize " + message.GetTypeName());
+  return buffer;
+}
+
 /// One server-streaming call. The job (on a worker) reports through the Sink; the Sink turns
 /// that into at most one outstanding write (progress events coalesce: only the latest waiting
 /// one is sent), then the result and the status. gRPC operations are started outside the Sink's
 /// lock, because their reactions may run on any thread. The reactor deletes itself in OnDone,
 /// which gRPC calls only after Finish; the job finishes the Sink before that, and the Sink holds
 /// everything the outstanding writes point to.
-template <class Event>
-class StreamReactor final : public grpc::ServerWriteReactor<Event> {
+template <class Event, class Request>
+class StreamReactor final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
   using Result = std::remove_pointer_t<decltype(std::declval<Event>().mutable_result())>;
 
  public:
   StreamReactor(JobQueue& queue, grpc::CallbackServerContext* context)
       : queue_(queue), context_(context), sink_(std::make_shared<Sink>(this)) {}
+
+  /// The request, parsed from the call's bytes; lives until OnDone, after the job finished.
+  Request request;
 
   std::shared_ptr<JobSink> sink() const { return sink_; }
 
@@ -90,8 +104,9 @@ class StreamReactor final : public grpc::ServerWriteReactor<Event> {
         }
         writing_ = true;
         *current_.mutable_progress() = event;
+        current_bytes_ = to_bytes(current_);
       }
-      reactor_->StartWrite(&current_);
+      reactor_->StartWrite(&current_bytes_);
     }
 
     void finish(const Status& status, std::unique_ptr<google::protobuf::Message> result) override {
@@ -102,6 +117,9 @@ class StreamReactor final : public grpc::ServerWriteReactor<Event> {
         status_ = status;
         if (result && status.ok()) {
           final_.mutable_result()->Swap(static_cast<Result*>(result.get()));
+          result.reset();
+          final_bytes_ = to_bytes(final_);  // on the worker
+          final_.Clear();
           has_result_ = true;
         }
         if (writing_) return;  // write_done finishes
@@ -120,6 +138,7 @@ class StreamReactor final : public grpc::ServerWriteReactor<Event> {
         } else if (pending_ && !broken_) {
           *current_.mutable_progress() = std::move(*pending_);
           pending_.reset();
+          current_bytes_ = to_bytes(current_);
           writing_ = true;
         } else {
           return;
@@ -128,7 +147,7 @@ class StreamReactor final : public grpc::ServerWriteReactor<Event> {
       if (final)
         send_final();
       else
-        reactor_->StartWrite(&current_);
+        reactor_->StartWrite(&current_bytes_);
     }
 
    private:
@@ -136,7 +155,7 @@ class StreamReactor final : public grpc::ServerWriteReactor<Event> {
       if (!status_.ok())
         reactor_->Finish(to_grpc(status_));
       else if (has_result_ && !broken_)
-        reactor_->StartWriteAndFinish(&final_, grpc::WriteOptions(), grpc::Status::OK);
+        reactor_->StartWriteAndFinish(&final_bytes_, grpc::WriteOptions(), grpc::Status::OK);
       else  // a result nobody can receive any more
         reactor_->Finish(grpc::Status(grpc::StatusCode::CANCELLED, "the client went away"));
     }
@@ -145,8 +164,9 @@ class StreamReactor final : public grpc::ServerWriteReactor<Event> {
     std::mutex mutex_;
     bool writing_ = false, done_ = false, broken_ = false, has_result_ = false;
     std::optional<v1::Progress> pending_;
-    Event current_;  // the write in flight
-    Event final_;    // the result, alive until OnDone
+    Event current_, final_;
+    grpc::ByteBuffer current_bytes_;  // the write in flight
+    grpc::ByteBuffer final_bytes_;    // the result, alive until OnDone
     Status status_;
   };
 
@@ -196,10 +216,9 @@ GridshellService::GridshellService(JobQueue& queue, const Methods& methods, std:
     : queue_(queue), methods_(methods), token_(std::move(token)) {}
 
 template <class Event, class M>
-grpc::ServerWriteReactor<Event>* GridshellService::serve(grpc::CallbackServerContext* context,
-                                                         const typename M::Request* request,
-                                                         const M& method) {
-  auto* reactor = new StreamReactor<Event>(queue_, context);
+GridshellService::Reactor* GridshellService::serve(Context* context, const grpc::ByteBuffer* bytes,
+                                                   const M& method) {
+  auto* reactor = new StreamReactor<Event, typename M::Request>(queue_, context);
   JobRequest job;
   job.id = queue_.next_id();
   job.method = method.name;
@@ -213,6 +232,14 @@ grpc::ServerWriteReactor<Event>* GridshellService::serve(grpc::CallbackServerCon
                                    "Bearer TOKEN)"});
     return reactor;
   }
+  grpc::ByteBuffer copy(*bytes);  // shares the slices; Deserialize consumes its argument
+  if (!grpc::SerializationTraits<google::protobuf::Message>::Deserialize(&copy, &reactor->request)
+           .ok()) {
+    queue_.refuse(std::move(job),
+                  {StatusCode::InvalidArgument, "request: not a " + reactor->request.GetTypeName() +
+                                                    " (malformed protocol buffer bytes)"});
+    return reactor;
+  }
   if (!method.run) {
     queue_.refuse(std::move(job), {StatusCode::Unimplemented, method.unimplemented});
     return reactor;
@@ -221,50 +248,25 @@ grpc::ServerWriteReactor<Event>* GridshellService::serve(grpc::CallbackServerCon
   if (deadline != std::chrono::system_clock::time_point::max())
     job.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                       deadline - std::chrono::system_clock::now());
-  job.run = job_function(method, request);
+  job.run = job_function(method, &reactor->request);
   reactor->attach(queue_.submit(std::move(job)));
   return reactor;
 }
 
-grpc::ServerWriteReactor<v1::PatchEvent>* GridshellService::Patch(
-    grpc::CallbackServerContext* context, const v1::PatchRequest* request) {
-  return serve<v1::PatchEvent>(context, request, methods_.patch);
-}
-
-grpc::ServerWriteReactor<v1::DesignEvent>* GridshellService::Design(
-    grpc::CallbackServerContext* context, const v1::DesignRequest* request) {
-  return serve<v1::DesignEvent>(context, request, methods_.design);
-}
-
-grpc::ServerWriteReactor<v1::SimulateEvent>* GridshellService::Simulate(
-    grpc::CallbackServerContext* context, const v1::SimulateRequest* request) {
-  return serve<v1::SimulateEvent>(context, request, methods_.simulate);
-}
-
-grpc::ServerWriteReactor<v1::RunEvent>* GridshellService::Run(grpc::CallbackServerContext* context,
-                                                              const v1::RunRequest* request) {
-  return serve<v1::RunEvent>(context, request, methods_.run);
-}
-
-grpc::ServerWriteReactor<v1::GeodesicEvent>* GridshellService::Geodesic(
-    grpc::CallbackServerContext* context, const v1::GeodesicRequest* request) {
-  return serve<v1::GeodesicEvent>(context, request, methods_.geodesic);
-}
-
-grpc::ServerWriteReactor<v1::LoadEvent>* GridshellService::Load(
-    grpc::CallbackServerContext* context, const v1::LoadRequest* request) {
-  return serve<v1::LoadEvent>(context, request, methods_.load);
-}
-
-grpc::ServerWriteReactor<v1::ExamplesEvent>* GridshellService::Examples(
-    grpc::CallbackServerContext* context, const v1::ExamplesRequest* request) {
-  return serve<v1::ExamplesEvent>(context, request, methods_.examples);
-}
-
-grpc::ServerWriteReactor<v1::FabricateEvent>* GridshellService::Fabricate(
-    grpc::CallbackServerContext* context, const v1::FabricateRequest* request) {
-  return serve<v1::FabricateEvent>(context, request, methods_.fabricate);
-}
+#define GRIDSHELL_RPC(NAME, FIELD)                                                     \
+  GridshellService::Reactor* GridshellService::NAME(Context* context,                  \
+                                                    const grpc::ByteBuffer* request) { \
+    return serve<v1::NAME##Event>(context, request, methods_.FIELD);                   \
+  }
+GRIDSHELL_RPC(Patch, patch)
+GRIDSHELL_RPC(Design, design)
+GRIDSHELL_RPC(Simulate, simulate)
+GRIDSHELL_RPC(Run, run)
+GRIDSHELL_RPC(Geodesic, geodesic)
+GRIDSHELL_RPC(Load, load)
+GRIDSHELL_RPC(Examples, examples)
+GRIDSHELL_RPC(Fabricate, fabricate)
+#undef GRIDSHELL_RPC
 
 std::shared_ptr<grpc::AuthMetadataProcessor> make_token_processor(
     std::string token, std::function<void(const std::string&)> on_refused) {

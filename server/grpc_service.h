@@ -17,32 +17,34 @@
 
 namespace gridshell::server {
 
-class GridshellService final : public v1::Gridshell::CallbackService {
+/// Every method takes and sends raw bytes: the service parses the request itself, so that
+/// malformed bytes get INVALID_ARGUMENT with a message (gRPC's own parser answers them with a
+/// bare status), and serializes the events itself.
+using RawService = v1::Gridshell::WithRawCallbackMethod_Patch<
+    v1::Gridshell::WithRawCallbackMethod_Design<v1::Gridshell::WithRawCallbackMethod_Simulate<
+        v1::Gridshell::WithRawCallbackMethod_Run<v1::Gridshell::WithRawCallbackMethod_Geodesic<
+            v1::Gridshell::WithRawCallbackMethod_Load<v1::Gridshell::WithRawCallbackMethod_Examples<
+                v1::Gridshell::WithRawCallbackMethod_Fabricate<v1::Gridshell::Service>>>>>>>>;
+
+class GridshellService final : public RawService {
  public:
   /// `token`: required bearer token, empty = none.
   GridshellService(JobQueue& queue, const Methods& methods, std::string token);
 
-  grpc::ServerWriteReactor<v1::PatchEvent>* Patch(grpc::CallbackServerContext* context,
-                                                  const v1::PatchRequest* request) override;
-  grpc::ServerWriteReactor<v1::DesignEvent>* Design(grpc::CallbackServerContext* context,
-                                                    const v1::DesignRequest* request) override;
-  grpc::ServerWriteReactor<v1::SimulateEvent>* Simulate(
-      grpc::CallbackServerContext* context, const v1::SimulateRequest* request) override;
-  grpc::ServerWriteReactor<v1::RunEvent>* Run(grpc::CallbackServerContext* context,
-                                              const v1::RunRequest* request) override;
-  grpc::ServerWriteReactor<v1::GeodesicEvent>* Geodesic(
-      grpc::CallbackServerContext* context, const v1::GeodesicRequest* request) override;
-  grpc::ServerWriteReactor<v1::LoadEvent>* Load(grpc::CallbackServerContext* context,
-                                                const v1::LoadRequest* request) override;
-  grpc::ServerWriteReactor<v1::ExamplesEvent>* Examples(
-      grpc::CallbackServerContext* context, const v1::ExamplesRequest* request) override;
-  grpc::ServerWriteReactor<v1::FabricateEvent>* Fabricate(
-      grpc::CallbackServerContext* context, const v1::FabricateRequest* request) override;
+  using Reactor = grpc::ServerWriteReactor<grpc::ByteBuffer>;
+  using Context = grpc::CallbackServerContext;
+  Reactor* Patch(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Design(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Simulate(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Run(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Geodesic(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Load(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Examples(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Fabricate(Context* context, const grpc::ByteBuffer* request) override;
 
  private:
   template <class Event, class M>
-  grpc::ServerWriteReactor<Event>* serve(grpc::CallbackServerContext* context,
-                                         const typename M::Request* request, const M& method);
+  Reactor* serve(Context* context, const grpc::ByteBuffer* request, const M& method);
 
   JobQueue& queue_;
   const Methods& methods_;

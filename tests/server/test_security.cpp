@@ -147,6 +147,26 @@ TEST(Security, EveryGrpcServiceNeedsTheToken) {
   }
 }
 
+// Bytes that are no protocol buffer get INVALID_ARGUMENT with a message (gRPC's own parser
+// answered them with a bare status), once the token has been checked.
+TEST(Security, MalformedGrpcBytesAreInvalidArgument) {
+  SecureDaemon secure(false);
+  const std::string bearer = std::string("Bearer ") + kToken;
+  for (const char* method : {"Design", "Patch", "Simulate", "Fabricate"}) {
+    SCOPED_TRACE(method);
+    const std::string path = std::string("/gridshell.v1.Gridshell/") + method;
+    // A length-delimited field whose length runs past the end, and a truncated varint.
+    for (const std::string& bytes : {std::string("\x0a\x7f\x01", 3), std::string("\x08\xff")}) {
+      const grpc::Status status = raw_stream(secure, path, bytes, bearer);
+      EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+      EXPECT_NE(status.error_message().find("malformed protocol buffer"), std::string::npos)
+          << status.error_message();
+    }
+    EXPECT_EQ(raw_stream(secure, path, "\xff", "").error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  }
+  EXPECT_EQ(secure.daemon->daemon().stats().succeeded, 0u);
+}
+
 TEST(Security, ATokenWithoutTlsIsRefusedOffLoopback) {
   auto options = testing::test_options();
   options.listen = "0.0.0.0:0";
