@@ -69,6 +69,52 @@ const v1::Mesh* find_mesh(const google::protobuf::Message& message, int depth) {
 
 }  // namespace
 
+namespace {
+
+void check_text(const google::protobuf::Message& message, const std::string& path, int depth) {
+  using google::protobuf::FieldDescriptor;
+  if (depth > 64) return;  // protobuf refuses deeper messages when it parses them
+  const google::protobuf::Reflection* reflection = message.GetReflection();
+  std::vector<const FieldDescriptor*> fields;
+  reflection->ListFields(message, &fields);
+  std::string scratch;
+  for (const FieldDescriptor* field : fields) {
+    const std::string name = path.empty() ? field->name() : path + "." + field->name();
+    if (field->type() == FieldDescriptor::TYPE_STRING) {
+      const auto too_long = [&](const std::string& text, const std::string& where) {
+        if (text.size() > kMaxTextBytes)
+          throw InvalidInput(where, "too long: " + std::to_string(text.size()) +
+                                        " bytes, at most " + std::to_string(kMaxTextBytes));
+      };
+      if (!field->is_repeated()) {
+        too_long(reflection->GetStringReference(message, field, &scratch), name);
+        continue;
+      }
+      const int count = reflection->FieldSize(message, field);
+      if (count > kMaxTextEntries)
+        throw InvalidInput(name, "too many entries: " + std::to_string(count) + ", at most " +
+                                     std::to_string(kMaxTextEntries));
+      for (int i = 0; i < count; ++i)
+        too_long(reflection->GetRepeatedStringReference(message, field, i, &scratch),
+                 name + "[" + std::to_string(i) + "]");
+    } else if (field->cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE &&
+               field->message_type()->file()->package() != "google.protobuf") {
+      if (!field->is_repeated()) {
+        check_text(reflection->GetMessage(message, field), name, depth + 1);
+        continue;
+      }
+      const int count = reflection->FieldSize(message, field);
+      for (int i = 0; i < count; ++i)
+        check_text(reflection->GetRepeatedMessage(message, field, i),
+                   name + "[" + std::to_string(i) + "]", depth + 1);
+    }
+  }
+}
+
+}  // namespace
+
+void check_text_limits(const google::protobuf::Message& request) { check_text(request, "", 0); }
+
 std::pair<int, int> mesh_size(const google::protobuf::Message& request) {
   const v1::Mesh* mesh = find_mesh(request, 3);
   if (!mesh) return {0, 0};

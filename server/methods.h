@@ -53,12 +53,25 @@ Methods make_methods(const RunSettings& settings);
 /// messages), for the log line; {0, 0} if it has none.
 std::pair<int, int> mesh_size(const google::protobuf::Message& request);
 
+/// The longest text any string field of a request may hold, in bytes (names, labels, options;
+/// file contents are `bytes` fields, limited by the message size only), and the most entries a
+/// repeated string field may have. Text given to the daemon is copied into results and logs, so
+/// one long name must not multiply into a response (issue 33, P4).
+inline constexpr std::size_t kMaxTextBytes = 1024;
+inline constexpr int kMaxTextEntries = 1000;
+
+/// Throws InvalidInput naming the first string field of `request` (path like "mesh.name" or
+/// "mesh.warnings[3]") that is longer than kMaxTextBytes, or a repeated string field with more
+/// than kMaxTextEntries entries. Does not look inside google.protobuf.* values.
+void check_text_limits(const google::protobuf::Message& request);
+
 /// The job body for a request the transport holds (gRPC: valid until the call is finished, which
 /// happens only after the job finished).
 template <class M>
 auto job_function(const M& method, const typename M::Request* request) {
   return [&method, request](const Progress& progress,
                             JobInfo& info) -> std::unique_ptr<google::protobuf::Message> {
+    check_text_limits(*request);
     const auto [vertices, faces] = mesh_size(*request);
     info.vertices = vertices;
     info.faces = faces;
@@ -80,6 +93,7 @@ auto job_function_from_json(const M& method, std::shared_ptr<const std::string> 
       throw InvalidInput("", "request body: not a " + request.GetTypeName() +
                                  " in JSON: " + std::string(status.message()));
     progress.check();
+    check_text_limits(request);
     const auto [vertices, faces] = mesh_size(request);
     info.vertices = vertices;
     info.faces = faces;

@@ -96,9 +96,15 @@ GeodesicMethod exact_method(const std::string& text, const std::string& field, c
   return method;
 }
 
+constexpr double kMaxEtaMax = 10;
+
 double eta_max_option(bool has, double value, const std::string& field, double fallback) {
   if (!has) return fallback;
-  if (!(value >= 1.0)) throw InvalidInput(field, "must be >= 1 (it is a ratio of path lengths)");
+  // eta is a ratio of path lengths, 1 on a developable surface; the paper's threshold is
+  // 1.0015, and above 10 no smoothing would ever run. Infinities and NaN are refused too.
+  if (!(value >= 1.0 && value <= kMaxEtaMax))
+    throw InvalidInput(field, "must be between 1 and " + shortest(kMaxEtaMax) +
+                                  " (a ratio of path lengths), got " + shortest(value));
   return value;
 }
 

@@ -369,10 +369,32 @@ std::vector<BadInput> bad_inputs() {
       "corners.points[4]: not a finite number");
   design_case(
       "EtaMaxBelowOne", [](auto& r) { r.mutable_options()->set_eta_max(0.5); },
-      "options.eta_max: must be >= 1");
+      "options.eta_max: must be between 1 and 10");
   design_case(
       "EtaMaxNan", [&](auto& r) { r.mutable_options()->set_eta_max(nan); },
-      "options.eta_max: must be >= 1");
+      "options.eta_max: must be between 1 and 10");
+  design_case(
+      "EtaMaxInfinite", [&](auto& r) { r.mutable_options()->set_eta_max(inf); },
+      "options.eta_max: must be between 1 and 10");
+  design_case(
+      "EtaMaxHuge", [&](auto& r) { r.mutable_options()->set_eta_max(1e308); },
+      "options.eta_max: must be between 1 and 10");
+  design_case(
+      "LongMeshName", [](auto& r) { r.mutable_mesh()->set_name(std::string(1025, 'n')); },
+      "mesh.name: too long: 1025 bytes, at most 1024");
+  design_case(
+      "LongMeshWarning",
+      [](auto& r) {
+        r.mutable_mesh()->add_warnings("fine");
+        r.mutable_mesh()->add_warnings(std::string(5000, 'w'));
+      },
+      "mesh.warnings[1]: too long: 5000 bytes");
+  design_case(
+      "ManyMeshWarnings",
+      [](auto& r) {
+        for (int k = 0; k < 1001; ++k) r.mutable_mesh()->add_warnings("w");
+      },
+      "mesh.warnings: too many entries: 1001, at most 1000");
   design_case(
       "HeatMethod", [](auto& r) { r.mutable_options()->set_geodesic_method("heat"); },
       "options.geodesic_method: the design needs exact geodesics");
