@@ -223,6 +223,7 @@ GridshellService::Reactor* GridshellService::serve(Context* context, const grpc:
   job.id = queue_.next_id();
   job.method = method.name;
   job.transport = "grpc";
+  job.light = method.light;
   job.peer = context->peer();
   job.sink = reactor->sink();
   context->AddInitialMetadata("x-request-id", std::to_string(job.id));

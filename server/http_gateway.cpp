@@ -42,12 +42,13 @@ struct Route {
   std::string name;
   bool implemented = false;
   std::string unimplemented;
+  bool light = false;  ///< the queue's light lane (Examples)
   std::function<JobFunction(std::shared_ptr<const std::string>)> job;
 };
 
 template <class M>
 Route route(const M& method) {
-  return {method.name, static_cast<bool>(method.run), method.unimplemented,
+  return {method.name, static_cast<bool>(method.run), method.unimplemented, method.light,
           [&method](std::shared_ptr<const std::string> body) -> JobFunction {
             return job_function_from_json(method, std::move(body));
           }};
@@ -432,6 +433,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
     request_id_ = std::to_string(job.id);
     job.method = route.name;
     job.transport = "http";
+    job.light = route.light;
     job.peer = peer_;
     job.sink = std::make_shared<Sink>(this->shared_from_this(), stream_.get_executor());
     if (!route.implemented)

@@ -89,6 +89,8 @@ class Job {
 
 namespace {
 
+int lane_of(const Job& job) { return job.request.light ? 1 : 0; }
+
 double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
@@ -129,7 +131,10 @@ JobQueue::JobQueue(const Options& options) : options_(options) {
     options_.workers = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   options_.capacity = std::max(0, options_.capacity);
   stats_.workers = options_.workers;
-  for (int i = 0; i < options_.workers; ++i) workers_.emplace_back([this] { work(); });
+  options_.light_workers = std::max(1, options_.light_workers);
+  options_.light_capacity = std::max(0, options_.light_capacity);
+  for (int i = 0; i < options_.workers; ++i) workers_.emplace_back([this] { work(0); });
+  for (int i = 0; i < options_.light_workers; ++i) workers_.emplace_back([this] { work(1); });
   watchdog_ = std::thread([this] { watch_deadlines(); });
 }
 
@@ -143,26 +148,29 @@ std::shared_ptr<Job> JobQueue::submit(JobRequest request) {
   v1::Progress queued;
   {
     std::lock_guard lock(mutex_);
+    const int lane = lane_of(*job);
+    auto& waiting = waiting_[lane];
+    const int workers = lane == 0 ? options_.workers : options_.light_workers;
+    const int capacity = lane == 0 ? options_.capacity : options_.light_capacity;
     if (!accepting_) {
       refusal = {StatusCode::Unavailable, "the daemon is shutting down"};
-    } else if (static_cast<int>(waiting_.size() + running_.size()) >=
-               options_.workers + options_.capacity) {
+    } else if (static_cast<int>(waiting.size()) + running_in_[lane] >= workers + capacity) {
       refusal = {StatusCode::ResourceExhausted,
-                 "the queue is full (" + std::to_string(waiting_.size()) + " waiting, " +
-                     std::to_string(running_.size()) + " running); retry later"};
+                 "the queue is full (" + std::to_string(waiting.size()) + " waiting, " +
+                     std::to_string(running_in_[lane]) + " running); retry later"};
     }
     if (!refusal.ok()) {
       job->state = Job::State::Done;
     } else {
       ++stats_.accepted;
-      waiting_.push_back(job);
+      waiting.push_back(job);
       if (job->request.deadline) {
         deadlines_.emplace(*job->request.deadline, job);
         deadline_changed_.notify_all();
       }
-      if (static_cast<int>(running_.size() + waiting_.size()) > options_.workers) {
+      if (running_in_[lane] + static_cast<int>(waiting.size()) > workers) {
         queued.set_stage("queued");
-        queued.set_message("waiting for a worker, " + std::to_string(waiting_.size() - 1) +
+        queued.set_message("waiting for a worker, " + std::to_string(waiting.size() - 1) +
                            " ahead");
       }
     }
@@ -172,7 +180,7 @@ std::shared_ptr<Job> JobQueue::submit(JobRequest request) {
     finish(job, std::move(refusal), nullptr, Count::Rejected);
     return nullptr;
   }
-  work_ready_.notify_one();
+  work_ready_.notify_all();  // the workers of both lanes wait on it
   // Outside the lock: sinks never run while the queue is locked. (A worker that frees up in
   // between may start the job first; the stale "queued" event is harmless.)
   if (!queued.stage().empty()) job->request.sink->progress(queued);
@@ -199,7 +207,8 @@ void JobQueue::cancel(const std::shared_ptr<Job>& job, StatusCode reason, std::s
     job->cancel_time = Clock::now();
     job->cancel_flag = true;
     if (job->state == Job::State::Waiting) {
-      waiting_.erase(std::find(waiting_.begin(), waiting_.end(), job));
+      auto& waiting = waiting_[lane_of(*job)];
+      waiting.erase(std::find(waiting.begin(), waiting.end(), job));
       job->state = Job::State::Done;
       job->started = job->stopped = job->cancel_time;
       finish_now = true;
@@ -209,18 +218,20 @@ void JobQueue::cancel(const std::shared_ptr<Job>& job, StatusCode reason, std::s
   if (finish_now) finish(job, {reason, job->cancel_message}, nullptr, Count::Cancelled);
 }
 
-void JobQueue::work() {
+void JobQueue::work(int lane) {
+  auto& waiting = waiting_[lane];
   for (;;) {
     std::shared_ptr<Job> job;
     {
       std::unique_lock lock(mutex_);
-      work_ready_.wait(lock, [&] { return stopping_ || !waiting_.empty(); });
-      if (waiting_.empty()) return;  // stopping
-      job = waiting_.front();
-      waiting_.pop_front();
+      work_ready_.wait(lock, [&] { return stopping_ || !waiting.empty(); });
+      if (waiting.empty()) return;  // stopping
+      job = waiting.front();
+      waiting.pop_front();
       job->state = Job::State::Running;
       job->started = Clock::now();
       running_.push_back(job);
+      ++running_in_[lane];
     }
     Status status;
     std::unique_ptr<google::protobuf::Message> result;
@@ -313,6 +324,7 @@ void JobQueue::finish(const std::shared_ptr<Job>& job, Status status,
   } else if (count == Count::Running) {
     std::lock_guard lock(mutex_);
     running_.erase(std::find(running_.begin(), running_.end(), job));
+    --running_in_[lane_of(*job)];
     if (status.ok())
       ++stats_.succeeded;
     else if (status.code == StatusCode::Cancelled || status.code == StatusCode::DeadlineExceeded ||
@@ -355,14 +367,19 @@ void JobQueue::shutdown(std::chrono::milliseconds grace) {
     std::unique_lock lock(mutex_);
     if (stopping_) return;
     accepting_ = false;
-    idle_.wait_for(lock, grace, [&] { return waiting_.empty() && running_.empty(); });
-    remaining.assign(waiting_.begin(), waiting_.end());
+    const auto idle = [&] {
+      return waiting_[0].empty() && waiting_[1].empty() && running_.empty();
+    };
+    idle_.wait_for(lock, grace, idle);
+    remaining.assign(waiting_[0].begin(), waiting_[0].end());
+    remaining.insert(remaining.end(), waiting_[1].begin(), waiting_[1].end());
     remaining.insert(remaining.end(), running_.begin(), running_.end());
   }
   for (const auto& job : remaining) cancel(job, StatusCode::Unavailable);
   {
     std::unique_lock lock(mutex_);
-    idle_.wait(lock, [&] { return waiting_.empty() && running_.empty(); });
+    idle_.wait(lock,
+               [&] { return waiting_[0].empty() && waiting_[1].empty() && running_.empty(); });
     stopping_ = true;
   }
   work_ready_.notify_all();
@@ -381,7 +398,7 @@ JobQueue::Stats JobQueue::stats() const {
   std::lock_guard lock(mutex_);
   Stats stats = stats_;
   stats.running = static_cast<int>(running_.size());
-  stats.queued = static_cast<int>(waiting_.size());
+  stats.queued = static_cast<int>(waiting_[0].size() + waiting_[1].size());
   return stats;
 }
 

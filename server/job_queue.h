@@ -59,6 +59,10 @@ struct JobRequest {
   std::string transport;  ///< "grpc" | "http"
   std::string peer;       ///< client address
   std::optional<Clock::time_point> deadline;
+  /// A light request (Examples: answered from tables, no kernel work): it runs in a lane of its
+  /// own (JobQueue::Options::light_workers), so it never waits behind design jobs and a full
+  /// design queue does not refuse it.
+  bool light = false;
   /// The computation: request -> kernel -> result message. Throws the kernel's errors.
   std::function<std::unique_ptr<google::protobuf::Message>(const Progress&, JobInfo&)> run;
   std::shared_ptr<JobSink> sink;
@@ -81,6 +85,8 @@ class JobQueue {
     /// costs the computing cores more than it is worth. 0 = forward every event except a
     /// stage's repeated fraction 1.
     int progress_interval_ms = 100;
+    int light_workers = 1;    ///< workers of the light lane (JobRequest::light)
+    int light_capacity = 64;  ///< light jobs that may wait; one more is refused
   };
 
   struct Stats {
@@ -127,7 +133,7 @@ class JobQueue {
   void write_log(const std::string& line);
 
  private:
-  void work();
+  void work(int lane);
   void watch_deadlines();
   /// How finish() counts the job in the statistics, after its log line is written: refused,
   /// cancelled while waiting, or ended by a worker (succeeded, failed or cancelled by status).
@@ -141,8 +147,10 @@ class JobQueue {
   std::condition_variable work_ready_;
   std::condition_variable idle_;
   std::condition_variable deadline_changed_;
-  std::deque<std::shared_ptr<Job>> waiting_;
-  std::vector<std::shared_ptr<Job>> running_;
+  /// Per lane: 0 = the workers, 1 = light jobs.
+  std::deque<std::shared_ptr<Job>> waiting_[2];
+  int running_in_[2] = {0, 0};
+  std::vector<std::shared_ptr<Job>> running_;  ///< both lanes
   std::multimap<Clock::time_point, std::weak_ptr<Job>> deadlines_;
   bool accepting_ = true;
   bool stopping_ = false;

@@ -42,7 +42,8 @@ Methods make_methods(const RunSettings& settings) {
                       [settings](const v1::ExamplesRequest& request, const Progress& progress) {
                         return run_examples(request, progress, settings);
                       },
-                      {}};
+                      {},
+                      true};
   methods.fabricate = {"Fabricate",
                        [settings](const v1::FabricateRequest& request, const Progress& progress) {
                          return run_fabricate(request, progress, settings);

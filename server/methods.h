@@ -33,6 +33,9 @@ struct Method {
   /// Cancelled). Empty: the method answers UNIMPLEMENTED with `unimplemented` as its message.
   std::function<Result(const Request&, const Progress&)> run;
   std::string unimplemented;
+  /// Answered from tables without kernel work (Examples): runs in the queue's light lane, never
+  /// behind design jobs (JobRequest::light).
+  bool light = false;
 };
 
 struct Methods {

@@ -341,6 +341,20 @@ TEST(Daemon, FullQueueAnswersResourceExhaustedAtOnce) {
   // At once: the answer came while the first job was still running, not after it.
   EXPECT_FALSE(running.done());
   EXPECT_EQ(daemon.daemon().stats().succeeded, 0u);
+  // Light requests have a lane of their own: Examples is answered, over gRPC and HTTP, while
+  // the design queue is full (it was refused with 429 before issue 33).
+  {
+    grpc::ClientContext context;
+    auto reader = stub->Examples(&context, v1::ExamplesRequest());
+    v1::ExamplesEvent event, last;
+    while (reader->Read(&event)) last = event;
+    EXPECT_TRUE(reader->Finish().ok());
+    EXPECT_GT(last.result().examples_size(), 0);
+    const auto reply = testing::http_request(daemon.http_port(), "POST", "/v1/examples", "{}");
+    EXPECT_EQ(reply.status, 200) << reply.body;
+  }
+  EXPECT_FALSE(running.done());
+  EXPECT_EQ(daemon.daemon().stats().succeeded, 2u);  // the two Examples calls
   // The waiting job is cancelled without ever running.
   waiting.cancel();
   EXPECT_EQ(waiting.finish().error_code(), grpc::StatusCode::CANCELLED);
