@@ -12,6 +12,7 @@
 #include <openssl/x509.h>
 
 #include <atomic>
+#include <cmath>
 #include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -195,6 +196,18 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
                          "expected an origin like https://example.org:8443, got '" + origin + "'");
   if (o.http_body_limit_mib < 1 || o.http_body_limit_mib > 4096)
     throw InvalidInput("--http-body-limit-mib", "must be 1..4096");
+  if (o.http_max_connections < 2 || o.http_max_connections > 100000)
+    throw InvalidInput("--http-max-connections", "must be 2..100000");
+  if (o.http_max_client_connections < 1 || o.http_max_client_connections > o.http_max_connections)
+    throw InvalidInput("--http-max-client-connections", "must be 1..--http-max-connections");
+  if (o.http_body_budget_mib < o.http_body_limit_mib || o.http_body_budget_mib > 65536)
+    throw InvalidInput("--http-body-budget-mib", "must be at least --http-body-limit-mib (" +
+                                                     std::to_string(o.http_body_limit_mib) +
+                                                     ") and at most 65536");
+  if (!(o.http_stall_timeout_seconds >= 0.1 && o.http_stall_timeout_seconds <= 3600))
+    throw InvalidInput("--http-stall-timeout", "must be 0.1..3600 seconds");
+  if (o.http_min_rate_kib < 1 || o.http_min_rate_kib > 1 << 20)
+    throw InvalidInput("--http-min-rate-kib", "must be 1..1048576");
   if (!(o.shutdown_grace_seconds >= 0)) throw InvalidInput("--shutdown-grace", "must be >= 0");
   if (tls) {
     d.cert_pem = read_secret_file(o.tls_cert, "--tls-cert");
@@ -273,6 +286,12 @@ void Daemon::start() {
     HttpOptions http;
     http.address = o.http;
     http.body_limit = static_cast<std::size_t>(o.http_body_limit_mib) << 20;
+    http.max_connections = static_cast<std::size_t>(o.http_max_connections);
+    http.max_client_connections = static_cast<std::size_t>(o.http_max_client_connections);
+    http.body_budget = static_cast<std::size_t>(o.http_body_budget_mib) << 20;
+    http.stall_timeout = std::chrono::milliseconds(
+        static_cast<long long>(std::lround(o.http_stall_timeout_seconds * 1000)));
+    http.min_rate = static_cast<std::size_t>(o.http_min_rate_kib) << 10;
     http.static_dir = o.static_dir;
     http.cors_origins = o.cors_origins;
     http.token = d.token;

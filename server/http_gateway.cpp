@@ -31,11 +31,11 @@ namespace ssl = net::ssl;
 namespace fs = std::filesystem;
 using tcp = net::ip::tcp;
 using JobFunction = decltype(JobRequest::run);
+using Clock = std::chrono::steady_clock;
 
-constexpr auto kIdleTimeout = std::chrono::seconds(60);   // between requests on a connection
-constexpr auto kReadTimeout = std::chrono::seconds(300);  // to receive one request
-constexpr std::size_t kMaxSessions = 512;
-constexpr std::size_t kMaxStaticFile = 64u << 20;
+constexpr auto kIdleTimeout = std::chrono::seconds(60);  // between requests on a connection
+constexpr std::size_t kMaxStaticFile = 1u << 30;
+constexpr std::size_t kWriteChunk = 256u << 10;  // bytes per write, and per static file read
 
 /// One POST /v1/NAME route: the RPC table entry behind it.
 struct Route {
@@ -151,11 +151,23 @@ struct HttpGateway::Impl {
   int port = 0;
   bool stopping = false;  // I/O thread only
 
+  /// What a connection is doing, for the budgets: the first four wait for a client and may be
+  /// told to give way (evicted) when a new connection or body needs room.
+  enum class Phase { Handshake, Idle, Header, Body, Busy, Closing };
+
   struct SessionBase {
     virtual ~SessionBase() = default;
-    virtual void stop() = 0;  // I/O thread
+    virtual void stop() = 0;   // I/O thread
+    virtual void evict() = 0;  // I/O thread: close now, release the body reserved
+    std::string address;       // the client's IP address
+    Phase phase = Phase::Handshake;
+    Clock::time_point last_activity = Clock::now();
+    std::size_t reserved = 0;  // bytes of the body budget held
+    bool waiting() const { return phase <= Phase::Body; }
   };
   std::list<std::weak_ptr<SessionBase>> sessions;  // I/O thread only
+  std::size_t body_in_use = 0;                     // I/O thread only
+  std::uint64_t evicted = 0;                       // connections told to give way
 
   std::mutex exit_mutex;
   std::condition_variable exited_cv;
@@ -178,6 +190,79 @@ struct HttpGateway::Impl {
   class Session;
 
   void accept();
+
+  /// The live sessions (expired entries dropped).
+  std::vector<std::shared_ptr<SessionBase>> live() {
+    std::vector<std::shared_ptr<SessionBase>> all;
+    for (auto it = sessions.begin(); it != sessions.end();)
+      if (auto session = it->lock()) {
+        all.push_back(std::move(session));
+        ++it;
+      } else {
+        it = sessions.erase(it);
+      }
+    return all;
+  }
+
+  /// Room for a new connection from `address`: the least recently active waiting connection
+  /// of that address gives way when it has its share, else one of the address with the most
+  /// connections when all are taken. False when nobody can give way.
+  bool admit(const std::string& address) {
+    auto all = live();
+    std::map<std::string, std::size_t> count;
+    for (const auto& s : all)
+      if (s->phase != Phase::Closing) ++count[s->address];
+    std::size_t total = 0;
+    for (const auto& [a, n] : count) total += n;
+    std::string from;
+    if (count[address] >= options.max_client_connections) {
+      from = address;
+    } else if (total >= options.max_connections) {
+      std::size_t most = 0;
+      for (const auto& [a, n] : count)
+        if (n > most) most = n, from = a;
+    } else {
+      return true;
+    }
+    std::shared_ptr<SessionBase> victim;
+    for (int pass = 0; pass < 2 && !victim; ++pass)  // the address first, then anyone
+      for (const auto& s : all)
+        if (s->waiting() && (pass == 1 || s->address == from) &&
+            (!victim || s->last_activity < victim->last_activity))
+          victim = s;
+    if (!victim) return false;
+    victim->evict();
+    ++evicted;
+    return true;
+  }
+
+  /// Reserves `bytes` of the body budget for `self`; bodies stalled for a second or more give
+  /// way (least recently active first) when it does not fit. False: no room.
+  bool reserve(std::size_t bytes, SessionBase* self) {
+    if (body_in_use + bytes > options.body_budget) {
+      auto all = live();
+      std::sort(all.begin(), all.end(),
+                [](const auto& a, const auto& b) { return a->last_activity < b->last_activity; });
+      const auto stalled = Clock::now() - std::chrono::seconds(1);
+      for (const auto& s : all) {
+        if (body_in_use + bytes <= options.body_budget) break;
+        if (s.get() == self || s->phase != Phase::Body || s->reserved == 0 ||
+            s->last_activity > stalled)
+          continue;
+        s->evict();
+        ++evicted;
+      }
+      if (body_in_use + bytes > options.body_budget) return false;
+    }
+    body_in_use += bytes;
+    self->reserved += bytes;
+    return true;
+  }
+
+  void release(SessionBase* self) {
+    body_in_use -= std::min(body_in_use, self->reserved);
+    self->reserved = 0;
+  }
 };
 
 /// One connection. Requests are read one at a time; an API call answers with "Connection: close"
@@ -194,6 +279,10 @@ class HttpGateway::Impl::Session final : public SessionBase,
       : gateway_(gateway), stream_(std::forward<Args>(args)...) {
     beast::error_code ec;
     const auto endpoint = beast::get_lowest_layer(stream_).socket().remote_endpoint(ec);
+    if (!ec) address = endpoint.address().to_string();
+    // Every close but the graceful one (close()) resets the connection: a timed-out or evicted
+    // client's unsent bytes are dropped at once instead of staying in the kernel's buffers.
+    beast::get_lowest_layer(stream_).socket().set_option(net::socket_base::linger(true, 0), ec);
     if (!ec)
       peer_ = std::string(endpoint.address().is_v6() ? "ipv6:[" : "ipv4:") +
               endpoint.address().to_string() + (endpoint.address().is_v6() ? "]:" : ":") +
@@ -202,7 +291,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
 
   void run() {
     if constexpr (kTls) {
-      beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(30));
+      beast::get_lowest_layer(stream_).expires_after(gateway_.options.stall_timeout);
       stream_.async_handshake(ssl::stream_base::server,
                               [self = this->shared_from_this()](beast::error_code ec) {
                                 if (ec) return;  // not TLS, or gave up: drop the connection
@@ -211,6 +300,14 @@ class HttpGateway::Impl::Session final : public SessionBase,
     } else {
       read_request();
     }
+  }
+
+  ~Session() override { gateway_.release(this); }
+
+  void evict() override {
+    gateway_.release(this);
+    phase = Phase::Closing;
+    abort();
   }
 
   void stop() override {
@@ -229,12 +326,18 @@ class HttpGateway::Impl::Session final : public SessionBase,
       if (event.stage() == "queued") return;
       send_sse_headers();
     }
-    send_chunk("event: progress\ndata: " + to_json(event, false) + "\n\n");
+    std::string chunk = chunked("event: progress\ndata: " + to_json(event, false) + "\n\n");
+    if (writing_) {  // a client that reads slowly gets the latest progress, not a backlog
+      pending_progress_ = std::move(chunk);
+      return;
+    }
+    send(std::move(chunk), false);
   }
 
   void on_finish(const Status& status, const std::string& result_json) {
     finished_ = true;
     job_active_ = false;
+    pending_progress_.reset();
     if (sse_ && (headers_sent_ || status.ok())) {
       if (!headers_sent_) send_sse_headers();
       send_chunk(status.ok() ? "event: result\ndata: " + result_json + "\n\n"
@@ -307,11 +410,28 @@ class HttpGateway::Impl::Session final : public SessionBase,
 
   void read_request() {
     if (gateway_.stopping) return close();
+    gateway_.release(this);  // the previous request's body is answered
     reading_ = true;
+    phase = Phase::Idle;
+    last_activity = Clock::now();
     parser_.emplace();
     parser_->header_limit(64 * 1024);
     parser_->body_limit(gateway_.options.body_limit);
+    if (buffer_.size() > 0) return read_header();  // pipelined bytes are here already
+    // Idle until the first byte; from then on the header has the stall timeout.
     beast::get_lowest_layer(stream_).expires_after(kIdleTimeout);
+    stream_.async_read_some(buffer_.prepare(4096),
+                            [self = this->shared_from_this()](beast::error_code ec, std::size_t n) {
+                              if (ec) return self->fail_read(ec);
+                              self->buffer_.commit(n);
+                              self->read_header();
+                            });
+  }
+
+  void read_header() {
+    phase = Phase::Header;
+    last_activity = Clock::now();
+    beast::get_lowest_layer(stream_).expires_after(gateway_.options.stall_timeout);
     http::async_read_header(stream_, buffer_, *parser_,
                             [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
                               self->on_header(ec);
@@ -323,22 +443,60 @@ class HttpGateway::Impl::Session final : public SessionBase,
     if (ec) return fail_read(ec);
     if (closed_) return abort();
     auto& request = parser_->get();
+    const std::string coding = lower(std::string(view(request[http::field::transfer_encoding])));
+    if (!coding.empty() && coding != "chunked")
+      return respond_error(
+          {StatusCode::Unimplemented,
+           "Transfer-Encoding: " + coding + " is not supported (send Content-Length or chunked)"},
+          false, 501);
     const auto length = parser_->content_length();
     if (length && *length > gateway_.options.body_limit)
       return respond_error({StatusCode::ResourceExhausted, too_large_message()}, false, 413);
+    const std::size_t need = length               ? *length
+                             : parser_->chunked() ? gateway_.options.body_limit
+                                                  : 0;
+    if (need > 0 && !gateway_.reserve(need, this)) {
+      retry_after_ = true;
+      return respond_error({StatusCode::Unavailable,
+                            "too many request bodies arriving at once (gridshelld "
+                            "--http-body-budget-mib); retry in a second"},
+                           false, 503);
+    }
     if (lower(std::string(view(request[http::field::expect]))) == "100-continue")
       send("HTTP/1.1 100 Continue\r\n\r\n", false);
-    beast::get_lowest_layer(stream_).expires_after(kReadTimeout);
     reading_ = true;
-    http::async_read(stream_, buffer_, *parser_,
-                     [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
-                       self->on_read(ec);
-                     });
+    phase = Phase::Body;
+    pace_start_ = last_activity = Clock::now();
+    pace_bytes_ = 0;
+    read_body();
+  }
+
+  /// The latest time the next bytes may come (or go): within the stall timeout, and never
+  /// slower on average than the minimum rate once the stall timeout has passed.
+  Clock::time_point pace_deadline() const {
+    const auto& o = gateway_.options;
+    const auto by_rate = pace_start_ + o.stall_timeout +
+                         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                             static_cast<double>(pace_bytes_) / o.min_rate));
+    return std::min(Clock::now() + o.stall_timeout, by_rate);
+  }
+
+  void read_body() {
+    if (parser_->is_done()) return on_read({});
+    beast::get_lowest_layer(stream_).expires_at(pace_deadline());
+    http::async_read_some(stream_, buffer_, *parser_,
+                          [self = this->shared_from_this()](beast::error_code ec, std::size_t n) {
+                            if (ec) return self->fail_read(ec);
+                            self->pace_bytes_ += n;
+                            self->last_activity = Clock::now();
+                            self->read_body();
+                          });
   }
 
   void on_read(beast::error_code ec) {
     if (ec) return fail_read(ec);
     reading_ = false;
+    phase = Phase::Busy;
     beast::get_lowest_layer(stream_).expires_never();
     handle(parser_->release());
   }
@@ -348,6 +506,12 @@ class HttpGateway::Impl::Session final : public SessionBase,
     if (closed_) return abort();
     if (ec == http::error::body_limit)
       return respond_error({StatusCode::ResourceExhausted, too_large_message()}, false, 413);
+    if (ec == beast::error::timeout && phase == Phase::Body)
+      return respond_error({StatusCode::DeadlineExceeded,
+                            "the request body stood still or arrived slower than " +
+                                std::to_string(gateway_.options.min_rate >> 10) +
+                                " KiB/s (gridshelld --http-stall-timeout, --http-min-rate-kib)"},
+                           false, 408);
     if (ec == http::error::end_of_stream || ec == net::error::eof || ec == beast::error::timeout ||
         ec == net::error::operation_aborted || ec == net::error::connection_reset ||
         ec.category() == net::error::get_ssl_category())
@@ -371,6 +535,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
   void handle(http::request<http::string_body> request) {
     keep_alive_ = request.keep_alive() && !gateway_.stopping;
     cors_origin_.clear();
+    allow_.clear();
     const std::string origin(view(request[http::field::origin]));
     if (!origin.empty())
       for (const std::string& allowed : gateway_.options.cors_origins)
@@ -380,8 +545,10 @@ class HttpGateway::Impl::Session final : public SessionBase,
     const auto verb = request.method();
 
     if (path == "/healthz") {
-      if (verb != http::verb::get && verb != http::verb::head)
+      if (verb != http::verb::get && verb != http::verb::head) {
+        allow_ = "GET, HEAD";
         return respond_error({StatusCode::Unimplemented, "use GET /healthz"}, keep_alive_, 405);
+      }
       if (!authorized(request)) return unauthorized();
       const bool serving = gateway_.serving();
       return respond(serving ? http::status::ok : http::status::service_unavailable,
@@ -398,14 +565,18 @@ class HttpGateway::Impl::Session final : public SessionBase,
              "no such method: " + path +
                  " (POST /v1/patch|design|simulate|run|geodesic|load|examples|fabricate)"},
             keep_alive_);
-      if (verb != http::verb::post)
+      if (verb != http::verb::post) {
+        allow_ = "POST, OPTIONS";
         return respond_error({StatusCode::Unimplemented, "use POST " + path}, keep_alive_, 405);
+      }
       if (!authorized(request)) return unauthorized();
       return start_job(std::move(request), it->second);
     }
     if (verb == http::verb::get || verb == http::verb::head)
       return serve_static(path, verb == http::verb::head);
-    respond_error({StatusCode::NotFound, "not found: " + path}, keep_alive_);
+    allow_ = "GET, HEAD";  // everything else is a static file
+    respond_error({StatusCode::Unimplemented, "use GET " + path + " (static files)"}, keep_alive_,
+                  405);
   }
 
   /// A CORS preflight: allowed for the configured origins only (the answer carries the
@@ -492,14 +663,21 @@ class HttpGateway::Impl::Session final : public SessionBase,
     if (ec || file.string().rfind(root, 0) != 0 || !fs::is_regular_file(file, ec) ||
         fs::file_size(file, ec) > kMaxStaticFile)
       return respond_error(not_found, keep_alive_);
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream contents;
-    contents << in.rdbuf();
-    respond(http::status::ok, content_type(file), contents.str(), keep_alive_, head);
+    // Streamed in chunks as the client reads them: a client that does not read holds one
+    // chunk, not the file.
+    const std::uint64_t size = fs::file_size(file, ec);
+    auto in = std::make_unique<std::ifstream>(file, std::ios::binary);
+    if (ec || !*in) return respond_error(not_found, keep_alive_);
+    if (!head && size > 0) {
+      file_ = std::move(in);
+      file_left_ = size;
+    }
+    respond(http::status::ok, content_type(file), "", keep_alive_, head, size);
   }
 
+  /// `streamed`: the length of a body that follows from file_ (the body argument is empty).
   void respond(http::status status, const char* type, std::string body, bool keep_alive,
-               bool head = false) {
+               bool head = false, std::optional<std::uint64_t> streamed = std::nullopt) {
     http::response<http::string_body> response{status, 11};
     response.set(http::field::server, "gridshelld");
     response.set(http::field::content_type, type);
@@ -508,7 +686,9 @@ class HttpGateway::Impl::Session final : public SessionBase,
     add_cors(response);
     if (status == http::status::unauthorized)
       response.set(http::field::www_authenticate, "Bearer realm=\"gridshelld\"");
-    const std::size_t length = body.size();
+    if (!allow_.empty()) response.set(http::field::allow, allow_);
+    if (retry_after_) response.set(http::field::retry_after, "1");
+    const std::uint64_t length = streamed ? *streamed : body.size();
     if (!head) response.body() = std::move(body);
     response.keep_alive(keep_alive);
     response.content_length(length);
@@ -549,11 +729,12 @@ class HttpGateway::Impl::Session final : public SessionBase,
     send(header + "\r\n", false);
   }
 
-  void send_chunk(const std::string& data) {
+  static std::string chunked(const std::string& data) {
     std::ostringstream size;
     size << std::hex << data.size();
-    send(size.str() + "\r\n" + data + "\r\n", false);
+    return size.str() + "\r\n" + data + "\r\n";
   }
+  void send_chunk(const std::string& data) { send(chunked(data), false); }
 
   /// Queues bytes; `last`: close the connection once they are written (otherwise, when nothing
   /// is left to write and no job is running, read the next request).
@@ -564,25 +745,61 @@ class HttpGateway::Impl::Session final : public SessionBase,
   }
 
   void write_next() {
+    if (out_.empty() && pending_progress_) {
+      out_.push_back(std::move(*pending_progress_));
+      pending_progress_.reset();
+    }
+    if (out_.empty() && file_) {
+      std::string chunk(std::min<std::uint64_t>(file_left_, kWriteChunk), '\0');
+      file_->read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+      if (file_->gcount() != static_cast<std::streamsize>(chunk.size())) {
+        file_.reset();  // the file shrank: the length sent cannot be kept, end the connection
+        out_.clear();
+        return abort();
+      }
+      file_left_ -= chunk.size();
+      if (file_left_ == 0) file_.reset();
+      out_.push_back(std::move(chunk));
+    }
     if (out_.empty()) {
+      pacing_ = false;
       if (close_after_write_ || (stopping_ && !job_active_)) return close();
       if (!job_active_ && !reading_ && keep_alive_) read_request();
       return;
     }
+    if (!pacing_) {  // an answer starts: it must move like a body does (pace_deadline)
+      pacing_ = true;
+      pace_start_ = Clock::now();
+      pace_bytes_ = 0;
+    }
     writing_ = true;
-    net::async_write(stream_, net::buffer(out_.front()),
-                     [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
-                       self->writing_ = false;
-                       if (ec) {
-                         if (self->job_active_ && self->job_)
-                           self->gateway_.queue.cancel(self->job_, StatusCode::Cancelled,
-                                                       "the HTTP client went away");
-                         self->out_.clear();
-                         return self->close();
-                       }
-                       self->out_.pop_front();
-                       self->write_next();
-                     });
+    // Sets the write timer (and the read timer unless a read is pending: the watch for a
+    // disconnect, or a request being read, keeps its own).
+    beast::get_lowest_layer(stream_).expires_at(pace_deadline());
+    const std::string& front = out_.front();
+    const std::size_t size = std::min(front.size() - written_, kWriteChunk);
+    stream_.async_write_some(
+        net::buffer(front.data() + written_, size),
+        [self = this->shared_from_this()](beast::error_code ec, std::size_t n) {
+          self->writing_ = false;
+          if (ec) {
+            if (self->job_active_ && self->job_)
+              self->gateway_.queue.cancel(self->job_, StatusCode::Cancelled,
+                                          "the HTTP client went away");
+            self->out_.clear();
+            self->written_ = 0;
+            self->file_.reset();
+            self->pending_progress_.reset();
+            return ec == beast::error::timeout ? self->abort() : self->close();
+          }
+          self->pace_bytes_ += n;
+          self->written_ += n;
+          if (self->written_ == self->out_.front().size()) {
+            self->out_.pop_front();
+            self->written_ = 0;
+          }
+          self->write_next();
+        });
   }
 
   /// Ends the connection gracefully: no more sending, then read (and drop) until the client
@@ -590,10 +807,18 @@ class HttpGateway::Impl::Session final : public SessionBase,
   void close() {
     if (closed_) return;
     closed_ = true;
+    phase = Phase::Closing;
     beast::error_code ec;
+    beast::get_lowest_layer(stream_).socket().set_option(net::socket_base::linger(false, 0), ec);
     beast::get_lowest_layer(stream_).socket().shutdown(tcp::socket::shutdown_send, ec);
     beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(5));
-    if (!watching_ && !reading_) drain();  // a pending read ends with the connection and drains
+    if (!watching_ && !reading_) return drain();
+    // A pending read (the watch for a disconnect has no time limit) ends with the connection
+    // and drains; a client that keeps the connection open anyway is cut after 5 s.
+    drain_timer_.expires_after(std::chrono::seconds(5));
+    drain_timer_.async_wait([self = this->shared_from_this()](beast::error_code ec) {
+      if (!ec) self->abort();
+    });
   }
 
   void drain() {
@@ -607,16 +832,27 @@ class HttpGateway::Impl::Session final : public SessionBase,
 
   void abort() {
     closed_ = true;
+    phase = Phase::Closing;
     beast::error_code ignored;
     beast::get_lowest_layer(stream_).socket().close(ignored);
   }
 
   Impl& gateway_;
   Stream stream_;
+  net::steady_timer drain_timer_{stream_.get_executor()};
   std::string peer_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   std::deque<std::string> out_;
+  std::size_t written_ = 0;                      ///< bytes of out_.front() already sent
+  std::optional<std::string> pending_progress_;  ///< the latest progress while a write is out
+  std::unique_ptr<std::ifstream> file_;          ///< a static file being sent, chunk by chunk
+  std::uint64_t file_left_ = 0;
+  Clock::time_point pace_start_;  ///< the body or answer in transfer began
+  std::uint64_t pace_bytes_ = 0;  ///< bytes of it transferred
+  bool pacing_ = false;           ///< an answer is being written (pace_start_ is its start)
+  std::string allow_;             ///< the Allow header of a 405
+  bool retry_after_ = false;      ///< a 503 with Retry-After
   std::array<char, 512> watch_buffer_{};
   std::shared_ptr<Job> job_;
   std::string request_id_;
@@ -632,10 +868,18 @@ void HttpGateway::Impl::accept() {
       if (acceptor.is_open() && !stopping) accept();
       return;
     }
-    sessions.remove_if([](const auto& weak) { return weak.expired(); });
-    if (sessions.size() >= kMaxSessions) {
-      beast::error_code ignored;
-      socket.close(ignored);  // too many connections: refuse this one
+    beast::error_code ignored;
+    const auto endpoint = socket.remote_endpoint(ignored);
+    if (!admit(ignored ? std::string() : endpoint.address().to_string())) {
+      // Every connection is busy with an answer: refuse this one, politely if it is plain HTTP.
+      if (!tls) {
+        static const std::string kBusy =
+            "HTTP/1.1 503 Service Unavailable\r\nServer: gridshelld\r\nRetry-After: 1\r\n"
+            "Content-Length: 0\r\nConnection: close\r\n\r\n";
+        socket.non_blocking(true, ignored);
+        socket.write_some(net::buffer(kBusy), ignored);
+      }
+      socket.close(ignored);
     } else if (tls) {
       auto session = std::make_shared<Session<beast::ssl_stream<beast::tcp_stream>>>(
           *this, std::move(socket), *tls);

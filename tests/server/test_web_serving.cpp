@@ -198,8 +198,14 @@ TEST(WebServing, StaticFilesAtTheRootWithTheirTypesAndNothingOutside) {
     EXPECT_EQ(reply.status, 404) << target;
     EXPECT_NE(reply.body, "secret") << target;
   }
-  // Only GET and HEAD.
-  EXPECT_EQ(http_request(port, "POST", "/index.html", "x").status, 404);
+  // Only GET and HEAD: 405 with Allow, as docs/api.md says (it was 404 before issue 33).
+  for (const char* method : {"POST", "PUT", "DELETE", "TRACE", "PATCH"}) {
+    HttpReply reply = http_request(port, method, "/index.html");
+    EXPECT_EQ(reply.status, 405) << method;
+    EXPECT_EQ(reply.headers["allow"], "GET, HEAD") << method;
+  }
+  EXPECT_EQ(http_request(port, "PUT", "/v1/design", "{}").headers["allow"], "POST, OPTIONS");
+  EXPECT_EQ(http_request(port, "DELETE", "/healthz").headers["allow"], "GET, HEAD");
 }
 
 TEST(WebServing, NoStaticFolderMeans404AtTheRoot) {
