@@ -10,6 +10,7 @@
 #include <openssl/evp.h>
 #include <openssl/pem.h>
 #include <openssl/x509.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <cmath>
@@ -198,6 +199,14 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
     throw InvalidInput("--http-body-limit-mib", "must be 1..4096");
   if (o.http_max_connections < 2 || o.http_max_connections > 100000)
     throw InvalidInput("--http-max-connections", "must be 2..100000");
+  if (rlimit files{}; !o.http.empty() && getrlimit(RLIMIT_NOFILE, &files) == 0 &&
+                      files.rlim_cur != RLIM_INFINITY &&
+                      static_cast<rlim_t>(o.http_max_connections) + 128 > files.rlim_cur)
+    throw InvalidInput("--http-max-connections",
+                       std::to_string(o.http_max_connections) + " connections need about " +
+                           std::to_string(o.http_max_connections + 128) +
+                           " file descriptors; the limit is " + std::to_string(files.rlim_cur) +
+                           " (ulimit -n)");
   if (o.http_max_client_connections < 1 || o.http_max_client_connections > o.http_max_connections)
     throw InvalidInput("--http-max-client-connections", "must be 1..--http-max-connections");
   if (o.http_body_budget_mib < o.http_body_limit_mib || o.http_body_budget_mib > 65536)

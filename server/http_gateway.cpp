@@ -146,6 +146,7 @@ struct HttpGateway::Impl {
 
   net::io_context io{1};
   tcp::acceptor acceptor{io};
+  net::steady_timer accept_backoff{io};
   std::optional<ssl::context> tls;
   std::thread thread;
   int port = 0;
@@ -865,7 +866,13 @@ class HttpGateway::Impl::Session final : public SessionBase,
 void HttpGateway::Impl::accept() {
   acceptor.async_accept([this](beast::error_code ec, tcp::socket socket) {
     if (ec) {
-      if (acceptor.is_open() && !stopping) accept();
+      if (!acceptor.is_open() || stopping) return;
+      // Out of file descriptors (or another transient failure): try again shortly instead of
+      // spinning on the error.
+      accept_backoff.expires_after(std::chrono::milliseconds(50));
+      accept_backoff.async_wait([this](beast::error_code) {
+        if (acceptor.is_open() && !stopping) accept();
+      });
       return;
     }
     beast::error_code ignored;
@@ -956,6 +963,7 @@ void HttpGateway::stop() {
     g.stopping = true;
     beast::error_code ignored;
     g.acceptor.close(ignored);
+    g.accept_backoff.cancel();
     for (const auto& weak : g.sessions)
       if (auto session = weak.lock()) session->stop();
   });

@@ -7,6 +7,7 @@
 // Logs one JSON line per request on stderr. SIGTERM or SIGINT: stop accepting, let running work
 // finish for --shutdown-grace seconds, cancel the rest, exit 0. Exit 2 for bad options.
 #include <pthread.h>
+#include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
 #include <csignal>
@@ -95,6 +96,14 @@ int main(int argc, char** argv) {
       (app.count("--static") == 0 && !std::filesystem::is_directory(GRIDSHELL_WEB_DIR)))
     options.static_dir.clear();
   if (no_http) options.http.clear();
+
+  // Every connection is a file descriptor: take what the system allows (the soft limit is often
+  // 1024, the hard one much higher); the Daemon checks its connection budget against it.
+  rlimit files{};
+  if (getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur < files.rlim_max) {
+    files.rlim_cur = files.rlim_max;
+    setrlimit(RLIMIT_NOFILE, &files);
+  }
 
   // Signals are taken by sigwait below only: block them before any thread starts.
   sigset_t signals;
