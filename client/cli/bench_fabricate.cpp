@@ -7,7 +7,6 @@
 // Times are wall-clock medians of `repeats` runs in this process (the CLI's work minus process
 // start: design.json parsed, kit built, every file rendered; scan file read, registered and
 // measured) and the process CPU time of the same runs.
-#include <google/protobuf/util/json_util.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -29,6 +28,7 @@
 #include "gridshell/example_surfaces.h"
 #include "gridshell/fabricate.h"
 #include "gridshell/files.h"
+#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/requests.h"
 #include "paper_table1.h"
@@ -180,10 +180,11 @@ int bench_fabricate(int repeats, int scan_points, const std::string& out, bool n
       for (int r = 0; r < repeats; ++r) {
         const double w0 = wall_seconds(), c0 = cpu_seconds();
         v1::FabricateRequest request;
-        google::protobuf::util::JsonParseOptions parse;
-        if (!google::protobuf::util::JsonStringToMessage(json, request.mutable_design(), parse)
-                 .ok())
-          throw std::runtime_error("design.json does not parse");
+        try {
+          from_json(json, *request.mutable_design());
+        } catch (const InvalidInput& e) {
+          throw std::runtime_error(std::string("design.json does not parse: ") + e.what());
+        }
         request.mutable_options()->set_unit("cm");
         result = gridshell::run_fabricate(request);
         const FileBundle files = fabricate_files(result);

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "cli_support.h"
 
-#include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -213,13 +212,13 @@ v1::Design read_design_file(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   v1::Design design;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
   std::string json = text.str();
   if (json.rfind("\xEF\xBB\xBF", 0) == 0) json.erase(0, 3);  // a UTF-8 byte order mark
-  const auto status = google::protobuf::util::JsonStringToMessage(json, &design, options);
-  if (!status.ok())
-    throw InvalidInput(path, "not a gridshell design file: " + std::string(status.message()));
+  try {
+    from_json(json, design);  // strict: unknown fields, "yes" for a bool, ... are refused
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(path, "not a gridshell design file: " + std::string(e.what()));
+  }
   return design;
 }
 

@@ -2,7 +2,6 @@
 // `gridshell compare SCAN --design DIR --out DIR2`: a scan of the built grid registered to its
 // simulated deployment (DIR/design.json + DIR/deployment.json, as `gridshell run` writes them),
 // with distances to the deployment and to the target patch: compare.json and compare.ply.
-#include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -36,11 +35,11 @@ v1::Deployment read_deployment_file(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   v1::Deployment deployment;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &deployment, options);
-  if (!status.ok())
-    throw InvalidInput(path, "not a gridshell deployment file: " + std::string(status.message()));
+  try {
+    from_json(text.str(), deployment);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(path, "not a gridshell deployment file: " + std::string(e.what()));
+  }
   return deployment;
 }
 

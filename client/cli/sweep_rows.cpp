@@ -2,7 +2,6 @@
 // Sweep rows on disk: one `gridshell run` per row in a child process, into a temporary folder
 // that becomes rows/<id> in one rename; status.json; the sweep's own file and lock.
 #include <fcntl.h>
-#include <google/protobuf/util/json_util.h>
 #include <poll.h>
 #include <sys/file.h>
 #include <sys/prctl.h>
@@ -22,6 +21,7 @@
 #include <sstream>
 #include <thread>
 
+#include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/v1/deployment.pb.h"
@@ -73,14 +73,17 @@ std::string error_line(const std::string& log) {
   return last;
 }
 
+/// A run's result file. Unknown fields (and enum value names) are skipped, as they were with
+/// protobuf's ignore_unknown_fields: a file written by a newer gridshell still gives its numbers.
 template <class Message>
 bool parse_json_file(const fs::path& path, Message* message, std::string* error) {
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = true;
-  const auto status =
-      google::protobuf::util::JsonStringToMessage(read_file(path), message, options);
-  if (!status.ok()) *error = path.filename().string() + ": " + std::string(status.message());
-  return status.ok();
+  try {
+    from_json(read_file(path), *message, kJsonMaxDepth, UnknownFields::Skip);
+  } catch (const InvalidInput& e) {
+    *error = path.filename().string() + ": " + e.what();
+    return false;
+  }
+  return true;
 }
 
 /// The summary numbers of a finished run, from its design.json, report.json, deployment.json.

@@ -1,16 +1,19 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// libFuzzer target: the HTTP gateway's request decoding for every RPC — protobuf JSON into the
-// request message, exactly as server/methods.h parses a body, then the request's checks and
-// conversion into kernel inputs (prepare_patch, prepare_design, ...; to_mesh reads mesh files and
-// examples). The first byte picks the RPC, the rest is the body. The computations themselves
-// (patch, design, deployment) are not run: they are tested on valid inputs elsewhere and would make
-// each input seconds long.
-#include <google/protobuf/util/json_util.h>
+// libFuzzer target: the request decoding for every RPC — the strict JSON reader (from_json,
+// proto/convert/json_read.cpp) into the request message, then the request's checks and conversion
+// into kernel inputs (prepare_patch, prepare_design, ...; to_mesh reads mesh files and examples).
+// The first byte picks the RPC, the rest is the body. A body from_json accepts must also print
+// (to_json) and read back to an equal message: the reader takes everything the writer writes. The
+// computations themselves (patch, design, deployment) are not run: they are tested on valid inputs
+// elsewhere and would make each input seconds long.
+#include <google/protobuf/util/field_comparator.h>
+#include <google/protobuf/util/message_differencer.h>
 
 #include <string>
 
 #include "fuzz_support.h"
 #include "gridshell/convert_deployment.h"
+#include "gridshell/files.h"
 #include "gridshell/requests.h"
 #include "gridshell/v1/requests.pb.h"
 
@@ -18,11 +21,32 @@ namespace {
 
 using namespace gridshell;
 
+/// The body read strictly into `request`: false (after checking the error) if it is refused.
+/// An accepted request must survive to_json and from_json unchanged.
 template <class Request>
 bool parse(const std::string& body, Request& request) {
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;  // as the gateway
-  return google::protobuf::util::JsonStringToMessage(body, &request, options).ok();
+  try {
+    from_json(body, request);
+  } catch (const Error& e) {
+    fuzz::expect_invalid_input(e);
+    return false;
+  }
+  const std::string again = to_json(request, false);
+  Request back;
+  try {
+    from_json(again, back);
+  } catch (const Error& e) {
+    fuzz::fail("from_json refuses to_json's text of a request it accepted: " +
+               std::string(e.what()) + "\n" + again.substr(0, 400));
+  }
+  google::protobuf::util::DefaultFieldComparator comparator;
+  comparator.set_treat_nan_as_equal(true);  // "NaN" reads back as a NaN
+  google::protobuf::util::MessageDifferencer differencer;
+  differencer.set_field_comparator(&comparator);
+  if (!differencer.Compare(request, back))
+    fuzz::fail("a request read by from_json does not read back from to_json's text:\n" +
+               again.substr(0, 400));
+  return true;
 }
 
 void check_design(const v1::DesignRequest& request) {

@@ -112,9 +112,9 @@ def main():
     requests = {
         "patch_arrays": (0, {"mesh": mesh, "corners": corners,
                              "options": {"maxSmoothingIterations": 2, "etaMax": 1.01}}),
+        # Corners.points is a repeated double: x, y, z of each corner in turn.
         "patch_points": (0, {"mesh": mesh, "corners": {"points": [
-            {"x": 0, "y": 0, "z": 0}, {"x": 1, "y": 0, "z": 0},
-            {"x": 1, "y": 1, "z": 0.1}, {"x": 0, "y": 1, "z": 0}]}}),
+            0, 0, 0, 1, 0, 0, 1, 1, 0.1, 0, 1, 0]}}),
         "design_example": (1, {"mesh": {"example": "double-vault"},
                                "options": {"alpha": "70deg", "membersU": 4, "membersV": 5,
                                            "lamellaWidth": 0.02, "resolution": 20,

@@ -9,6 +9,7 @@
 
 #include <map>
 #include <string>
+#include <string_view>
 
 #include "gridshell/v1/requests.pb.h"
 
@@ -41,5 +42,29 @@ std::string to_json(const google::protobuf::Message& message, bool pretty = true
 
 /// The same text from protobuf's own JSON printer (the tests' oracle).
 std::string to_json_library(const google::protobuf::Message& message, bool pretty = true);
+
+/// The deepest nesting of JSON objects and arrays from_json accepts (documented in docs/api.md).
+inline constexpr int kJsonMaxDepth = 32;
+
+/// What from_json does with a member that names no field.
+enum class UnknownFields {
+  Refuse,  ///< an error naming it (the API's and the CLI's input files)
+  Skip,    ///< ignored with its value, and so are unknown enum value names (files written by a
+           ///< newer gridshell; protobuf's ignore_unknown_fields)
+};
+
+/// Reads `text` in protobuf's JSON mapping into `message` (cleared first), strictly: only what
+/// the mapping allows for each field's type (protobuf.dev/programming-guides/proto3/#json) in
+/// strict JSON (RFC 8259, UTF-8) — true/false for a bool, integral numbers in range or decimal
+/// strings for integers, numbers or "NaN"/"Infinity"/"-Infinity" for floating point, base64 for
+/// bytes, an enum value's name or number, an array for a repeated field (no nested arrays, no
+/// null elements), an object for a message or map; each field once (by its proto or its JSON
+/// name), one member of a oneof; null as a field's default; objects and arrays nested at most
+/// `max_depth` deep. The text is checked in one pass first (json_read.cpp), then protobuf's
+/// parser fills the message. Throws InvalidInput(field path, reason): the path in proto field
+/// names with indices ("design.options.files", "mesh.positions[12]", "stage_seconds["grid"]"),
+/// the reason what was expected and what came; "" for text that is not JSON at all.
+void from_json(std::string_view text, google::protobuf::Message& message,
+               int max_depth = kJsonMaxDepth, UnknownFields unknown = UnknownFields::Refuse);
 
 }  // namespace gridshell
