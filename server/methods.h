@@ -8,14 +8,13 @@
 // `methods.simulate.run` to it in make_methods (methods.cpp). That is all.
 #pragma once
 
-#include <google/protobuf/util/json_util.h>
-
 #include <functional>
 #include <memory>
 #include <string>
 #include <utility>
 
 #include "gridshell/fabricate.h"
+#include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/progress.h"
 #include "gridshell/requests.h"
@@ -83,18 +82,15 @@ auto job_function(const M& method, const typename M::Request* request) {
 }
 
 /// The job body for a request in protobuf's JSON mapping (HTTP): parsed on the worker, so a large
-/// body does not hold up the gateway. Unknown fields and malformed JSON are INVALID_ARGUMENT.
+/// body does not hold up the gateway. Read strictly (from_json): unknown fields, wrong JSON
+/// types, malformed JSON and nesting deeper than kJsonMaxDepth are INVALID_ARGUMENT naming the
+/// field.
 template <class M>
 auto job_function_from_json(const M& method, std::shared_ptr<const std::string> body) {
   return [&method, body](const Progress& progress,
                          JobInfo& info) -> std::unique_ptr<google::protobuf::Message> {
     typename M::Request request;
-    google::protobuf::util::JsonParseOptions options;
-    options.ignore_unknown_fields = false;
-    const auto status = google::protobuf::util::JsonStringToMessage(*body, &request, options);
-    if (!status.ok())
-      throw InvalidInput("", "request body: not a " + request.GetTypeName() +
-                                 " in JSON: " + std::string(status.message()));
+    from_json(*body, request);  // strict: InvalidInput naming the field (gridshell/files.h)
     progress.check();
     check_text_limits(request);
     const auto [vertices, faces] = mesh_size(request);

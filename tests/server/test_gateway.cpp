@@ -256,11 +256,23 @@ TEST(Gateway, ServerSentEventsStreamProgressThenTheResult) {
 TEST(Gateway, EveryBadInputIs400WithItsMessage) {
   TestDaemon daemon;
   auto bad = testing::bad_inputs();
-  // Only HTTP can send these.
-  bad.push_back({"MalformedJson", "Patch", "{\"mesh\": {", "request body: not a"});
+  // Only HTTP can send these; the JSON reader is strict (issue 33) and names the field.
+  bad.push_back({"MalformedJson", "Patch", "{\"mesh\": {", "not valid JSON"});
   bad.push_back({"UnknownField", "Design", "{\"meshes\": {}}", "meshes"});
-  bad.push_back({"WrongType", "Patch", "{\"mesh\": {\"positions\": \"abc\"}}", "request body"});
-  bad.push_back({"EmptyBody", "Design", "", "request body"});
+  bad.push_back({"WrongType", "Patch", "{\"mesh\": {\"positions\": \"abc\"}}",
+                 "mesh.positions: expected an array"});
+  bad.push_back({"EmptyBody", "Design", "", "not valid JSON"});
+  bad.push_back(
+      {"BoolAsString", "Design", "{\"files\": \"yes\"}", "files: expected true or false"});
+  bad.push_back({"UnknownEscape", "Design", "{\"mesh\": {\"name\": \"\\q\"}}", "not valid JSON"});
+  bad.push_back(
+      {"NestedPositions", "Design",
+       "{\"mesh\": {\"positions\": " + std::string(100000, '[') + std::string(100000, ']') + "}}",
+       "mesh.positions[0]: expected a number"});
+  bad.push_back({"TooDeep", "Simulate",
+                 "{\"design\": {\"members\": [{\"surface\": " + std::string(100, '[') +
+                     std::string(100, ']') + "}]}}",
+                 "too deep"});
   int sse_400 = 0;
   for (const testing::BadInput& input : bad) {
     SCOPED_TRACE(input.name);
