@@ -9,9 +9,6 @@
 //   - the daemon's own measured stop latency when designs are cancelled mid-way or pass their
 //     deadline, and when simulations are cancelled mid-way.
 // Writes a table into docs/benchmarks.md (section "service").
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -27,6 +24,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_daemon.h"
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
@@ -59,78 +57,17 @@ double percentile(std::vector<double> values, double p) {
   return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
 }
 
-std::string read_all(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-/// gridshelld as a child process, its log in a file.
-class Daemon {
+/// gridshelld for the gRPC benchmarks: no gateway, room for every client's requests.
+class Daemon : public ChildDaemon {
  public:
   explicit Daemon(const std::string& log_path, std::vector<std::string> extra = {})
-      : log_path_(log_path) {
-    std::error_code ec;
-    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-    const std::string binary = (self.parent_path() / "gridshelld").string();
-    if (ec || !fs::exists(binary))
-      throw InvalidInput("", "bench service: gridshelld not found next to " + self.string() +
-                                 " (build with GRIDSHELL_BUILD_SERVER=ON)");
-    pid_ = fork();
-    if (pid_ == 0) {
-      const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(fd, STDERR_FILENO);
-      std::vector<std::string> args{binary,      "--listen", "127.0.0.1:0",
-                                    "--no-http", "--queue",  "64"};
-      args.insert(args.end(), extra.begin(), extra.end());
-      std::vector<char*> argv;
-      for (std::string& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      execv(binary.c_str(), argv.data());
-      _exit(127);
-    }
-    for (int i = 0; i < 3000 && address_.empty(); ++i) {
-      std::smatch match;
-      const std::string log = read_all(log_path_);
-      if (std::regex_search(log, match, std::regex("\"grpc\":\"([0-9.]+:[0-9]+)\"")))
-        address_ = match[1];
-      else
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (address_.empty())
-      throw std::runtime_error("gridshelld did not start: " + read_all(log_path_));
-  }
-  ~Daemon() {
-    if (pid_ <= 0) return;
-    kill(pid_, SIGTERM);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-  }
-  const std::string& address() const { return address_; }
-  /// VmRSS in MiB.
-  double resident_mib() const {
-    std::ifstream in("/proc/" + std::to_string(pid_) + "/status");
-    std::string line;
-    while (std::getline(in, line))
-      if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024;
-    return 0;
-  }
-  std::string log() const { return read_all(log_path_); }
-  /// CPU time of the daemon so far (all its threads, exited ones included), in s; 10 ms ticks.
-  double cpu_seconds() const {
-    std::istringstream stat(read_all("/proc/" + std::to_string(pid_) + "/stat"));
-    std::string field;
-    double ticks = 0;
-    for (int k = 1; stat >> field && k <= 15; ++k)
-      if (k >= 14) ticks += std::stod(field);  // utime, stime (the name has no spaces)
-    return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
-  }
+      : ChildDaemon(log_path, with_defaults(std::move(extra))) {}
 
  private:
-  std::string log_path_;
-  std::string address_;
-  pid_t pid_ = -1;
+  static std::vector<std::string> with_defaults(std::vector<std::string> extra) {
+    extra.insert(extra.begin(), {"--no-http", "--queue", "64"});
+    return extra;
+  }
 };
 
 v1::DesignRequest example_request() {

@@ -41,6 +41,8 @@ struct BenchArguments {
   bool no_write = false;
   int repeats = 3;
   std::vector<double> edges{1, 2, 3, 4};
+  bool quick = false;         // abuse: a 2 s stall timeout (the CI test)
+  std::string json;           // abuse: the rows as JSON too
   std::string server;         // interactive: an existing gridshelld instead of a new one
   int request_threads = 1;    // interactive: --request-threads of the daemon it starts
   int redesign_threads = 0;   // interactive: --redesign-threads of the daemon it starts
@@ -291,10 +293,12 @@ Command add_bench_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
   sub->add_option("WHAT", args->what,
                   "geodesic | design | simulate | resolution | service | interactive | sweep | "
-                  "fabricate | scale")
+                  "fabricate | scale | abuse")
       ->required()
       ->check(CLI::IsMember({"geodesic", "design", "simulate", "resolution", "service",
-                             "interactive", "sweep", "fabricate", "scale"}));
+                             "interactive", "sweep", "fabricate", "scale", "abuse"}));
+  sub->add_flag("--quick", args->quick, "abuse: a 2 s stall timeout instead of 10 s");
+  sub->add_option("--json", args->json, "abuse: also write the rows to this JSON file");
   sub->add_option("--examples", args->examples, "scale: examples to design")
       ->delimiter(',')
       ->capture_default_str();
@@ -353,6 +357,8 @@ Command add_bench_command(CLI::App& app) {
       return bench_resolution(args->edges, args->repeats, args->out, args->no_write);
     }
     if (args->what == "service") return bench_service(args->out, args->no_write, args->repeats);
+    if (args->what == "abuse")
+      return bench_abuse(args->out, args->no_write, args->repeats, args->quick, args->json);
     if (args->what == "scale")
       return bench_scale(args->examples, args->sizes, args->largest_examples, args->baseline,
                          args->out, args->no_write);

@@ -104,5 +104,10 @@ int bench_service(const std::string& out, bool no_write, int repeats);
 /// counts) of the seven examples through gridshelld; `server` empty = start one.
 int bench_interactive(const std::string& out, bool no_write, const std::string& server,
                       int request_threads, int redesign_threads);
+/// `gridshell bench abuse` (bench_abuse.cpp, issue 33): attacks on fresh daemons, `repeats`
+/// rounds; `quick`: a 2 s stall timeout instead of 10 s (the CI test); the rows also as JSON to
+/// `json_path` if set. Table: section "abuse" of `out`.
+int bench_abuse(const std::string& out, bool no_write, int repeats, bool quick,
+                const std::string& json_path);
 
 }  // namespace gridshell::cli
