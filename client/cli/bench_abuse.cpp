@@ -218,6 +218,24 @@ class Bench {
     std::cerr << "bench abuse: " << row.to_json().dump() << "\n";
   }
 
+  /// `count` new connections to the daemon, each sent `first` (and `then`, if given).
+  static std::vector<int> open_connections(const ChildDaemon& daemon, int count, double timeout,
+                                           const std::string& first, const std::string& then = "",
+                                           int receive_buffer = 0) {
+    std::vector<int> fds;
+    for (int k = 0; k < count; ++k) {
+      const int fd = connect_to(daemon.http_port());
+      if (fd < 0) continue;
+      set_timeouts(fd, timeout);
+      if (receive_buffer > 0)
+        setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &receive_buffer, sizeof receive_buffer);
+      send_all(fd, first);
+      if (!then.empty()) send_all(fd, then);
+      fds.push_back(fd);
+    }
+    return fds;
+  }
+
   /// What each held connection got: an HTTP status, closed without one, or still open.
   static void tally(std::vector<int>& fds, Row& row, double wait) {
     for (int fd : fds) {
@@ -233,16 +251,10 @@ class Bench {
     Row row{"slow-connections", "515 connections, each holding a partial body of 1 MiB", 515};
     auto daemon = start();
     row.idle_mib = daemon->resident_mib();
-    std::vector<int> fds;
-    for (int k = 0; k < row.count; ++k) {
-      const int fd = connect_to(daemon->http_port());
-      if (fd < 0) continue;
-      set_timeouts(fd, 5);
-      send_all(fd,
-               "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
-               "Content-Length: 1048576\r\n\r\n{\"mesh\": {\"name\": \"");
-      fds.push_back(fd);
-    }
+    std::vector<int> fds =
+        open_connections(*daemon, row.count, 5,
+                         "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                         "Content-Length: 1048576\r\n\r\n{\"mesh\": {\"name\": \"");
     probe(*daemon, row);
     tally(fds, row, 2);
     finish(*daemon, row);
@@ -253,19 +265,12 @@ class Bench {
     Row row{"partial-bodies", "30 connections, each sending 30 of a declared 31 MiB", 30};
     auto daemon = start();
     row.idle_mib = daemon->resident_mib();
-    const std::string part(30u << 20, ' ');
-    std::vector<int> fds;
-    for (int k = 0; k < row.count; ++k) {
-      const int fd = connect_to(daemon->http_port());
-      if (fd < 0) continue;
-      set_timeouts(fd, 5);
-      send_all(fd,
-               "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
-               "Content-Length: " +
-                   std::to_string(31u << 20) + "\r\n\r\n");
-      send_all(fd, part);
-      fds.push_back(fd);
-    }
+    std::vector<int> fds =
+        open_connections(*daemon, row.count, 5,
+                         "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                         "Content-Length: " +
+                             std::to_string(31u << 20) + "\r\n\r\n",
+                         std::string(30u << 20, ' '));
     probe(*daemon, row);
     tally(fds, row, 2);
     finish(*daemon, row);
@@ -283,18 +288,15 @@ class Bench {
     request.set_files(true);
     const std::string design = to_json(request, false);
     const int baseline = daemon->open_sockets();
-    std::vector<int> fds;
-    for (int k = 0; k < row.count; ++k) {
-      const int fd = connect_to(daemon->http_port());
-      if (fd < 0) continue;
-      const int small = 4096;  // a client that never reads: its window stays closed
-      setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
-      send_all(fd, k < 8 ? std::string("GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n")
-                         : "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Type: "
-                           "application/json\r\nContent-Length: " +
-                               std::to_string(design.size()) + "\r\n\r\n" + design);
+    // A client that never reads: a small window that stays closed.
+    std::vector<int> fds =
+        open_connections(*daemon, 8, 5, "GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n", "", 4096);
+    for (int fd : open_connections(*daemon, 3, 5,
+                                   "POST /v1/design HTTP/1.1\r\nHost: x\r\nContent-Type: "
+                                   "application/json\r\nContent-Length: " +
+                                       std::to_string(design.size()) + "\r\n\r\n" + design,
+                                   "", 4096))
       fds.push_back(fd);
-    }
     probe(*daemon, row);
     // Past the stall timeout (and the 5 s a finished answer's connection may drain) the daemon
     // must have let go of every one of them, read or not.
@@ -331,14 +333,7 @@ class Bench {
     Row row{"slowloris", "100 connections trickling a header, a byte every 0.5 s", 100};
     auto daemon = start();
     row.idle_mib = daemon->resident_mib();
-    std::vector<int> fds;
-    for (int k = 0; k < row.count; ++k) {
-      const int fd = connect_to(daemon->http_port());
-      if (fd < 0) continue;
-      set_timeouts(fd, 1);
-      send_all(fd, "GET /healthz HTTP/1.1\r\n");
-      fds.push_back(fd);
-    }
+    std::vector<int> fds = open_connections(*daemon, row.count, 1, "GET /healthz HTTP/1.1\r\n");
     std::atomic<bool> done{false};
     std::vector<bool> cut(fds.size(), false);
     std::thread trickle([&] {
