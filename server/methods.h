@@ -90,7 +90,8 @@ auto job_function_from_json(const M& method, std::shared_ptr<const std::string> 
   return [&method, body](const Progress& progress,
                          JobInfo& info) -> std::unique_ptr<google::protobuf::Message> {
     typename M::Request request;
-    from_json(*body, request);  // strict: InvalidInput naming the field (gridshell/files.h)
+    // Strict (gridshell/files.h), and an over-long string is refused before protobuf copies it.
+    from_json(*body, request, kJsonMaxDepth, UnknownFields::Refuse, kMaxTextBytes);
     progress.check();
     check_text_limits(request);
     const auto [vertices, faces] = mesh_size(request);

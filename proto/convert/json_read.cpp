@@ -587,9 +587,11 @@ bool underflows(std::string_view s) {
 /// at once.
 class Checker {
  public:
-  Checker(const pb::Descriptor* root, int max_depth, UnknownFields unknown)
+  Checker(const pb::Descriptor* root, int max_depth, UnknownFields unknown,
+          std::size_t max_string_bytes)
       : pool_(root->file()->pool()),
         max_depth_(static_cast<std::size_t>(std::max(max_depth, 0))),
+        max_string_bytes_(max_string_bytes),
         skip_unknown_(unknown == UnknownFields::Skip) {
     classify_message(root_, root);
     root_.shape = Shape::Root;
@@ -655,6 +657,10 @@ class Checker {
     if (whole(s)) return fail_got(s, got_string(value));
     switch (s.type) {
       case Type::String:
+        if (max_string_bytes_ > 0 && value.size() > max_string_bytes_)
+          return fail(path(true), "too long: " + std::to_string(value.size()) + " bytes, at most " +
+                                      std::to_string(max_string_bytes_));
+        return true;
       case Type::StringWkt:
       case Type::Value:
       case Type::Generic:
@@ -1063,6 +1069,7 @@ class Checker {
 
   const pb::DescriptorPool* pool_;  // the root message's: where an Any's "@type" is looked up
   const std::size_t max_depth_;
+  const std::size_t max_string_bytes_;  // 0 = no limit
   const bool skip_unknown_;
   Slot root_;
   std::vector<Frame> frames_;  // [0, depth_) are open; the rest are kept for reuse
@@ -1077,7 +1084,7 @@ class Checker {
 }  // namespace
 
 void from_json(std::string_view text, google::protobuf::Message& message, int max_depth,
-               UnknownFields unknown) {
+               UnknownFields unknown, std::size_t max_string_bytes) {
   message.Clear();
   // nlohmann skips a byte order mark, protobuf's parser does not: refused, as before.
   if (text.substr(0, 3) == "\xEF\xBB\xBF")
@@ -1086,7 +1093,7 @@ void from_json(std::string_view text, google::protobuf::Message& message, int ma
   // no raw NUL anywhere (in a string it must be escaped): refused wherever it is.
   if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos)
     throw InvalidInput("", "not valid JSON: a NUL byte, at byte " + std::to_string(nul + 1));
-  Checker checker(message.GetDescriptor(), max_depth, unknown);
+  Checker checker(message.GetDescriptor(), max_depth, unknown, max_string_bytes);
   const bool valid = json::sax_parse(text.data(), text.data() + text.size(), &checker);
   if (checker.failed()) throw InvalidInput(checker.error_field(), checker.error_message());
   if (!valid) throw InvalidInput("", "not valid JSON");

@@ -477,6 +477,36 @@ TEST(JsonRead, SkipsUnknownFieldsOnlyWhenAsked) {
                  kJsonMaxDepth, UnknownFields::Skip);
 }
 
+// The daemon's text limit, checked in the pass before protobuf copies the string: string fields
+// (repeated ones by element) longer than the limit are refused naming the field; bytes fields
+// (whole mesh files) and strings exactly at the limit are not.
+TEST(JsonRead, RefusesStringsLongerThanTheLimitWhenGiven) {
+  const auto read = [](const std::string& json, std::size_t limit) {
+    v1::DesignRequest request;
+    from_json(json, request, kJsonMaxDepth, UnknownFields::Refuse, limit);
+    return request;
+  };
+  const std::string name(1025, 'n');
+  EXPECT_EQ(read(R"({"mesh":{"name":")" + name + R"("}})", 0).mesh().name(), name);  // no limit
+  EXPECT_EQ(read(R"({"mesh":{"name":")" + name.substr(1) + R"("}})", 1024).mesh().name().size(),
+            1024u);
+  try {
+    read(R"({"mesh":{"name":")" + name + R"("}})", 1024);
+    ADD_FAILURE() << "accepted a 1025-byte name";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "mesh.name");
+    EXPECT_EQ(e.message(), "too long: 1025 bytes, at most 1024");
+  }
+  try {
+    read(R"({"mesh":{"warnings":["ok",")" + name + R"("]}})", 1024);
+    ADD_FAILURE() << "accepted a 1025-byte warning";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.field(), "mesh.warnings[1]");
+  }
+  const std::string file(4000, 'A');  // base64 of 3000 bytes: a bytes field, not text
+  EXPECT_EQ(read(R"({"mesh":{"file":")" + file + R"("}})", 1024).mesh().file().size(), 3000u);
+}
+
 // ---- Accepted ----------------------------------------------------------------------------------
 
 TEST(JsonRead, ReadsRealRequestsAndFilesBack) {

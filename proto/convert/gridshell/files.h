@@ -7,6 +7,7 @@
 
 #include <google/protobuf/message.h>
 
+#include <cstddef>
 #include <map>
 #include <string>
 #include <string_view>
@@ -64,7 +65,11 @@ enum class UnknownFields {
 /// parser fills the message. Throws InvalidInput(field path, reason): the path in proto field
 /// names with indices ("design.options.files", "mesh.positions[12]", "stage_seconds["grid"]"),
 /// the reason what was expected and what came; "" for text that is not JSON at all.
+/// `max_string_bytes` > 0: a string field (not bytes, not inside google.protobuf values) longer
+/// than that is refused in the checking pass ("mesh.name: too long: N bytes, at most M"), before
+/// protobuf copies it (the daemon passes its text limit: a 31 MiB name peaked at +212 MiB).
 void from_json(std::string_view text, google::protobuf::Message& message,
-               int max_depth = kJsonMaxDepth, UnknownFields unknown = UnknownFields::Refuse);
+               int max_depth = kJsonMaxDepth, UnknownFields unknown = UnknownFields::Refuse,
+               std::size_t max_string_bytes = 0);
 
 }  // namespace gridshell
