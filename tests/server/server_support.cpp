@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "server_support.h"
 
+#include <grpcpp/generic/generic_stub.h>
 #include <openssl/evp.h>
 #include <openssl/pem.h>
 #include <openssl/x509.h>
@@ -170,6 +171,72 @@ CallResult<v1::GeodesicResult> call_geodesic(v1::Gridshell::Stub& stub,
                                              const v1::GeodesicRequest& request,
                                              grpc::ClientContext* context) {
   return call(&v1::Gridshell::Stub::Geodesic, stub, request, context);
+}
+
+namespace {
+
+std::string bytes_of(const grpc::ByteBuffer& buffer) {
+  std::vector<grpc::Slice> slices;
+  std::string text;
+  if (!buffer.Dump(&slices).ok()) return text;
+  for (const grpc::Slice& s : slices)
+    text.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  return text;
+}
+
+}  // namespace
+
+RawReply raw_unary(const std::shared_ptr<grpc::Channel>& channel, const std::string& method,
+                   const std::string& bytes, const std::string& authorization) {
+  grpc::GenericStub generic(channel);
+  grpc::Slice slice{bytes};
+  grpc::ByteBuffer request(&slice, 1), response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
+  grpc::CompletionQueue queue;
+  auto call = generic.PrepareUnaryCall(&context, method, request, &queue);
+  call->StartCall();
+  RawReply reply;
+  call->Finish(&response, &reply.status, reinterpret_cast<void*>(1));
+  void* tag;
+  bool ok;
+  if (!queue.Next(&tag, &ok)) throw std::runtime_error("raw_unary: the completion queue ended");
+  if (reply.status.ok()) reply.messages.push_back(bytes_of(response));
+  return reply;
+}
+
+RawReply raw_stream(const std::shared_ptr<grpc::Channel>& channel, const std::string& method,
+                    const std::string& bytes, const std::string& authorization) {
+  grpc::GenericStub generic(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
+  grpc::CompletionQueue queue;
+  auto call = generic.PrepareCall(&context, method, &queue);
+  void* tag;
+  bool ok;
+  // Every operation's tag comes back (with ok false when the call failed); Next() returns false
+  // only once the queue is shut down, which nothing here does.
+  const auto next = [&] {
+    if (!queue.Next(&tag, &ok)) throw std::runtime_error("raw_stream: the completion queue ended");
+    return ok;
+  };
+  call->StartCall(reinterpret_cast<void*>(1));
+  next();
+  grpc::Slice slice{bytes};
+  grpc::ByteBuffer request(&slice, 1), response;
+  call->WriteLast(request, grpc::WriteOptions(), reinterpret_cast<void*>(2));
+  next();
+  RawReply reply;
+  for (int reads = 0; reads < 10000; ++reads) {  // the answers, then the end of the stream
+    call->Read(&response, reinterpret_cast<void*>(3));
+    if (!next()) break;
+    reply.messages.push_back(bytes_of(response));
+  }
+  call->Finish(&reply.status, reinterpret_cast<void*>(4));
+  next();
+  return reply;
 }
 
 const v1::Design& small_design() {

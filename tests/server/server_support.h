@@ -71,6 +71,18 @@ CallResult<v1::GeodesicResult> call_geodesic(v1::Gridshell::Stub& stub,
 CallResult<v1::RunResult> call_run(v1::Gridshell::Stub& stub, const v1::RunRequest& request,
                                    grpc::ClientContext* context = nullptr);
 
+/// A call by method path with raw request bytes, for services without a stub here (health,
+/// reflection) and for bytes that are no message: its status and the messages it answered.
+struct RawReply {
+  grpc::Status status;
+  std::vector<std::string> messages;
+};
+RawReply raw_unary(const std::shared_ptr<grpc::Channel>& channel, const std::string& method,
+                   const std::string& bytes, const std::string& authorization = "");
+/// The same for a streaming method: `bytes` as its (only) request, every answer read.
+RawReply raw_stream(const std::shared_ptr<grpc::Channel>& channel, const std::string& method,
+                    const std::string& bytes, const std::string& authorization = "");
+
 /// A small design (plane, resolution 16) to simulate, made in process once.
 const v1::Design& small_design();
 

@@ -2,7 +2,6 @@
 // gridshelld over gRPC, in-process on ephemeral loopback ports: results identical to in-process
 // runs, concurrency, cancellation and deadlines, the bounded queue, status codes for every bad
 // input, health checking, reflection, the log line and shutdown.
-#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -561,57 +560,21 @@ TEST(Daemon, SimulateDeadlineStopsTheSolverAndTheDaemonKeepsServing) {
 
 TEST(Daemon, HealthCheckAndReflectionListTheService) {
   TestDaemon daemon;
-  auto channel = daemon.channel();
-  grpc::GenericStub generic(channel);
   // grpc.health.v1.Health/Check {service: "gridshell.v1.Gridshell"}; reply {status: SERVING}.
-  {
-    const std::string service = "gridshell.v1.Gridshell";
-    const std::string bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
-    grpc::Slice slice(bytes);
-    grpc::ByteBuffer request(&slice, 1), response;
-    grpc::ClientContext context;
-    grpc::CompletionQueue queue;
-    std::unique_ptr<grpc::GenericClientAsyncResponseReader> call =
-        generic.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &queue);
-    call->StartCall();
-    grpc::Status status;
-    call->Finish(&response, &status, reinterpret_cast<void*>(1));
-    void* tag;
-    bool ok;
-    ASSERT_TRUE(queue.Next(&tag, &ok));
-    ASSERT_TRUE(status.ok()) << status.error_message();
-    std::vector<grpc::Slice> slices;
-    ASSERT_TRUE(response.Dump(&slices).ok());
-    std::string reply;
-    for (const auto& s : slices) reply.append(reinterpret_cast<const char*>(s.begin()), s.size());
-    EXPECT_EQ(reply, std::string("\x08\x01", 2));  // status = SERVING
-  }
+  const std::string service = "gridshell.v1.Gridshell";
+  const auto health =
+      testing::raw_unary(daemon.channel(), "/grpc.health.v1.Health/Check",
+                         std::string("\x0a", 1) + static_cast<char>(service.size()) + service);
+  ASSERT_TRUE(health.status.ok()) << health.status.error_message();
+  EXPECT_EQ(health.messages, std::vector<std::string>{std::string("\x08\x01", 2)});
   // grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo {list_services: ""}.
-  {
-    grpc::ClientContext context;
-    grpc::CompletionQueue queue;
-    auto call = generic.PrepareCall(
-        &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &queue);
-    void* tag;
-    bool ok;
-    call->StartCall(reinterpret_cast<void*>(1));
-    ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
-    grpc::Slice slice(std::string("\x3a\x00", 2));
-    grpc::ByteBuffer request(&slice, 1), response;
-    call->WriteLast(request, grpc::WriteOptions(), reinterpret_cast<void*>(2));
-    ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
-    call->Read(&response, reinterpret_cast<void*>(3));
-    ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
-    std::vector<grpc::Slice> slices;
-    ASSERT_TRUE(response.Dump(&slices).ok());
-    std::string reply;
-    for (const auto& s : slices) reply.append(reinterpret_cast<const char*>(s.begin()), s.size());
-    EXPECT_NE(reply.find("gridshell.v1.Gridshell"), std::string::npos);
-    EXPECT_NE(reply.find("grpc.health.v1.Health"), std::string::npos);
-    grpc::Status status;
-    call->Finish(&status, reinterpret_cast<void*>(4));
-    ASSERT_TRUE(queue.Next(&tag, &ok));
-  }
+  const auto reflection = testing::raw_stream(
+      daemon.channel(), "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+      std::string("\x3a\x00", 2));
+  ASSERT_TRUE(reflection.status.ok()) << reflection.status.error_message();
+  ASSERT_EQ(reflection.messages.size(), 1u);
+  EXPECT_NE(reflection.messages[0].find("gridshell.v1.Gridshell"), std::string::npos);
+  EXPECT_NE(reflection.messages[0].find("grpc.health.v1.Health"), std::string::npos);
 }
 
 TEST(Daemon, OneStructuredLogLinePerRequest) {

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Security of gridshelld: loopback by default, TLS and a bearer token for anything else, the
 // token checked on every gRPC call (health included) and every HTTP API call.
-#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -36,60 +35,12 @@ struct SecureDaemon {
   }
 };
 
-/// A unary call by name with raw bytes (health and reflection have no stub here).
-grpc::Status raw_call(const SecureDaemon& secure, const std::string& method,
-                      const std::string& bytes, const std::string& authorization,
-                      std::string* reply = nullptr) {
-  grpc::GenericStub generic(secure.daemon->channel(secure.certificate.cert_pem));
-  grpc::Slice slice{bytes};
-  grpc::ByteBuffer request(&slice, 1), response;
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
-  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
-  grpc::CompletionQueue queue;
-  auto call = generic.PrepareUnaryCall(&context, method, request, &queue);
-  call->StartCall();
-  grpc::Status status;
-  call->Finish(&response, &status, reinterpret_cast<void*>(1));
-  void* tag;
-  bool ok;
-  EXPECT_TRUE(queue.Next(&tag, &ok));
-  if (reply) {
-    std::vector<grpc::Slice> slices;
-    (void)response.Dump(&slices);
-    reply->clear();
-    for (const grpc::Slice& s : slices)
-      reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
-  }
-  return status;
-}
-
-/// A streaming call by name with raw bytes; the status.
-grpc::Status raw_stream(const SecureDaemon& secure, const std::string& method,
-                        const std::string& bytes, const std::string& authorization) {
-  grpc::GenericStub generic(secure.daemon->channel(secure.certificate.cert_pem));
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
-  if (!authorization.empty()) context.AddMetadata("authorization", authorization);
-  grpc::CompletionQueue queue;
-  auto call = generic.PrepareCall(&context, method, &queue);
-  void* tag;
-  bool ok;
-  call->StartCall(reinterpret_cast<void*>(1));
-  EXPECT_TRUE(queue.Next(&tag, &ok));
-  grpc::Slice slice{bytes};
-  grpc::ByteBuffer request(&slice, 1), response;
-  call->WriteLast(request, grpc::WriteOptions(), reinterpret_cast<void*>(2));
-  EXPECT_TRUE(queue.Next(&tag, &ok));
-  for (int reads = 0; reads < 10000; ++reads) {  // progress events, then the end of the stream
-    call->Read(&response, reinterpret_cast<void*>(3));
-    EXPECT_TRUE(queue.Next(&tag, &ok));
-    if (!ok) break;
-  }
-  grpc::Status status;
-  call->Finish(&status, reinterpret_cast<void*>(4));
-  EXPECT_TRUE(queue.Next(&tag, &ok));
-  return status;
+/// A raw call on the secure daemon's channel (TLS when it has a certificate).
+testing::RawReply raw(const SecureDaemon& secure, bool stream, const std::string& method,
+                      const std::string& bytes, const std::string& authorization) {
+  const auto channel = secure.daemon->channel(secure.certificate.cert_pem);
+  return stream ? testing::raw_stream(channel, method, bytes, authorization)
+                : testing::raw_unary(channel, method, bytes, authorization);
 }
 
 grpc::Status patch_with(const SecureDaemon& secure, const std::string& authorization) {
@@ -122,20 +73,20 @@ TEST(Security, EveryGrpcServiceNeedsTheToken) {
       const auto expected =
           header == bearer ? grpc::StatusCode::OK : grpc::StatusCode::UNAUTHENTICATED;
       // Health/Check with an empty request (the whole server).
-      std::string reply;
-      EXPECT_EQ(raw_call(secure, "/grpc.health.v1.Health/Check", "", header, &reply).error_code(),
-                expected);
+      const auto health = raw(secure, false, "/grpc.health.v1.Health/Check", "", header);
+      EXPECT_EQ(health.status.error_code(), expected);
       if (header == bearer) {
-        EXPECT_EQ(reply, std::string("\x08\x01", 2));  // status: SERVING
+        EXPECT_EQ(health.messages, std::vector<std::string>{std::string("\x08\x01", 2)});
       }
       // Reflection: list_services (field 7, empty string), a bidirectional stream.
-      EXPECT_EQ(raw_stream(secure, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
-                           std::string("\x3a\x00", 2), header)
-                    .error_code(),
+      EXPECT_EQ(raw(secure, true, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                    std::string("\x3a\x00", 2), header)
+                    .status.error_code(),
                 expected);
       // Our own service: Examples, an empty request.
-      EXPECT_EQ(raw_stream(secure, "/gridshell.v1.Gridshell/Examples", "", header).error_code(),
-                expected);
+      EXPECT_EQ(
+          raw(secure, true, "/gridshell.v1.Gridshell/Examples", "", header).status.error_code(),
+          expected);
     }
     if (!tls) {  // the plaintext port answers a client with the token (stub, not raw bytes)
       auto stub = secure.daemon->stub();
@@ -157,12 +108,13 @@ TEST(Security, MalformedGrpcBytesAreInvalidArgument) {
     const std::string path = std::string("/gridshell.v1.Gridshell/") + method;
     // A length-delimited field whose length runs past the end, and a truncated varint.
     for (const std::string& bytes : {std::string("\x0a\x7f\x01", 3), std::string("\x08\xff")}) {
-      const grpc::Status status = raw_stream(secure, path, bytes, bearer);
+      const grpc::Status status = raw(secure, true, path, bytes, bearer).status;
       EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
       EXPECT_NE(status.error_message().find("malformed protocol buffer"), std::string::npos)
           << status.error_message();
     }
-    EXPECT_EQ(raw_stream(secure, path, "\xff", "").error_code(), grpc::StatusCode::UNAUTHENTICATED);
+    EXPECT_EQ(raw(secure, true, path, "\xff", "").status.error_code(),
+              grpc::StatusCode::UNAUTHENTICATED);
   }
   EXPECT_EQ(secure.daemon->daemon().stats().succeeded, 0u);
 }
