@@ -13,7 +13,6 @@
 #include <sys/resource.h>
 
 #include <atomic>
-#include <cmath>
 #include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -197,25 +196,28 @@ Daemon::Daemon(DaemonOptions options) : impl_(std::make_unique<Impl>()) {
                          "expected an origin like https://example.org:8443, got '" + origin + "'");
   if (o.http_body_limit_mib < 1 || o.http_body_limit_mib > 4096)
     throw InvalidInput("--http-body-limit-mib", "must be 1..4096");
-  if (o.http_max_connections < 2 || o.http_max_connections > 100000)
+  if (o.http_budgets.max_connections < 2 || o.http_budgets.max_connections > 100000)
     throw InvalidInput("--http-max-connections", "must be 2..100000");
   if (rlimit files{}; !o.http.empty() && getrlimit(RLIMIT_NOFILE, &files) == 0 &&
                       files.rlim_cur != RLIM_INFINITY &&
-                      static_cast<rlim_t>(o.http_max_connections) + 128 > files.rlim_cur)
+                      static_cast<rlim_t>(o.http_budgets.max_connections) + 128 > files.rlim_cur)
     throw InvalidInput("--http-max-connections",
-                       std::to_string(o.http_max_connections) + " connections need about " +
-                           std::to_string(o.http_max_connections + 128) +
+                       std::to_string(o.http_budgets.max_connections) + " connections need about " +
+                           std::to_string(o.http_budgets.max_connections + 128) +
                            " file descriptors; the limit is " + std::to_string(files.rlim_cur) +
                            " (ulimit -n)");
-  if (o.http_max_client_connections < 1 || o.http_max_client_connections > o.http_max_connections)
+  if (o.http_budgets.max_client_connections < 1 ||
+      o.http_budgets.max_client_connections > o.http_budgets.max_connections)
     throw InvalidInput("--http-max-client-connections", "must be 1..--http-max-connections");
-  if (o.http_body_budget_mib < o.http_body_limit_mib || o.http_body_budget_mib > 65536)
+  if (o.http_budgets.body_budget_mib < o.http_body_limit_mib ||
+      o.http_budgets.body_budget_mib > 65536)
     throw InvalidInput("--http-body-budget-mib", "must be at least --http-body-limit-mib (" +
                                                      std::to_string(o.http_body_limit_mib) +
                                                      ") and at most 65536");
-  if (!(o.http_stall_timeout_seconds >= 0.1 && o.http_stall_timeout_seconds <= 3600))
+  if (!(o.http_budgets.stall_timeout_seconds >= 0.1 &&
+        o.http_budgets.stall_timeout_seconds <= 3600))
     throw InvalidInput("--http-stall-timeout", "must be 0.1..3600 seconds");
-  if (o.http_min_rate_kib < 1 || o.http_min_rate_kib > 1 << 20)
+  if (o.http_budgets.min_rate_kib < 1 || o.http_budgets.min_rate_kib > 1 << 20)
     throw InvalidInput("--http-min-rate-kib", "must be 1..1048576");
   if (!(o.shutdown_grace_seconds >= 0)) throw InvalidInput("--shutdown-grace", "must be >= 0");
   if (tls) {
@@ -295,12 +297,7 @@ void Daemon::start() {
     HttpOptions http;
     http.address = o.http;
     http.body_limit = static_cast<std::size_t>(o.http_body_limit_mib) << 20;
-    http.max_connections = static_cast<std::size_t>(o.http_max_connections);
-    http.max_client_connections = static_cast<std::size_t>(o.http_max_client_connections);
-    http.body_budget = static_cast<std::size_t>(o.http_body_budget_mib) << 20;
-    http.stall_timeout = std::chrono::milliseconds(
-        static_cast<long long>(std::lround(o.http_stall_timeout_seconds * 1000)));
-    http.min_rate = static_cast<std::size_t>(o.http_min_rate_kib) << 10;
+    http.budgets = o.http_budgets;
     http.static_dir = o.static_dir;
     http.cors_origins = o.cors_origins;
     http.token = d.token;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "http_budgets.h"
 #include "job_queue.h"
 
 namespace gridshell::server {
@@ -30,12 +31,7 @@ struct DaemonOptions {
   /// Largest HTTP request body. 32 MiB holds a 250k-triangle mesh as an ASCII OBJ sent as file
   /// bytes (about 13 MB, 17 MB in base64) or as packed arrays in JSON (about 13 MB), with room.
   int http_body_limit_mib = 32;
-  /// The gateway's budgets (HttpOptions, docs/api.md "Limits").
-  int http_max_connections = 512;
-  int http_max_client_connections = 128;
-  int http_body_budget_mib = 128;
-  double http_stall_timeout_seconds = 10;
-  int http_min_rate_kib = 64;
+  HttpBudgets http_budgets;               ///< the gateway's budgets (http_budgets.h)
   int cache_mib = 512;                    ///< per-patch design work kept for redesigns; 0 = none
   std::vector<std::string> cors_origins;  ///< origins allowed to call /v1/* from their pages
   std::string static_dir;                 ///< served by the gateway for GET; empty = none

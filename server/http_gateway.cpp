@@ -216,9 +216,9 @@ struct HttpGateway::Impl {
     std::size_t total = 0;
     for (const auto& [a, n] : count) total += n;
     std::string from;
-    if (count[address] >= options.max_client_connections) {
+    if (count[address] >= static_cast<std::size_t>(options.budgets.max_client_connections)) {
       from = address;
-    } else if (total >= options.max_connections) {
+    } else if (total >= static_cast<std::size_t>(options.budgets.max_connections)) {
       std::size_t most = 0;
       for (const auto& [a, n] : count)
         if (n > most) most = n, from = a;
@@ -240,20 +240,20 @@ struct HttpGateway::Impl {
   /// Reserves `bytes` of the body budget for `self`; bodies stalled for a second or more give
   /// way (least recently active first) when it does not fit. False: no room.
   bool reserve(std::size_t bytes, SessionBase* self) {
-    if (body_in_use + bytes > options.body_budget) {
+    if (body_in_use + bytes > options.budgets.body_budget_bytes()) {
       auto all = live();
       std::sort(all.begin(), all.end(),
                 [](const auto& a, const auto& b) { return a->last_activity < b->last_activity; });
       const auto stalled = Clock::now() - std::chrono::seconds(1);
       for (const auto& s : all) {
-        if (body_in_use + bytes <= options.body_budget) break;
+        if (body_in_use + bytes <= options.budgets.body_budget_bytes()) break;
         if (s.get() == self || s->phase != Phase::Body || s->reserved == 0 ||
             s->last_activity > stalled)
           continue;
         s->evict();
         ++evicted;
       }
-      if (body_in_use + bytes > options.body_budget) return false;
+      if (body_in_use + bytes > options.budgets.body_budget_bytes()) return false;
     }
     body_in_use += bytes;
     self->reserved += bytes;
@@ -292,7 +292,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
 
   void run() {
     if constexpr (kTls) {
-      beast::get_lowest_layer(stream_).expires_after(gateway_.options.stall_timeout);
+      beast::get_lowest_layer(stream_).expires_after(gateway_.options.budgets.stall_timeout());
       stream_.async_handshake(ssl::stream_base::server,
                               [self = this->shared_from_this()](beast::error_code ec) {
                                 if (ec) return;  // not TLS, or gave up: drop the connection
@@ -432,7 +432,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
   void read_header() {
     phase = Phase::Header;
     last_activity = Clock::now();
-    beast::get_lowest_layer(stream_).expires_after(gateway_.options.stall_timeout);
+    beast::get_lowest_layer(stream_).expires_after(gateway_.options.budgets.stall_timeout());
     http::async_read_header(stream_, buffer_, *parser_,
                             [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
                               self->on_header(ec);
@@ -475,11 +475,11 @@ class HttpGateway::Impl::Session final : public SessionBase,
   /// The latest time the next bytes may come (or go): within the stall timeout, and never
   /// slower on average than the minimum rate once the stall timeout has passed.
   Clock::time_point pace_deadline() const {
-    const auto& o = gateway_.options;
-    const auto by_rate = pace_start_ + o.stall_timeout +
+    const HttpBudgets& b = gateway_.options.budgets;
+    const auto by_rate = pace_start_ + b.stall_timeout() +
                          std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                             static_cast<double>(pace_bytes_) / o.min_rate));
-    return std::min(Clock::now() + o.stall_timeout, by_rate);
+                             static_cast<double>(pace_bytes_) / b.min_rate_bytes()));
+    return std::min(Clock::now() + b.stall_timeout(), by_rate);
   }
 
   void read_body() {
@@ -510,7 +510,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
     if (ec == beast::error::timeout && phase == Phase::Body)
       return respond_error({StatusCode::DeadlineExceeded,
                             "the request body stood still or arrived slower than " +
-                                std::to_string(gateway_.options.min_rate >> 10) +
+                                std::to_string(gateway_.options.budgets.min_rate_kib) +
                                 " KiB/s (gridshelld --http-stall-timeout, --http-min-rate-kib)"},
                            false, 408);
     if (ec == http::error::end_of_stream || ec == net::error::eof || ec == beast::error::timeout ||

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "http_budgets.h"
 #include "job_queue.h"
 #include "methods.h"
 
@@ -28,24 +29,9 @@ namespace gridshell::server {
 struct HttpOptions {
   std::string address = "127.0.0.1:8080";  ///< HOST:PORT; port 0 picks a free one
   std::size_t body_limit = 256u << 20;     ///< largest request body, bytes (413 beyond)
-  // Budgets (docs/api.md "Limits"); one client must not be able to take them all.
-  /// Open connections in all, and from one client address. A new connection beyond either
-  /// makes the least recently active connection that waits for a request (idle, or its header
-  /// or body arriving) give way: of the same address first, then of the address that has the
-  /// most. Only when every connection is busy with an answer is the new one refused (503).
-  std::size_t max_connections = 512;
-  std::size_t max_client_connections = 128;
-  /// Bytes of request bodies held at once (being received, or waiting for their answer): a
-  /// body reserves its Content-Length when its header arrives (a chunked one the body limit).
-  /// A request that does not fit makes bodies stalled for a second or more give way, or gets
-  /// 503 with Retry-After.
-  std::size_t body_budget = 128u << 20;
-  /// Once a request's first byte arrives its header must be complete within this time; a body
-  /// or an answer must move at least this often, and after this grace average min_rate.
-  std::chrono::milliseconds stall_timeout{10000};
-  std::size_t min_rate = 64u << 10;  ///< bytes per second, both directions
-  std::string static_dir;            ///< folder served for GET; empty = none
-  std::string token;                 ///< bearer token for /v1/* and /healthz; empty = none
+  HttpBudgets budgets;     ///< one client must not be able to take the gateway from the others
+  std::string static_dir;  ///< folder served for GET; empty = none
+  std::string token;       ///< bearer token for /v1/* and /healthz; empty = none
   /// Origins (scheme://host[:port]) whose pages may call /v1/* from another origin (CORS);
   /// empty = none: browsers only let pages served by this gateway call it.
   std::vector<std::string> cors_origins;

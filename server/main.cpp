@@ -47,19 +47,19 @@ int main(int argc, char** argv) {
   app.add_option("--http-body-limit-mib", options.http_body_limit_mib,
                  "largest HTTP request body, MiB")
       ->capture_default_str();
-  app.add_option("--http-max-connections", options.http_max_connections,
+  app.add_option("--http-max-connections", options.http_budgets.max_connections,
                  "HTTP connections in all; beyond, the least recently active waiting one closes")
       ->capture_default_str();
-  app.add_option("--http-max-client-connections", options.http_max_client_connections,
+  app.add_option("--http-max-client-connections", options.http_budgets.max_client_connections,
                  "HTTP connections from one client address (the same rule within it)")
       ->capture_default_str();
-  app.add_option("--http-body-budget-mib", options.http_body_budget_mib,
+  app.add_option("--http-body-budget-mib", options.http_budgets.body_budget_mib,
                  "HTTP request bodies held at once, MiB; beyond, stalled ones give way or 503")
       ->capture_default_str();
-  app.add_option("--http-stall-timeout", options.http_stall_timeout_seconds,
+  app.add_option("--http-stall-timeout", options.http_budgets.stall_timeout_seconds,
                  "seconds an HTTP header may take, and a body or answer may stand still")
       ->capture_default_str();
-  app.add_option("--http-min-rate-kib", options.http_min_rate_kib,
+  app.add_option("--http-min-rate-kib", options.http_budgets.min_rate_kib,
                  "KiB/s an HTTP body or answer must average after the stall timeout")
       ->capture_default_str();
   // The web page, served at / when it is built (scripts/build.sh); --static elsewhere, or
