@@ -38,30 +38,6 @@
 
 namespace gridshell {
 
-const std::vector<Material>& material_presets() {
-  // Reference values along the grain / fibres (approximate; see docs/decisions.md): E, G,
-  // bending strength, shear strength.
-  static const std::vector<Material> presets{
-      {"lime-wood", 7.4e9, 0.46e9, 60e6, 6.8e6},      // Tilia, the paper's lamellas
-      {"birch-plywood", 9.0e9, 0.62e9, 50e6, 9.0e6},  // face grain direction
-      {"beech-wood", 14.0e9, 1.08e9, 103e6, 13.9e6},  //
-      {"gfrp", 25.0e9, 3.5e9, 240e6, 25e6},           // pultruded glass fibre (EN 13706 E23)
-      {"aluminium", 70.0e9, 26.0e9, 276e6, 159e6},    // 6061-T6, yield
-      {"steel", 210.0e9, 81.0e9, 235e6, 136e6},       // S235, yield
-      {"hdpe", 0.9e9, 0.31e9, 25e6, 14e6},            // high-density polyethylene, yield
-  };
-  return presets;
-}
-
-Material material_by_name(const std::string& name) {
-  std::string known;
-  for (const Material& m : material_presets()) {
-    if (m.name == name) return m;
-    known += (known.empty() ? "" : ", ") + m.name;
-  }
-  throw InvalidInput("", "unknown material '" + name + "' (known: " + known + ")");
-}
-
 namespace {
 
 using rod_terms::EdgeReference;

@@ -38,11 +38,19 @@ struct Material {
   double shear_modulus = 0;     ///< G, Pa
   double bending_strength = 0;  ///< f_m, Pa (0 = unknown)
   double shear_strength = 0;    ///< f_v, Pa (0 = unknown)
+  std::string label;            ///< "lime wood": for forms and bills of materials
+  std::string source;           ///< where the values come from
+  bool site = false;            ///< added by add_material_presets, not built in
 };
 
-/// The built-in materials (reference values; see docs/decisions.md), "lime-wood" first (the
-/// paper's models are lime wood lamellas).
+/// The materials: the built-in ones (reference values; kernel/simulation/materials.cpp, the one
+/// place they are listed), "lime-wood" first (the paper's models are lime wood lamellas), then
+/// those a site added.
 const std::vector<Material>& material_presets();
+/// Adds a site's own materials after the built-in ones (gridshell.v1.MaterialLibrary, read by
+/// the application layer). Call before any thread runs. Throws InvalidInput naming
+/// "materials[i].<field>" for an empty or taken name or moduli outside 1e3..1e13 Pa.
+void add_material_presets(const std::vector<Material>& materials);
 /// A preset by name; throws InvalidInput listing the known names.
 Material material_by_name(const std::string& name);
 
