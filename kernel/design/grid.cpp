@@ -244,7 +244,8 @@ Infeasible no_end(Family family, int index, double u1) {
   msg << "member " << member_name(family, index) << " (u1 = " << u1
       << "): no end point on the opposite boundary has equal surface and planar length "
          "(criterion i)";
-  return Infeasible(family == Family::G ? "options.members_u" : "options.members_v", msg.str());
+  return Infeasible(family == Family::G ? "options.members_u" : "options.members_v", msg.str(),
+                    family == Family::G ? Reason::GMembersDoNotFit : Reason::HMembersDoNotFit);
 }
 
 }  // namespace
@@ -615,8 +616,9 @@ Grid build_grid(const Patch& patch, const GeodesicSolver& solver, const PlanarPa
           msg << "members " << member_name(m.family, m.index) << " and "
               << member_name(n.family, n.index)
               << " of the same family cross in the planar grid (criterion iii)";
-          throw Infeasible(m.family == Family::G ? "options.members_u" : "options.members_v",
-                           msg.str());
+          throw Infeasible(
+              m.family == Family::G ? "options.members_u" : "options.members_v", msg.str(),
+              m.family == Family::G ? Reason::GMembersDoNotFit : Reason::HMembersDoNotFit);
         }
       }
   for (auto& [key, x] : crossings) grid.crossings.push_back(x);

@@ -487,10 +487,13 @@ std::vector<MemberPosition> place_members(const CladdingFunction& cladding,
       }
       msg << "; members meet the boundaries at angles down to " << std::fixed
           << std::setprecision(1) << std::asin(sine) * 180 / std::numbers::pi << " deg";
+      const Reason reason = automatic             ? Reason::LamellasTooWide
+                            : family == Family::G ? Reason::GMembersDoNotFit
+                                                  : Reason::HMembersDoNotFit;
       throw Infeasible(automatic             ? "options.lamella_width"
                        : family == Family::G ? "options.members_u"
                                              : "options.members_v",
-                       msg.str());
+                       msg.str(), reason);
     }
     features.pop_back();  // lowest priority
   }

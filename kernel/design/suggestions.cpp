@@ -222,9 +222,9 @@ struct Search {
 
   // Members: narrower lamellas, or fewer explicit members.
   void members(const Error& failure) {
-    const bool width = failure.field() == "options.lamella_width";
-    const bool g = failure.field() == "options.members_u",
-               h = failure.field() == "options.members_v";
+    const bool width = failure.reason() == Reason::LamellasTooWide;
+    const bool g = failure.reason() == Reason::GMembersDoNotFit,
+               h = failure.reason() == Reason::HMembersDoNotFit;
     if (!width && !g && !h) return;
     const LamellaSize size = lamella_size(work.target.patch, options.members);
     for (double f : {0.8, 0.6, 0.4, 0.25, 0.15, 0.1}) {
@@ -297,9 +297,9 @@ std::vector<DesignSuggestion> suggest_feasible_designs(
   Search search{mesh, work, options, limits, progress, {}, 0};
   if (limits.count <= 0 || failure.code() != ErrorCode::Infeasible) return {};
   progress.report("suggestions", 0.0);
-  const bool members = failure.field() == "options.lamella_width" ||
-                       failure.field() == "options.members_u" ||
-                       failure.field() == "options.members_v";
+  const bool members = failure.reason() == Reason::LamellasTooWide ||
+                       failure.reason() == Reason::GMembersDoNotFit ||
+                       failure.reason() == Reason::HMembersDoNotFit;
   if (members) {
     search.members(failure);
   } else {

@@ -31,9 +31,10 @@ std::string join_field(const std::string& prefix, const std::string& field) {
   return prefix + "." + field;
 }
 
-Error::Error(ErrorCode code, std::string field, std::string message)
+Error::Error(ErrorCode code, std::string field, std::string message, Reason reason)
     : std::runtime_error(describe(field, message)),
       code_(code),
+      reason_(reason),
       field_(std::move(field)),
       message_(std::move(message)) {}
 
@@ -43,7 +44,7 @@ void rethrow_within(const Error& error, const std::string& prefix) {
     case ErrorCode::InvalidInput:
       throw InvalidInput(field, error.message());
     case ErrorCode::Infeasible:
-      throw Infeasible(field, error.message());
+      throw Infeasible(field, error.message(), error.reason());
     case ErrorCode::Cancelled:
       throw Cancelled();
     case ErrorCode::Internal:

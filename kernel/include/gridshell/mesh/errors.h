@@ -27,6 +27,15 @@ enum class ErrorCode {
   Internal,      ///< a bug: an invariant the kernel relies on does not hold
 };
 
+/// What made a design infeasible, in the kernel's terms, for a caller that acts on it (the
+/// suggestions search): it never needs to read the field or the message.
+enum class Reason {
+  Unspecified,
+  LamellasTooWide,   ///< the automatic member count cannot reach its minimum at this width
+  GMembersDoNotFit,  ///< the g-members (their count, or one of them) cannot be placed
+  HMembersDoNotFit,  ///< ... the h-members
+};
+
 /// "invalid_input" | "infeasible" | "cancelled" | "internal".
 const char* to_string(ErrorCode code);
 
@@ -36,9 +45,12 @@ std::string join_field(const std::string& prefix, const std::string& field);
 /// The error every kernel function throws. what() is "field: message" (or the message alone).
 class Error : public std::runtime_error {
  public:
-  Error(ErrorCode code, std::string field, std::string message);
+  Error(ErrorCode code, std::string field, std::string message,
+        Reason reason = Reason::Unspecified);
 
   ErrorCode code() const { return code_; }
+  /// Why, where the kernel says (Infeasible designs); Unspecified otherwise.
+  Reason reason() const { return reason_; }
   /// Path of the input element concerned ("corners[2]"), empty if the whole input is.
   const std::string& field() const { return field_; }
   /// Plain description of the problem, without the field.
@@ -46,6 +58,7 @@ class Error : public std::runtime_error {
 
  private:
   ErrorCode code_;
+  Reason reason_;
   std::string field_;
   std::string message_;
 };
@@ -61,8 +74,8 @@ class InvalidInput : public Error {
 /// that makes it so, where one does: "corners[1]" for a reflex corner, "options.alpha").
 class Infeasible : public Error {
  public:
-  Infeasible(std::string field, std::string message)
-      : Error(ErrorCode::Infeasible, std::move(field), std::move(message)) {}
+  Infeasible(std::string field, std::string message, Reason reason = Reason::Unspecified)
+      : Error(ErrorCode::Infeasible, std::move(field), std::move(message), reason) {}
 };
 
 /// The caller asked to stop.
