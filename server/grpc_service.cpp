@@ -267,6 +267,7 @@ GRIDSHELL_RPC(Geodesic, geodesic)
 GRIDSHELL_RPC(Load, load)
 GRIDSHELL_RPC(Examples, examples)
 GRIDSHELL_RPC(Fabricate, fabricate)
+GRIDSHELL_RPC(Options, options)
 #undef GRIDSHELL_RPC
 
 std::shared_ptr<grpc::AuthMetadataProcessor> make_token_processor(

@@ -24,7 +24,8 @@ using RawService = v1::Gridshell::WithRawCallbackMethod_Patch<
     v1::Gridshell::WithRawCallbackMethod_Design<v1::Gridshell::WithRawCallbackMethod_Simulate<
         v1::Gridshell::WithRawCallbackMethod_Run<v1::Gridshell::WithRawCallbackMethod_Geodesic<
             v1::Gridshell::WithRawCallbackMethod_Load<v1::Gridshell::WithRawCallbackMethod_Examples<
-                v1::Gridshell::WithRawCallbackMethod_Fabricate<v1::Gridshell::Service>>>>>>>>;
+                v1::Gridshell::WithRawCallbackMethod_Fabricate<
+                    v1::Gridshell::WithRawCallbackMethod_Options<v1::Gridshell::Service>>>>>>>>>;
 
 class GridshellService final : public RawService {
  public:
@@ -40,6 +41,7 @@ class GridshellService final : public RawService {
   Reactor* Geodesic(Context* context, const grpc::ByteBuffer* request) override;
   Reactor* Load(Context* context, const grpc::ByteBuffer* request) override;
   Reactor* Examples(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Options(Context* context, const grpc::ByteBuffer* request) override;
   Reactor* Fabricate(Context* context, const grpc::ByteBuffer* request) override;
 
  private:

@@ -185,6 +185,7 @@ struct HttpGateway::Impl {
     routes["/v1/load"] = route(methods.load);
     routes["/v1/examples"] = route(methods.examples);
     routes["/v1/fabricate"] = route(methods.fabricate);
+    routes["/v1/options"] = route(methods.options);
   }
 
   template <class Stream>
@@ -564,7 +565,7 @@ class HttpGateway::Impl::Session final : public SessionBase,
         return respond_error(
             {StatusCode::NotFound,
              "no such method: " + path +
-                 " (POST /v1/patch|design|simulate|run|geodesic|load|examples|fabricate)"},
+                 " (POST /v1/patch|design|simulate|run|geodesic|load|examples|fabricate|options)"},
             keep_alive_);
       if (verb != http::verb::post) {
         allow_ = "POST, OPTIONS";

@@ -16,6 +16,7 @@
 
 #include "daemon.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/options.h"
 
 int main(int argc, char** argv) {
   using namespace gridshell;
@@ -114,6 +115,7 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);
 
   try {
+    load_site_materials();  // GRIDSHELL_MATERIALS, before the description is answered
     server::Daemon daemon(options);
     daemon.start();
     int signal = 0;

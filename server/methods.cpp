@@ -49,6 +49,12 @@ Methods make_methods(const RunSettings& settings) {
                          return run_fabricate(request, progress, settings);
                        },
                        {}};
+  methods.options = {"Options",
+                     [settings](const v1::OptionsRequest& request, const Progress& progress) {
+                       return run_options(request, progress, settings);
+                     },
+                     {},
+                     true};
   return methods;
 }
 

@@ -17,6 +17,7 @@
 #include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/progress.h"
+#include "gridshell/options.h"
 #include "gridshell/requests.h"
 #include "gridshell/v1/requests.pb.h"
 #include "job_queue.h"
@@ -46,6 +47,7 @@ struct Methods {
   Method<v1::LoadRequest, v1::LoadResult> load;
   Method<v1::ExamplesRequest, v1::ExamplesResult> examples;
   Method<v1::FabricateRequest, v1::FabricateResult> fabricate;
+  Method<v1::OptionsRequest, v1::OptionsResult> options;
 };
 
 /// The table; `settings` (kernel threads per request) applies to every method.

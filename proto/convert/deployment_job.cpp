@@ -11,26 +11,14 @@
 #include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/parallel.h"
+#include "gridshell/options.h"
 #include "gridshell/simulation/auto_anchors.h"
 #include "gridshell/simulation/deployment_export.h"
 
 namespace gridshell {
 namespace {
 
-/// The fields are those of a SimulationOptions message (the caller names where it came from).
-void require(bool ok, const std::string& field, const std::string& problem) {
-  if (!ok) throw InvalidInput(field, problem);
-}
-
 bool positive(double v) { return std::isfinite(v) && v > 0; }
-
-/// lo <= value <= hi (false for NaN).
-bool within(double value, double lo, double hi) { return value >= lo && value <= hi; }
-
-/// SimulationOptions.anchor_goal when it is not given: 0.25 % of the patch diagonal, half the
-/// accuracy bar of issue 18 (0.5 %); the paper's built models reached 0.22-0.55 % (Table 1 RMS2
-/// over their patch diagonals). docs/decisions.md, "--interior-anchors auto".
-constexpr double kDefaultAnchorGoalPercent = 0.25;
 
 }  // namespace
 
@@ -49,23 +37,28 @@ double parse_length_unit(const std::string& unit, const std::string& field) {
 }
 
 v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
-  const SimulationOptions defaults;
-  if (o.notches().empty()) o.set_notches("both");
-  if (o.solver().empty()) o.set_solver("newton");
-  require(o.solver() == "newton" || o.solver() == "ceres", "solver",
-          "expected newton or ceres, got '" + o.solver() + "'");
-  require(o.notches() == "on" || o.notches() == "off" || o.notches() == "both", "notches",
-          "expected on, off or both, got '" + o.notches() + "'");
+  // Each option against its description (options.cpp); fields as in SimulationOptions (the
+  // caller names where the message came from).
+  const auto check = [](const char* name, double value) {
+    return check_option(option_spec("simulation", name), value, name);
+  };
+  const auto choose = [](const char* name, const std::string& value) {
+    return check_option(option_spec("simulation", name), value, name);
+  };
+  const auto fill = [](const char* name, double value) {
+    return value == 0 ? std::strtod(option_spec("simulation", name).default_value.c_str(), nullptr)
+                      : value;
+  };
+  o.set_notches(choose("notches", o.notches().empty() ? "both" : o.notches()));
+  o.set_solver(choose("solver", o.solver().empty() ? "newton" : o.solver()));
   // Material: a preset by name (default lime wood); explicit moduli override its values (without
   // a name the material is then "custom"). "custom" by name needs both moduli.
   if (o.material() != "custom") {
     const bool overridden = o.young_modulus() != 0 || o.shear_modulus() != 0;
-    Material preset;
-    try {
-      preset = material_by_name(o.material().empty() ? defaults.material.name : o.material());
-    } catch (const Error& e) {
-      rethrow_within(e, "material");
-    }
+    const std::string& name = choose(
+        "material",
+        o.material().empty() ? option_spec("simulation", "material").default_value : o.material());
+    const Material preset = material_by_name(name);
     if (o.young_modulus() == 0) o.set_young_modulus(preset.young_modulus);
     if (o.shear_modulus() == 0) o.set_shear_modulus(preset.shear_modulus);
     // A preset's strengths go with its name: moduli given without a name make a custom
@@ -77,70 +70,57 @@ v1::SimulationOptions resolve_simulation_options(v1::SimulationOptions o) {
     o.set_material(o.material().empty() && overridden ? "custom" : preset.name);
   }
   // 1 kPa (soft foam) to 10 TPa (beyond diamond): outside, energies and stresses overflow.
-  require(within(o.young_modulus(), 1e3, 1e13), "young_modulus",
-          "must be a number of pascals between 1e3 and 1e13");
-  require(within(o.shear_modulus(), 1e3, 1e13), "shear_modulus",
-          "must be a number of pascals between 1e3 and 1e13; give it with the Young's modulus or "
-          "pick a material");
-  for (const auto& [value, name] : {std::pair{o.bending_strength(), "bending_strength"},
-                                    std::pair{o.shear_strength(), "shear_strength"}})
-    require(value == 0 || within(value, 1e3, 1e11), name,
-            "must be a number of pascals between 1e3 and 1e11 (or 0: unknown)");
-  auto fill = [](double value, double fallback) { return value == 0 ? fallback : value; };
-  o.set_friction_mu(fill(o.friction_mu(), defaults.friction_mu));
-  o.set_friction_epsilon(fill(o.friction_epsilon(), defaults.friction_epsilon));
-  o.set_notch_limit_weight(fill(o.notch_limit_weight(), defaults.notch_limit_weight));
+  if (o.young_modulus() == 0)
+    throw InvalidInput("young_modulus", "a custom material needs its Young's modulus");
+  if (o.shear_modulus() == 0)
+    throw InvalidInput("shear_modulus",
+                       "a custom material needs its shear modulus; give it with the Young's "
+                       "modulus or pick a material");
+  for (const char* name : {"young_modulus", "shear_modulus", "bending_strength", "shear_strength"})
+    check(name, o.GetReflection()->GetDouble(o, o.GetDescriptor()->FindFieldByName(name)));
+  o.set_friction_mu(check("friction_mu", fill("friction_mu", o.friction_mu())));
+  o.set_friction_epsilon(check("friction_epsilon", fill("friction_epsilon", o.friction_epsilon())));
+  o.set_notch_limit_weight(
+      check("notch_limit_weight", fill("notch_limit_weight", o.notch_limit_weight())));
   o.set_connection_position_weight(
-      fill(o.connection_position_weight(), defaults.connection_position_weight));
+      check("connection_position_weight",
+            fill("connection_position_weight", o.connection_position_weight())));
   o.set_connection_direction_weight(
-      fill(o.connection_direction_weight(), defaults.connection_direction_weight));
-  o.set_anchor_position_weight(fill(o.anchor_position_weight(), defaults.anchor_position_weight));
-  o.set_anchor_direction_weight(
-      fill(o.anchor_direction_weight(), defaults.anchor_direction_weight));
-  o.set_edges_per_interval(fill(o.edges_per_interval(), defaults.edges_per_interval));
-  o.set_reference_extent(fill(o.reference_extent(), defaults.reference_extent));
-  o.set_gradient_tolerance(fill(o.gradient_tolerance(), defaults.gradient_tolerance));
-  if (o.max_iterations() == 0) o.set_max_iterations(defaults.max_iterations);
-  require(positive(o.friction_mu()) && o.friction_mu() <= 100, "friction_mu",
-          "must be a positive number up to 100 (the paper's is 0.1)");
-  require(positive(o.friction_epsilon()) && o.friction_epsilon() < 0.5, "friction_epsilon",
-          "must be in (0, 0.5)");
-  for (const auto& [value, name] :
-       {std::pair{o.connection_position_weight(), "connection_position_weight"},
-        {o.connection_direction_weight(), "connection_direction_weight"},
-        {o.anchor_position_weight(), "anchor_position_weight"},
-        {o.anchor_direction_weight(), "anchor_direction_weight"},
-        {o.notch_limit_weight(), "notch_limit_weight"}})
-    require(positive(value) && value <= 1e6, name, "must be a positive number up to 1e6");
-  require(within(o.reference_extent(), 1e-3, 1e6), "reference_extent",
-          "must be between 1e-3 and 1e6");
-  require(positive(o.gradient_tolerance()) && o.gradient_tolerance() <= 1, "gradient_tolerance",
-          "must be in (0, 1]");
-  require(std::isfinite(o.edges_per_interval()) && o.edges_per_interval() >= 1 &&
-              o.edges_per_interval() <= 64,
-          "edges_per_interval", "must be between 1 and 64");
-  require(o.max_iterations() >= 1 && o.max_iterations() <= 1000000, "max_iterations",
-          "must be between 1 and 1000000");
-  require(o.interior_anchors().empty() || o.interior_anchors() == "auto", "interior_anchors",
-          "expected auto or nothing (the design's anchors), got '" + o.interior_anchors() + "'");
+      check("connection_direction_weight",
+            fill("connection_direction_weight", o.connection_direction_weight())));
+  o.set_anchor_position_weight(
+      check("anchor_position_weight", fill("anchor_position_weight", o.anchor_position_weight())));
+  o.set_anchor_direction_weight(check(
+      "anchor_direction_weight", fill("anchor_direction_weight", o.anchor_direction_weight())));
+  o.set_edges_per_interval(
+      check("edges_per_interval", fill("edges_per_interval", o.edges_per_interval())));
+  o.set_reference_extent(check("reference_extent", fill("reference_extent", o.reference_extent())));
+  o.set_gradient_tolerance(
+      check("gradient_tolerance", fill("gradient_tolerance", o.gradient_tolerance())));
+  o.set_max_iterations(
+      static_cast<int>(check("max_iterations", fill("max_iterations", o.max_iterations()))));
+  choose("interior_anchors", o.interior_anchors());
   if (o.has_anchor_goal()) {
-    require(o.interior_anchors() == "auto", "anchor_goal",
-            "applies to interior_anchors auto only (the search stops there)");
-    require(within(o.anchor_goal(), 0, 100), "anchor_goal",
-            "must be a percentage of the patch diagonal between 0 and 100");
+    if (o.interior_anchors() != "auto")
+      throw InvalidInput("anchor_goal",
+                         "applies to interior_anchors auto only (the search stops there)");
+    check("anchor_goal", o.anchor_goal());
   } else if (o.interior_anchors() == "auto") {
-    o.set_anchor_goal(kDefaultAnchorGoalPercent);
+    o.set_anchor_goal(
+        std::strtod(option_spec("simulation", "anchor_goal").default_value.c_str(), nullptr));
   }
   if (o.unit_in_meters() == 0) o.set_unit_in_meters(parse_length_unit(o.unit()));
-  require(o.unit_in_meters() == 0 || within(o.unit_in_meters(), 1e-9, 1e6), "unit_in_meters",
-          "must be between 1e-9 and 1e6 metres (or 0 for unknown)");
+  check("unit_in_meters", o.unit_in_meters());
   return o;
 }
 
 SimulationOptions kernel_simulation_options(const v1::SimulationOptions& o, bool notches) {
   SimulationOptions k;
-  k.material = {o.material(), o.young_modulus(), o.shear_modulus(), o.bending_strength(),
-                o.shear_strength()};
+  k.material.name = o.material();
+  k.material.young_modulus = o.young_modulus();
+  k.material.shear_modulus = o.shear_modulus();
+  k.material.bending_strength = o.bending_strength();
+  k.material.shear_strength = o.shear_strength();
   k.notches = notches;
   k.solver = o.solver() == "ceres" ? SimulationSolver::Ceres : SimulationSolver::Newton;
   k.friction_mu = o.friction_mu();
@@ -185,21 +165,11 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
   // Both runs are independent: with two or more threads they run side by side, half the threads
   // each (results do not depend on the thread count).
   const int available = resolve_threads(threads);
-  // The lamella's cross-section comes from the design's options: its errors name them there.
-  const auto in_design_options = [](auto&& run) {
-    try {
-      return run();
-    } catch (const InvalidInput& e) {
-      if (e.field() == "lamella_width" || e.field() == "lamella_thickness")
-        throw InvalidInput("design.options." + e.field(), e.message());
-      throw;
-    }
-  };
+  // The lamella's cross-section was checked with the design (design_from_proto names
+  // design.options.lamella_width), so the kernel's own check of it cannot fail here.
   auto simulate = [&](const SimulationOptions& o) {
-    return in_design_options([&] {
-      return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
-                                 design.lamella_thickness, o, progress);
-    });
+    return simulate_deployment(design.grid, design.anchors, target, design.lamella_width,
+                               design.lamella_thickness, o, progress);
   };
   std::optional<AutoAnchorResult> found;
   AutoAnchorOptions auto_options;
@@ -209,10 +179,8 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
     // anchor; the other run then holds the anchors found.
     const SimulationOptions& search = with ? with_options : without_options;
     auto_options.goal_rms = options.anchor_goal() / 100 * bounding_box_size(target).norm();
-    found = in_design_options([&] {
-      return auto_interior_anchors(design.grid, design.anchors, target, design.lamella_width,
-                                   design.lamella_thickness, search, auto_options, progress);
-    });
+    found = auto_interior_anchors(design.grid, design.anchors, target, design.lamella_width,
+                                  design.lamella_thickness, search, auto_options, progress);
     design.anchors = found->anchors;
     (with ? job.with_notches : job.without_notches) = std::move(found->run);
     if (with && without) job.without_notches = simulate(without_options);

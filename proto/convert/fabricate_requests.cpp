@@ -11,6 +11,7 @@
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/fabrication/kit_export.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/options.h"
 
 namespace gridshell {
 namespace {
@@ -116,8 +117,15 @@ v1::FabricationOptions prepare_fabrication_options(const v1::FabricationOptions&
   if (o.hole_diameter() == 0) o.set_hole_diameter(defaults.hole_diameter);
   if (!o.has_spacing()) o.set_spacing(defaults.spacing);
   if (!o.has_min_slot()) o.set_min_slot(defaults.min_slot);
-  if (o.material().empty()) o.set_material("lime wood");
-  // Range checks (the lamella size is not known here: 1 mm stands in for it).
+  if (o.material().empty()) o.set_material(option_spec("fabrication", "material").default_value);
+  // Each number against its description (options.cpp); then the checks that relate two options
+  // (the hole larger than the kerf, ...), by the kernel (the lamella size is not known here: 1
+  // mm stands in for it).
+  for (const OptionSpec& spec : option_specs())
+    if (spec.group == "fabrication" && spec.type == OptionType::Number && !spec.output)
+      check_option(spec,
+                   o.GetReflection()->GetDouble(o, o.GetDescriptor()->FindFieldByName(spec.name)),
+                   "options." + spec.name);
   resolve_fabrication_options(kernel_options(o), 1, 1);
   return o;
 }

@@ -20,19 +20,15 @@
 #include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/curvature.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/options.h"
 #include "gridshell/patch_cache.h"
 #include "gridshell/patch_routing_key.h"
 
 namespace gridshell {
 namespace {
 
-// Generous caps that keep one request from asking for unbounded work; far above every example.
-constexpr int kMaxMembers = 1000;
-constexpr int kMaxInteriorAnchors = 100;
-// Below this a simplified copy has hardly more than its 4 x 100 boundary samples.
-constexpr int kMinMapVertices = 500;
-constexpr int kMaxSmoothingIterations = 100000;
-constexpr int kMaxSuggestions = 20;
+// The ranges of the options are in the one description (options.cpp): generous caps that keep
+// one request from asking for unbounded work, far above every example.
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -88,37 +84,33 @@ GeodesicMethod any_method(const std::string& text, const std::string& field) {
   }
 }
 
-GeodesicMethod exact_method(const std::string& text, const std::string& field, const char* what) {
-  const GeodesicMethod method = any_method(text, field);
-  if (method == GeodesicMethod::Heat)
-    throw InvalidInput(field,
-                       std::string(what) + " needs exact geodesics; use fast or cgal, not heat");
-  return method;
+/// The exact engine a patch or design option names ("" = fast), checked against its option.
+GeodesicMethod exact_method(const std::string& group, const std::string& text,
+                            const std::string& field) {
+  return any_method(
+      check_option(option_spec(group, "geodesic_method"), text.empty() ? "fast" : text, field),
+      field);
 }
 
-constexpr double kMaxEtaMax = 10;
-
-double eta_max_option(bool has, double value, const std::string& field, double fallback) {
-  if (!has) return fallback;
-  // eta is a ratio of path lengths, 1 on a developable surface; the paper's threshold is
-  // 1.0015, and above 10 no smoothing would ever run. Infinities and NaN are refused too.
-  if (!(value >= 1.0 && value <= kMaxEtaMax))
-    throw InvalidInput(field, "must be between 1 and " + shortest(kMaxEtaMax) +
-                                  " (a ratio of path lengths), got " + shortest(value));
-  return value;
+double eta_max_option(const std::string& group, bool has, double value, const std::string& field,
+                      double fallback) {
+  return has ? check_option(option_spec(group, "eta_max"), value, field) : fallback;
 }
 
 /// [min, max] corner angles of the automatic corners' search, radians (empty = default).
-void auto_corner_angles(const google::protobuf::RepeatedField<double>& values,
+void auto_corner_angles(const std::string& group,
+                        const google::protobuf::RepeatedField<double>& values,
                         const std::string& field, AutoCornerOptions& options) {
   if (values.empty()) return;
-  if (values.size() != 2)
+  const OptionSpec& spec = option_spec(group, "auto_corner_angles");
+  if (values.size() != spec.count)
     throw InvalidInput(field, "expected two angles [min, max] in radians, got " +
                                   std::to_string(values.size()) + " numbers");
+  for (int k = 0; k < values.size(); ++k)
+    check_option(spec, values[k], field + "[" + std::to_string(k) + "]");
   const double lo = values[0], hi = values[1];
-  if (!(lo > 0 && lo < hi && hi < std::numbers::pi))
-    throw InvalidInput(
-        field, "expected 0 < min < max < pi radians, got " + shortest(lo) + ", " + shortest(hi));
+  if (!(lo < hi))
+    throw InvalidInput(field, "expected min < max, got " + shortest(lo) + ", " + shortest(hi));
   options.min_corner_angle = lo;
   options.max_corner_angle = hi;
 }
@@ -390,18 +382,16 @@ PatchInputs prepare_patch(const v1::PatchRequest& request) {
   in.corners = to_corner_spec(request.corners(), in.load);
   const v1::PatchRequest::Options& o = request.options();
   in.options.geodesic.method =
-      exact_method(o.geodesic_method(), "options.geodesic_method", "the patch");
-  in.options.coverability.eta_max = eta_max_option(o.has_eta_max(), o.eta_max(), "options.eta_max",
-                                                   in.options.coverability.eta_max);
-  if (o.has_max_smoothing_iterations()) {
-    const int n = o.max_smoothing_iterations();
-    if (n < 0 || n > kMaxSmoothingIterations)
-      throw InvalidInput("options.max_smoothing_iterations",
-                         "must be between 0 and " + std::to_string(kMaxSmoothingIterations));
-    in.options.coverability.max_smoothing_iterations = n;
-  }
+      exact_method("patch", o.geodesic_method(), "options.geodesic_method");
+  in.options.coverability.eta_max = eta_max_option(
+      "patch", o.has_eta_max(), o.eta_max(), "options.eta_max", in.options.coverability.eta_max);
+  if (o.has_max_smoothing_iterations())
+    in.options.coverability.max_smoothing_iterations = static_cast<int>(
+        check_option(option_spec("patch", "max_smoothing_iterations"), o.max_smoothing_iterations(),
+                     "options.max_smoothing_iterations"));
   in.options.smooth = !o.no_smoothing();
-  auto_corner_angles(o.auto_corner_angles(), "options.auto_corner_angles", in.options.auto_corners);
+  auto_corner_angles("patch", o.auto_corner_angles(), "options.auto_corner_angles",
+                     in.options.auto_corners);
   return in;
 }
 
@@ -564,56 +554,36 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
   in.corners = to_corner_spec(request.corners(), in.load);
   const v1::DesignRequest::Options& o = request.options();
   DesignOptions& options = in.options;
+  // Each option against its description (options.cpp), named by its field.
+  const auto check = [](const char* name, double value) {
+    return check_option(option_spec("design", name), value, std::string("options.") + name);
+  };
   options.patch.geodesic.method =
-      exact_method(o.geodesic_method(), "options.geodesic_method", "the design");
-  options.patch.coverability.eta_max = eta_max_option(
-      o.has_eta_max(), o.eta_max(), "options.eta_max", options.patch.coverability.eta_max);
+      exact_method("design", o.geodesic_method(), "options.geodesic_method");
+  options.patch.coverability.eta_max =
+      eta_max_option("design", o.has_eta_max(), o.eta_max(), "options.eta_max",
+                     options.patch.coverability.eta_max);
   const std::string alpha = o.has_alpha() ? o.alpha() : "min";
   parse_alpha(alpha, options);
-  for (const auto& [count, field] : {std::pair{o.members_u(), "options.members_u"},
-                                     std::pair{o.members_v(), "options.members_v"}})
-    if (count < 0 || count > kMaxMembers)
-      throw InvalidInput(field, "must be between 0 (automatic) and " + std::to_string(kMaxMembers));
-  options.members_g = o.members_u();
-  options.members_h = o.members_v();
-  if (!(o.lamella_width() >= 0) || !std::isfinite(o.lamella_width()))
-    throw InvalidInput("options.lamella_width",
-                       "must be positive (or 0 for 1% of the longest side)");
-  if (!(o.lamella_thickness() >= 0) || !std::isfinite(o.lamella_thickness()))
-    throw InvalidInput("options.lamella_thickness",
-                       "must be positive (or 0 for a tenth of the width)");
-  options.members.lamella_width = o.lamella_width();
-  options.members.lamella_thickness = o.lamella_thickness();
-  if (o.interior_anchors() < 0 || o.interior_anchors() > kMaxInteriorAnchors)
-    throw InvalidInput(
-        "options.interior_anchors",
-        "must be between 0 (boundary anchors only) and " + std::to_string(kMaxInteriorAnchors));
-  options.anchors.interior = o.interior_anchors();
-  if (o.has_resolution()) {
-    const int r = o.resolution();
-    if (r != 0 && (r < 8 || r > 1000))
-      throw InvalidInput("options.resolution", "must be 0 (adaptive) or 8..1000");
-    options.maps.resolution = r;
-  }
-  auto_corner_angles(o.auto_corner_angles(), "options.auto_corner_angles",
+  options.members_g = static_cast<int>(check("members_u", o.members_u()));
+  options.members_h = static_cast<int>(check("members_v", o.members_v()));
+  options.members.lamella_width = check("lamella_width", o.lamella_width());
+  options.members.lamella_thickness = check("lamella_thickness", o.lamella_thickness());
+  options.anchors.interior = static_cast<int>(check("interior_anchors", o.interior_anchors()));
+  if (o.has_resolution())
+    options.maps.resolution = static_cast<int>(check("resolution", o.resolution()));
+  auto_corner_angles("design", o.auto_corner_angles(), "options.auto_corner_angles",
                      options.patch.auto_corners);
-  if (o.has_k_min()) options.cladding.k_min = o.k_min();
-  if (o.has_k_max()) options.cladding.k_max = o.k_max();
-  if (!(options.cladding.k_min > 0 && options.cladding.k_min < options.cladding.k_max &&
-        options.cladding.k_max <= 100))
+  if (o.has_k_min()) options.cladding.k_min = check("k_min", o.k_min());
+  if (o.has_k_max()) options.cladding.k_max = check("k_max", o.k_max());
+  if (!(options.cladding.k_min < options.cladding.k_max))
     throw InvalidInput(o.has_k_min() && !o.has_k_max() ? "options.k_min" : "options.k_max",
-                       "slope bounds must satisfy 0 < k_min < k_max <= 100, got k_min " +
+                       "slope bounds must satisfy k_min < k_max, got k_min " +
                            shortest(options.cladding.k_min) + ", k_max " +
                            shortest(options.cladding.k_max));
-  if (o.has_suggest() && (o.suggest() < 0 || o.suggest() > kMaxSuggestions))
-    throw InvalidInput("options.suggest",
-                       "must be between 0 (none) and " + std::to_string(kMaxSuggestions));
-  in.suggest = o.has_suggest() ? o.suggest() : 3;
-  if (o.map_vertices() != 0 && o.map_vertices() < kMinMapVertices)
-    throw InvalidInput("options.map_vertices",
-                       "must be 0 (default " + std::to_string(kDefaultMapVertices) +
-                           ") or at least " + std::to_string(kMinMapVertices) + ", got " +
-                           std::to_string(o.map_vertices()));
+  in.suggest = o.has_suggest() ? static_cast<int>(check("suggest", o.suggest()))
+                               : std::stoi(option_spec("design", "suggest").default_value);
+  check("map_vertices", o.map_vertices());
   options.maps.max_vertices = options.patch.coverability.max_vertices =
       o.map_vertices() != 0 ? o.map_vertices() : kDefaultMapVertices;
 

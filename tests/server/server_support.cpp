@@ -464,10 +464,10 @@ std::vector<BadInput> bad_inputs() {
       "mesh.warnings: too many entries: 1001, at most 1000");
   design_case(
       "HeatMethod", [](auto& r) { r.mutable_options()->set_geodesic_method("heat"); },
-      "options.geodesic_method: the design needs exact geodesics");
+      "options.geodesic_method: expected one of fast, cgal, got 'heat'");
   design_case(
       "UnknownMethod", [](auto& r) { r.mutable_options()->set_geodesic_method("fastest"); },
-      "options.geodesic_method: unknown geodesic method 'fastest'");
+      "options.geodesic_method: expected one of fast, cgal, got 'fastest'");
   design_case(
       "AlphaOutOfRange", [](auto& r) { r.mutable_options()->set_alpha("7"); },
       "options.alpha: the planar corner angle must be between 0 and pi");
@@ -476,28 +476,30 @@ std::vector<BadInput> bad_inputs() {
       "options.alpha: expected min, max");
   design_case(
       "NegativeMembers", [](auto& r) { r.mutable_options()->set_members_u(-1); },
-      "options.members_u: must be between 0");
+      "options.members_u: must be between 1 and 1000 (or 0: automatic), got -1");
   design_case(
       "TooManyMembers", [](auto& r) { r.mutable_options()->set_members_v(5000); },
-      "options.members_v: must be between 0");
+      "options.members_v: must be between 1 and 1000 (or 0: automatic)");
   design_case(
       "NegativeInteriorAnchors", [](auto& r) { r.mutable_options()->set_interior_anchors(-2); },
-      "options.interior_anchors: must be between 0 (boundary anchors only) and 100");
+      "options.interior_anchors: must be between 0 and 100");
   design_case(
       "NegativeLamellaWidth", [](auto& r) { r.mutable_options()->set_lamella_width(-1); },
-      "options.lamella_width: must be positive");
+      "options.lamella_width: must be positive, in mesh units (or 0: 1% of the longest patch "
+      "side)");
   design_case(
       "InfiniteLamellaWidth", [&](auto& r) { r.mutable_options()->set_lamella_width(inf); },
-      "options.lamella_width: must be positive");
+      "options.lamella_width: must be positive, in mesh units (or 0: 1% of the longest patch "
+      "side)");
   design_case(
       "NanLamellaThickness", [&](auto& r) { r.mutable_options()->set_lamella_thickness(nan); },
-      "options.lamella_thickness: must be positive");
+      "options.lamella_thickness: must be positive, in mesh units (or 0: width / 10)");
   design_case(
       "LamellaWiderThanHalfThePatch", [](auto& r) { r.mutable_options()->set_lamella_width(1e4); },
       "options.lamella_width: 10000 is outside [1e-6, 0.5] x the longest patch side");
   design_case(
       "ResolutionTooSmall", [](auto& r) { r.mutable_options()->set_resolution(5); },
-      "options.resolution: must be 0 (adaptive) or 8..1000");
+      "options.resolution: must be between 8 and 1000 (or 0: adaptive)");
   {
     v1::PatchRequest request = patch_request("plane");
     request.mutable_options()->set_max_smoothing_iterations(-3);
@@ -517,7 +519,7 @@ std::vector<BadInput> bad_inputs() {
       "options.notches");
   simulate_case(
       "UnknownMaterial", [](auto& r) { r.mutable_options()->set_material("balsa"); },
-      "options.material: unknown material 'balsa'");
+      "options.material: expected one of lime-wood, birch-plywood");
   simulate_case(
       "NegativeYoungModulus", [](auto& r) { r.mutable_options()->set_young_modulus(-1e9); },
       "options.young_modulus");
@@ -536,7 +538,7 @@ std::vector<BadInput> bad_inputs() {
       "UnknownSolver", [](auto& r) { r.mutable_options()->set_solver("guess"); }, "options.solver");
   simulate_case(
       "UnknownInteriorAnchors", [](auto& r) { r.mutable_options()->set_interior_anchors("3"); },
-      "options.interior_anchors: expected auto or nothing");
+      "options.interior_anchors: expected one of \"\", auto, got");
   simulate_case(
       "AnchorGoalWithoutAutomaticAnchors", [](auto& r) { r.mutable_options()->set_anchor_goal(1); },
       "options.anchor_goal: applies to interior_anchors auto only");
@@ -546,7 +548,7 @@ std::vector<BadInput> bad_inputs() {
         r.mutable_options()->set_interior_anchors("auto");
         r.mutable_options()->set_anchor_goal(std::nan(""));
       },
-      "options.anchor_goal: must be a percentage");
+      "options.anchor_goal: must be between 0 and 100 %");
   simulate_case(
       "CrossingOutOfRange", [](auto& r) { r.mutable_design()->mutable_crossings(3)->set_h(999); },
       "design.crossings[3].h");
@@ -601,7 +603,7 @@ std::vector<BadInput> bad_inputs() {
       "simulation.notches");
   run_case(
       "RunUnknownMaterial", [](auto& r) { r.mutable_simulation()->set_material("balsa"); },
-      "simulation.material: unknown material");
+      "simulation.material: expected one of lime-wood");
   return set;
 }
 
