@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "cli_support.h"
+#include "gridshell/options.h"
 #include "gridshell/requests.h"
 
 namespace gridshell::cli {
@@ -29,18 +30,14 @@ std::pair<std::string, long long> split_index(const std::string& field) {
   return {field.substr(0, open), index};
 }
 
-/// An option of a request ("members_u") as the CLI flag that sets it.
+/// An option of a request ("members_u") as the CLI flag that sets it: the flag of its
+/// description (options.cpp); --unit sets unit_in_meters too, and design.json's map_resolution
+/// is the --resolution it was designed with.
 std::string flag_of(const std::string& option) {
-  static const std::array<std::pair<const char*, const char*>, 6> kRenamed{{
-      {"geodesic_method", "--method"},
-      {"young_modulus", "--young"},
-      {"shear_modulus", "--shear"},
-      {"friction_mu", "--mu"},
-      {"unit_in_meters", "--unit"},
-      {"map_resolution", "--resolution"},
-  }};
-  for (const auto& [name, flag] : kRenamed)
-    if (option == name) return flag;
+  for (const OptionSpec& spec : option_specs())
+    if (spec.name == option && !spec.flag.empty()) return spec.flag;
+  if (option == "unit_in_meters") return "--unit";
+  if (option == "map_resolution") return "--resolution";
   std::string flag = "--" + option;
   for (char& c : flag)
     if (c == '_') c = '-';

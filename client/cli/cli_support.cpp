@@ -21,9 +21,49 @@
 #include "gridshell/example_surfaces.h"
 #include "gridshell/files.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/options.h"
 #include "gridshell/requests.h"
 
 namespace gridshell::cli {
+
+std::string described_help(const char* group, const char* name) {
+  const OptionSpec& spec = option_spec(group, name);
+  std::string help = spec.help;
+  if (!spec.unit.empty() && (spec.type == OptionType::Text || spec.type == OptionType::Choice))
+    help += ", " + spec.unit;
+  if (spec.type == OptionType::Choice) {
+    std::string choices;
+    for (const std::string& choice : spec.choices)
+      if (!choice.empty()) choices += (choices.empty() ? "" : " | ") + choice;
+    help += ": " + choices;
+  } else if (spec.type == OptionType::Number || spec.type == OptionType::Integer) {
+    help += "; " + allowed_text(spec);
+  }
+  if (!spec.default_value.empty()) help += "; default " + spec.default_value;
+  if (!spec.note.empty()) help += " (" + spec.note + ")";
+  return help;
+}
+
+namespace {
+template <class T>
+void add_described(CLI::App* sub, const char* group, const char* name, std::optional<T>& value) {
+  const OptionSpec& spec = option_spec(group, name);
+  sub->add_option(spec.flag, value, described_help(group, name));
+}
+}  // namespace
+
+void add_described_option(CLI::App* sub, const char* group, const char* name,
+                          std::optional<double>& value) {
+  add_described(sub, group, name, value);
+}
+void add_described_option(CLI::App* sub, const char* group, const char* name,
+                          std::optional<int>& value) {
+  add_described(sub, group, name, value);
+}
+void add_described_option(CLI::App* sub, const char* group, const char* name,
+                          std::optional<std::string>& value) {
+  add_described(sub, group, name, value);
+}
 
 InputMesh load_input(const std::string& name) {
   InputMesh input;
@@ -141,9 +181,17 @@ int file_vertex(const InputMesh& input, int mesh_vertex) {
 }
 
 void add_corner_angles_flag(CLI::App* sub, std::string& text) {
+  // The default from the description, which is in radians.
+  const std::string radians = option_spec("design", "auto_corner_angles").default_value;
+  const double lo = std::strtod(radians.c_str(), nullptr),
+               hi = std::strtod(radians.c_str() + radians.find(',') + 1, nullptr);
+  char degrees[64];
+  std::snprintf(degrees, sizeof degrees, "%g,%g", lo * 180 / std::numbers::pi,
+                hi * 180 / std::numbers::pi);
   sub->add_option("--corner-angles", text,
                   "automatic corners: MIN,MAX inner corner angles of the patch in degrees "
-                  "(default 45,135)");
+                  "(default " +
+                      std::string(degrees) + ")");
 }
 
 void set_corner_angles(const std::string& text, google::protobuf::RepeatedField<double>* out) {

@@ -86,6 +86,19 @@ v1::Mesh request_mesh(const InputMesh& input);
 
 /// The file-order index of a loaded mesh vertex (the first, for welded duplicates), or -1.
 int file_vertex(const InputMesh& input, int mesh_vertex);
+/// Adds the flag of the request option `group`.`name`: its flag name, help, unit, range and
+/// default come from the one description (gridshell/options.h). The value stays unset unless the
+/// flag is given (the request then carries the option's default); the request check names the
+/// flag when the value is out of range (cli_errors.cpp maps the field through the description).
+void add_described_option(CLI::App* sub, const char* group, const char* name,
+                          std::optional<double>& value);
+void add_described_option(CLI::App* sub, const char* group, const char* name,
+                          std::optional<int>& value);
+void add_described_option(CLI::App* sub, const char* group, const char* name,
+                          std::optional<std::string>& value);
+/// The help line of a described option: "lamella width, mesh units; above 0 (or 0: 1% of the
+/// longest patch side); default 0".
+std::string described_help(const char* group, const char* name);
 /// --corner-angles MIN,MAX (degrees) of the automatic corners' search.
 void add_corner_angles_flag(CLI::App* sub, std::string& text);
 /// Parses it into radians (nothing for ""); InvalidInput naming --corner-angles.

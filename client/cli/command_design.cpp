@@ -11,6 +11,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/files.h"
+#include "gridshell/options.h"
 #include "gridshell/requests.h"
 #include "remote.h"
 
@@ -37,39 +38,23 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
   sub->add_option(
       "--corners", flags.corners,
       "i,j,k,l | \"x,y,z;x,y,z;x,y,z;x,y,z\" | auto (default: example corners or auto)");
-  sub->add_option("--alpha", flags.alpha, "planar corner angle: min | max | radians | NNdeg")
-      ->capture_default_str();
-  sub->add_option("--members-u", flags.members_u, "inner g-members (0 = automatic)")
-      ->capture_default_str();
-  sub->add_option("--members-v", flags.members_v, "inner h-members (0 = automatic)")
-      ->capture_default_str();
-  sub->add_option("--lamella-width", flags.lamella_width,
-                  "lamella width, mesh units (0 = 1% of the longest patch side)")
-      ->capture_default_str();
-  sub->add_option("--lamella-thickness", flags.lamella_thickness,
-                  "lamella thickness, mesh units (0 = width / 10)")
-      ->capture_default_str();
-  sub->add_option("--resolution", flags.resolution, "distance map resolution R (0 = adaptive)")
-      ->capture_default_str();
-  sub->add_option("--method", flags.method, "geodesic engine: fast | cgal")->capture_default_str();
-  sub->add_option("--eta-max", flags.eta_max, "gap factor threshold")->capture_default_str();
+  add_described_option(sub, "design", "alpha", flags.alpha);
+  add_described_option(sub, "design", "members_u", flags.members_u);
+  add_described_option(sub, "design", "members_v", flags.members_v);
+  add_described_option(sub, "design", "lamella_width", flags.lamella_width);
+  add_described_option(sub, "design", "lamella_thickness", flags.lamella_thickness);
+  add_described_option(sub, "design", "resolution", flags.resolution);
+  add_described_option(sub, "design", "geodesic_method", flags.method);
+  add_described_option(sub, "design", "eta_max", flags.eta_max);
   sub->add_option("--interior-anchors", flags.interior_anchors,
-                  "also pin up to N inner crossings at the target's bumps and dips (0 = boundary "
-                  "anchors only, as in the paper); auto (run only): add them one at a time where "
-                  "the deployment strays farthest while RMS falls by 5% or more")
+                  described_help("design", "interior_anchors") + "; or (run only) " +
+                      option_spec("simulation", "interior_anchors").help)
       ->capture_default_str();
   add_corner_angles_flag(sub, flags.corner_angles);
-  sub->add_option("--suggest", flags.suggest,
-                  "when the design is infeasible, compute and print up to N ranked feasible "
-                  "changes (0 = none)")
-      ->capture_default_str();
-  sub->add_option("--k-min", flags.k_min, "lower slope bound of the cladding functions (0.1)");
-  sub->add_option("--k-max", flags.k_max, "upper slope bound of the cladding functions (10)");
-  sub->add_option("--map-vertices", flags.map_vertices,
-                  "distance maps of a patch with more vertices on a copy simplified to about "
-                  "this many (0 = 4000; members stay exact; a number above the patch's vertex "
-                  "count gives exact maps)")
-      ->capture_default_str();
+  add_described_option(sub, "design", "suggest", flags.suggest);
+  add_described_option(sub, "design", "k_min", flags.k_min);
+  add_described_option(sub, "design", "k_max", flags.k_max);
+  add_described_option(sub, "design", "map_vertices", flags.map_vertices);
 }
 
 bool automatic_interior_anchors(const DesignFlags& flags) {
@@ -87,14 +72,14 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
   *request.mutable_mesh() = request_mesh(input);
   *request.mutable_corners() = to_proto(spec, corners_used);
   v1::DesignRequest::Options& options = *request.mutable_options();
-  options.set_alpha(flags.alpha);
-  options.set_members_u(flags.members_u);
-  options.set_members_v(flags.members_v);
-  options.set_lamella_width(flags.lamella_width);
-  options.set_lamella_thickness(flags.lamella_thickness);
-  options.set_resolution(flags.resolution);
-  options.set_geodesic_method(flags.method);
-  options.set_eta_max(flags.eta_max);
+  if (flags.alpha) options.set_alpha(*flags.alpha);
+  if (flags.members_u) options.set_members_u(*flags.members_u);
+  if (flags.members_v) options.set_members_v(*flags.members_v);
+  if (flags.lamella_width) options.set_lamella_width(*flags.lamella_width);
+  if (flags.lamella_thickness) options.set_lamella_thickness(*flags.lamella_thickness);
+  if (flags.resolution) options.set_resolution(*flags.resolution);
+  if (flags.method) options.set_geodesic_method(*flags.method);
+  if (flags.eta_max) options.set_eta_max(*flags.eta_max);
   // auto: the design places none; the simulation adds them (run, simulate).
   if (!automatic_interior_anchors(flags)) {
     char* end = nullptr;
@@ -105,10 +90,10 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
     options.set_interior_anchors(static_cast<int>(n));
   }
   set_corner_angles(flags.corner_angles, options.mutable_auto_corner_angles());
-  options.set_suggest(flags.suggest);
+  if (flags.suggest) options.set_suggest(*flags.suggest);
   if (flags.k_min) options.set_k_min(*flags.k_min);
   if (flags.k_max) options.set_k_max(*flags.k_max);
-  options.set_map_vertices(flags.map_vertices);
+  if (flags.map_vertices) options.set_map_vertices(*flags.map_vertices);
   return request;
 }
 

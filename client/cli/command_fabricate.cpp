@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "gridshell/fabricate.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/options.h"
 #include "remote.h"
 
 namespace gridshell::cli {
@@ -20,15 +21,11 @@ struct FabricateArguments {
   std::string design;
   OutputFlags output;
   std::string unit;
-  std::string sheet = "1200x600";
-  double kerf = 0.15;
-  double hole_diameter = 3.2;
-  double end_allowance = 0;
-  double spacing = 3;
-  double thickness = 0;
-  double min_slot = 0.1;
-  double text_height = 0;
-  std::string material = "lime wood";
+  std::string sheet;  // WIDTHxHEIGHT mm; "" = the default sheet
+  // Described options (gridshell/options.h): unset unless given, then the request's default.
+  std::optional<double> kerf, hole_diameter, end_allowance, spacing, thickness, min_slot,
+      text_height;
+  std::optional<std::string> material;
 };
 
 /// "1200x600" -> {1200, 600} (mm).
@@ -51,17 +48,19 @@ int run_fabricate(const FabricateArguments& args) {
   request.set_design_name(std::filesystem::path(args.design).filename().string());
   v1::FabricationOptions& o = *request.mutable_options();
   o.set_unit(args.unit);
-  const auto [w, h] = parse_sheet(args.sheet);
-  o.set_sheet_width(w);
-  o.set_sheet_height(h);
-  o.set_kerf(args.kerf);
-  o.set_hole_diameter(args.hole_diameter);
-  o.set_end_allowance(args.end_allowance);
-  o.set_spacing(args.spacing);
-  o.set_thickness(args.thickness);
-  o.set_min_slot(args.min_slot);
-  o.set_text_height(args.text_height);
-  o.set_material(args.material);
+  if (!args.sheet.empty()) {
+    const auto [w, h] = parse_sheet(args.sheet);
+    o.set_sheet_width(w);
+    o.set_sheet_height(h);
+  }
+  if (args.kerf) o.set_kerf(*args.kerf);
+  if (args.hole_diameter) o.set_hole_diameter(*args.hole_diameter);
+  if (args.end_allowance) o.set_end_allowance(*args.end_allowance);
+  if (args.spacing) o.set_spacing(*args.spacing);
+  if (args.thickness) o.set_thickness(*args.thickness);
+  if (args.min_slot) o.set_min_slot(*args.min_slot);
+  if (args.text_height) o.set_text_height(*args.text_height);
+  if (args.material) o.set_material(*args.material);
   prepare_fabrication_options(o);  // checked here, before anything runs or is sent
   prepare_output_folder(args.output.out);
   const Progress progress = make_progress(args.output.quiet);
@@ -99,27 +98,19 @@ Command add_fabricate_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "fabricate", "Fabrication kit of a design: nested DXF/SVG cut sheets, assembly, supports");
   sub->add_option("DESIGN", args->design, "design.json written by 'gridshell design'")->required();
-  sub->add_option("--unit", args->unit,
-                  "the design's length unit: mm | cm | m | in | ft | metres per unit (required)");
-  sub->add_option("--sheet", args->sheet, "sheet size WIDTHxHEIGHT in mm")->capture_default_str();
-  sub->add_option("--kerf", args->kerf, "laser kerf in mm (outlines grow, holes shrink by half)")
-      ->capture_default_str();
-  sub->add_option("--hole-diameter", args->hole_diameter, "bolt hole and slot width in mm")
-      ->capture_default_str();
-  sub->add_option("--end-allowance", args->end_allowance,
-                  "mm beyond the outermost crossing (0 = the lamella width)")
-      ->capture_default_str();
-  sub->add_option("--spacing", args->spacing, "mm between parts and from the sheet's edges")
-      ->capture_default_str();
-  sub->add_option("--thickness", args->thickness,
-                  "material thickness in mm (0 = the design's lamella thickness)")
-      ->capture_default_str();
-  sub->add_option("--min-slot", args->min_slot,
-                  "sliding ranges shorter than this (mm) get a round hole")
-      ->capture_default_str();
-  sub->add_option("--text-height", args->text_height, "engraved label height in mm (0 = auto)")
-      ->capture_default_str();
-  sub->add_option("--material", args->material, "material named in bom.csv")->capture_default_str();
+  sub->add_option("--unit", args->unit, described_help("fabrication", "unit"));
+  sub->add_option("--sheet", args->sheet,
+                  "sheet size WIDTHxHEIGHT in mm; default " +
+                      option_spec("fabrication", "sheet_width").default_value + "x" +
+                      option_spec("fabrication", "sheet_height").default_value);
+  add_described_option(sub, "fabrication", "kerf", args->kerf);
+  add_described_option(sub, "fabrication", "hole_diameter", args->hole_diameter);
+  add_described_option(sub, "fabrication", "end_allowance", args->end_allowance);
+  add_described_option(sub, "fabrication", "spacing", args->spacing);
+  add_described_option(sub, "fabrication", "thickness", args->thickness);
+  add_described_option(sub, "fabrication", "min_slot", args->min_slot);
+  add_described_option(sub, "fabrication", "text_height", args->text_height);
+  add_described_option(sub, "fabrication", "material", args->material);
   add_output_flags(sub, args->output, false);
   return [args] { return run_fabricate(*args); };
 }

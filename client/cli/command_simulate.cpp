@@ -20,83 +20,42 @@
 namespace gridshell::cli {
 
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags) {
-  sub->add_option("--notches", flags.notches, "simulate with notches, without, or both")
-      ->check(CLI::IsMember({"on", "off", "both"}))
-      ->capture_default_str();
-  sub->add_option("--material", flags.material,
-                  "lime-wood (default) | birch-plywood | beech-wood | gfrp | aluminium | steel | "
-                  "hdpe");
-  sub->add_option("--young", flags.young, "Young's modulus E in Pa (overrides the material's)");
-  sub->add_option("--shear", flags.shear, "shear modulus G in Pa (overrides the material's)");
-  sub->add_option("--bending-strength", flags.bending_strength,
-                  "bending strength f_m in Pa (overrides the material's; stresses are reported "
-                  "against it)");
-  sub->add_option("--shear-strength", flags.shear_strength,
-                  "shear strength f_v in Pa (overrides the material's)");
-  sub->add_option("--unit", flags.unit,
-                  "the model's length unit: mm | cm | m | in | ft | metres per unit (energies "
-                  "in J)");
-  sub->add_option("--mu", flags.mu, "pseudo-friction weight mu of E_p")->capture_default_str();
-  sub->add_option("--edges-per-interval", flags.edges_per_interval,
-                  "rod edges per interval between crossings")
-      ->capture_default_str();
-  sub->add_option("--max-iterations", flags.max_iterations, "solver iteration cap")
-      ->capture_default_str();
-  sub->add_option("--solver", flags.solver,
-                  "newton (default) | ceres (Levenberg-Marquardt, the reference)")
-      ->check(CLI::IsMember({"newton", "ceres"}))
-      ->capture_default_str();
-  sub->add_option("--anchor-goal", flags.anchor_goal,
-                  "with --interior-anchors auto: no (further) inner anchor once RMS is at most "
-                  "this percentage of the patch diagonal (default 0.25; 0: add while each "
-                  "lowers RMS by 5%)");
+  add_described_option(sub, "simulation", "notches", flags.notches);
+  add_described_option(sub, "simulation", "material", flags.material);
+  add_described_option(sub, "simulation", "young_modulus", flags.young);
+  add_described_option(sub, "simulation", "shear_modulus", flags.shear);
+  add_described_option(sub, "simulation", "bending_strength", flags.bending_strength);
+  add_described_option(sub, "simulation", "shear_strength", flags.shear_strength);
+  sub->add_option("--unit", flags.unit, described_help("simulation", "unit"));
+  add_described_option(sub, "simulation", "friction_mu", flags.mu);
+  add_described_option(sub, "simulation", "edges_per_interval", flags.edges_per_interval);
+  add_described_option(sub, "simulation", "max_iterations", flags.max_iterations);
+  add_described_option(sub, "simulation", "solver", flags.solver);
+  add_described_option(sub, "simulation", "anchor_goal", flags.anchor_goal);
 }
 
+/// The request's options from the flags as given; their checks are the request's
+/// (resolve_simulation_options), whose fields the CLI shows as these flags.
 v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags) {
   v1::SimulationOptions o;
-  o.set_notches(flags.notches);
-  o.set_solver(flags.solver);
-  if (!flags.material.empty()) o.set_material(flags.material);
-  if (flags.young) {
-    if (!(*flags.young > 0)) throw InvalidInput("--young", "must be a positive number of pascal");
-    o.set_young_modulus(*flags.young);
-  }
-  if (flags.shear) {
-    if (!(*flags.shear > 0)) throw InvalidInput("--shear", "must be a positive number of pascal");
-    o.set_shear_modulus(*flags.shear);
-  }
-  if (flags.bending_strength) {
-    if (!(*flags.bending_strength > 0))
-      throw InvalidInput("--bending-strength", "must be a positive number of pascal");
-    o.set_bending_strength(*flags.bending_strength);
-  }
-  if (flags.shear_strength) {
-    if (!(*flags.shear_strength > 0))
-      throw InvalidInput("--shear-strength", "must be a positive number of pascal");
-    o.set_shear_strength(*flags.shear_strength);
-  }
+  if (flags.notches) o.set_notches(*flags.notches);
+  if (flags.solver) o.set_solver(*flags.solver);
+  if (flags.material) o.set_material(*flags.material);
   // Without --material the moduli override the default material's (resolve_simulation_options
-  // then calls it "custom").
+  // then calls it "custom"); 0 means the material's.
+  if (flags.young) o.set_young_modulus(*flags.young);
+  if (flags.shear) o.set_shear_modulus(*flags.shear);
+  if (flags.bending_strength) o.set_bending_strength(*flags.bending_strength);
+  if (flags.shear_strength) o.set_shear_strength(*flags.shear_strength);
   o.set_unit(flags.unit);
   o.set_unit_in_meters(parse_length_unit(flags.unit, "--unit"));
-  if (!(flags.mu > 0)) throw InvalidInput("--mu", "must be a positive number");
-  o.set_friction_mu(flags.mu);
-  if (!(flags.edges_per_interval >= 1 && flags.edges_per_interval <= 64))
-    throw InvalidInput("--edges-per-interval", "must be between 1 and 64");
-  o.set_edges_per_interval(flags.edges_per_interval);
+  if (flags.mu) o.set_friction_mu(*flags.mu);
+  if (flags.edges_per_interval) o.set_edges_per_interval(*flags.edges_per_interval);
   if (!flags.interior_anchors.empty() && flags.interior_anchors != "auto")
     throw InvalidInput("--interior-anchors", "expected auto, got '" + flags.interior_anchors + "'");
   o.set_interior_anchors(flags.interior_anchors);
-  if (flags.anchor_goal) {
-    if (flags.interior_anchors != "auto")
-      throw InvalidInput("--anchor-goal", "applies to --interior-anchors auto only");
-    if (!(*flags.anchor_goal >= 0 && *flags.anchor_goal <= 100))
-      throw InvalidInput("--anchor-goal",
-                         "must be a percentage of the patch diagonal between 0 and 100");
-    o.set_anchor_goal(*flags.anchor_goal);
-  }
-  if (flags.max_iterations < 1) throw InvalidInput("--max-iterations", "must be at least 1");
-  o.set_max_iterations(flags.max_iterations);
+  if (flags.anchor_goal) o.set_anchor_goal(*flags.anchor_goal);
+  if (flags.max_iterations) o.set_max_iterations(*flags.max_iterations);
   return o;
 }
 

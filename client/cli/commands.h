@@ -31,6 +31,7 @@ Command add_simulate_command(CLI::App& app);
 Command add_run_command(CLI::App& app);
 Command add_fabricate_command(CLI::App& app);
 Command add_compare_command(CLI::App& app);
+Command add_options_command(CLI::App& app);
 
 /// Flags of every command that computes and writes a folder: --out, --threads (in-process only;
 /// left out where a command has no parallel work), --quiet and the remote options.
@@ -45,22 +46,16 @@ void add_output_flags(CLI::App* sub, OutputFlags& flags, bool with_threads = tru
 void print_heading(const char* command, const std::string& input, const OutputFlags& flags);
 
 /// Design flags shared by `design` and `run` (MESH, --corners, --alpha, ...).
+/// The design flags. The described options (gridshell/options.h) stay unset unless given: their
+/// defaults, ranges and checks are the request's.
 struct DesignFlags {
   std::string mesh;
   std::string corners;
-  std::string alpha = "min";
-  int members_u = 0;
-  int members_v = 0;
-  double lamella_width = 0;      // 0 = 1% of the longest patch side
-  double lamella_thickness = 0;  // 0 = width / 10
-  int resolution = 100;
-  std::string method = "fast";
-  double eta_max = 1.0015;
+  std::optional<std::string> alpha, method;
+  std::optional<int> members_u, members_v, resolution, suggest, map_vertices;
+  std::optional<double> lamella_width, lamella_thickness, eta_max, k_min, k_max;
   std::string interior_anchors = "0";  // N (0..100) placed by the design, or auto (`run` only)
   std::string corner_angles;           // "MIN,MAX" degrees for automatic corners, "" = 45,135
-  int suggest = 3;                     // feasible suggestions when infeasible
-  std::optional<double> k_min, k_max;
-  int map_vertices = 0;  // 0 = default (4000): maps on a simplified copy of larger patches
 };
 void add_design_flags(CLI::App* sub, DesignFlags& flags);
 /// Loads the mesh and builds the request (InvalidInput names the flag).
@@ -72,21 +67,20 @@ void print_design_summary(const v1::DesignResult& result);
 bool automatic_interior_anchors(const DesignFlags& flags);
 
 /// Simulation flags shared by `simulate` and `run`.
+/// The simulation flags (described options, unset unless given; see DesignFlags).
 struct SimulationFlags {
-  std::string notches = "both";
-  std::string material;  // empty: lime-wood, or custom when --young/--shear are given
+  std::optional<std::string> notches, material, solver;  // no material: the default, or custom
+                                                         // when --young/--shear are given
   std::optional<double> young, shear;
   std::optional<double> bending_strength, shear_strength;  // Pa; default: the material's
   std::string unit;
-  double mu = 0.1;
-  double edges_per_interval = 2;
-  int max_iterations = 2000;
-  std::string solver = "newton";
+  std::optional<double> mu, edges_per_interval;
+  std::optional<int> max_iterations;
   std::string interior_anchors;       // "auto" or "" (the design's anchors)
   std::optional<double> anchor_goal;  // percent of the patch diagonal (auto anchors only)
 };
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
-/// Resolved and validated (InvalidInput names the flag).
+/// The options as given (the request check, resolve_simulation_options, names the flag).
 v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags);
 void print_deployment_summary(const v1::Deployment& deployment);
 

@@ -11,6 +11,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/mesh/errors.h"
+#include "gridshell/options.h"
 #include "remote.h"
 
 int main(int argc, char** argv) {
@@ -18,6 +19,13 @@ int main(int argc, char** argv) {
   CLI::App app{"gridshell: design and simulate elastic geodesic gridshells"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "gridshell 0.1.0");
+  // A site's materials (GRIDSHELL_MATERIALS) before the flags that list them.
+  try {
+    load_site_materials();
+  } catch (const Error& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  }
   std::map<CLI::App*, cli::Command> commands;
   auto add = [&](cli::Command (*adder)(CLI::App&)) {
     const size_t before = app.get_subcommands({}).size();
@@ -35,6 +43,7 @@ int main(int argc, char** argv) {
   add(cli::add_sweep_command);
   add(cli::add_fabricate_command);
   add(cli::add_compare_command);
+  add(cli::add_options_command);
 
   try {
     app.parse(argc, argv);

@@ -439,7 +439,7 @@ TEST(Fabricate, BadDesignsAndOptionsNameTheField) {
       {"'" + good + "' --unit parsec", "--unit: expected mm, cm"},
       {"'" + good + "' --unit cm --sheet 1000x600", "--sheet: lamella h7 is 1061.0 mm long"},
       {"'" + good + "' --unit cm --sheet 12x", "--sheet: expected WIDTHxHEIGHT"},
-      {"'" + good + "' --unit cm --kerf -1", "--kerf: must be between 0 and 10 mm"},
+      {"'" + good + "' --unit cm --kerf -1", "--kerf: must be in [0, 10) mm, got -1"},
       {"'" + good + "' --unit cm --hole-diameter 12", "--hole-diameter: 12.0 mm does not fit"},
       {"'" + dir + "/none.json' --unit cm", "cannot open the design file"},
   };

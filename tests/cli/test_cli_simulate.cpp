@@ -195,10 +195,10 @@ TEST(CliSimulate, BadInputsNameTheProblem) {
       {"'" + testing::write_text(dir, "garbage.json", "{not json") + "'", "not a gridshell design"},
       {"'" + broken_path + "'", "crossings[3].h"},
       {"'" + width_path + "'", "options.lamella_width"},
-      {good + " --material unobtainium", "unknown material"},
+      {good + " --material unobtainium", "--material: expected one of lime-wood, birch-plywood"},
       {good + " --unit parsec", "--unit"},
       {good + " --young -5", "--young"},
-      {good + " --mu 0", "--mu"},
+      {good + " --mu -1", "--mu"},  // 0 is the default (0.1), as in the request
       {good + " --edges-per-interval 100", "--edges-per-interval"},
       // Extremes that used to give Infinity / NaN in deployment.json with exit code 0.
       {good + " --young 1e-300 --shear 1e-301", "--young"},
@@ -250,7 +250,7 @@ TEST(CliRun, BadInputsStopBeforeAnyWork) {
   const std::string dir = testing::temp_dir();
   struct Case {
     std::string arguments, expected;
-  } cases[] = {{"example:hypar --material balsa", "--material: unknown material 'balsa'"},
+  } cases[] = {{"example:hypar --material balsa", "--material: expected one of lime-wood"},
                {"example:hypar --young -5", "--young"},
                {"example:hypar --eta-max 0.5", "--eta-max"},
                {"example:nothing", "nothing"},
