@@ -33,7 +33,7 @@
 #include <random>
 #include <sstream>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

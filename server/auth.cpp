@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::server {
 

@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "auth.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/patch_cache.h"
+#include "gridshell/application/patch_cache.h"
+#include "gridshell/foundation/errors.h"
 #include "grpc_service.h"
 #include "http_gateway.h"
 #include "methods.h"

@@ -18,8 +18,8 @@
 #include <thread>
 
 #include "auth.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/application/files.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::server {
 namespace {

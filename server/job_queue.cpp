@@ -9,8 +9,8 @@
 #include <new>
 #include <nlohmann/json.hpp>
 
-#include "gridshell/mesh/errors.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/requests.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::server {
 

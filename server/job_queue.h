@@ -27,7 +27,7 @@
 #include <thread>
 #include <vector>
 
-#include "gridshell/mesh/progress.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/v1/requests.pb.h"
 #include "status.h"
 

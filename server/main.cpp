@@ -15,8 +15,8 @@
 #include <iostream>
 
 #include "daemon.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/options.h"
+#include "gridshell/application/options.h"
+#include "gridshell/foundation/errors.h"
 
 int main(int argc, char** argv) {
   using namespace gridshell;

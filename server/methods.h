@@ -4,7 +4,7 @@
 // generic (job_queue.h, grpc_service.cpp, http_gateway.cpp) and need nothing per method.
 //
 // To implement Simulate or Run: write `v1::SimulateResult run_simulate(const v1::SimulateRequest&,
-// const Progress&, const RunSettings&)` next to run_design in proto/convert/requests.cpp and set
+// const Progress&, const RunSettings&)` next to run_design in application/requests.cpp and set
 // `methods.simulate.run` to it in make_methods (methods.cpp). That is all.
 #pragma once
 
@@ -13,12 +13,12 @@
 #include <string>
 #include <utility>
 
-#include "gridshell/fabricate.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/mesh/progress.h"
-#include "gridshell/options.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/fabricate.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/options.h"
+#include "gridshell/application/requests.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/v1/requests.pb.h"
 #include "job_queue.h"
 

@@ -37,11 +37,11 @@
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
-#include "gridshell/requests.h"
 #include "remote.h"
 
 namespace gridshell::cli {

@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 

@@ -25,7 +25,7 @@
 #include "bench_support.h"
 #include "commands.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 
 extern char** environ;

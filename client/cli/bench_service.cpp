@@ -28,9 +28,9 @@
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
+#include "gridshell/application/requests.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/requests.h"
+#include "gridshell/foundation/errors.h"
 #include "remote.h"
 
 namespace gridshell::cli {

@@ -17,8 +17,8 @@
 #include "bench_support.h"
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
-#include "sweep.h"
+#include "gridshell/batch/sweep.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 namespace {

@@ -11,8 +11,8 @@
 #include <utility>
 
 #include "cli_support.h"
-#include "gridshell/options.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/options.h"
+#include "gridshell/application/requests.h"
 
 namespace gridshell::cli {
 namespace {

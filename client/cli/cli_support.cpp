@@ -18,11 +18,11 @@
 #include <numbers>
 #include <sstream>
 
+#include "gridshell/application/files.h"
+#include "gridshell/application/options.h"
+#include "gridshell/application/requests.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/options.h"
-#include "gridshell/requests.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 

@@ -12,10 +12,10 @@
 
 #include "cli_syntax.h"
 #include "gridshell/design/patch.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/mesh_io.h"
-#include "gridshell/mesh/progress.h"
 #include "gridshell/v1/design.pb.h"
 #include "gridshell/v1/requests.pb.h"
 

@@ -6,7 +6,7 @@
 #include <limits>
 #include <system_error>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 

@@ -23,8 +23,8 @@
 #include "commands.h"
 #include "gridshell/design/design.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/geodesic/geodesic.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {

@@ -12,9 +12,9 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/compare_job.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/application/compare_job.h"
+#include "gridshell/application/files.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 namespace {

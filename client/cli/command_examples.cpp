@@ -6,7 +6,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell::cli {

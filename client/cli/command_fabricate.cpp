@@ -9,9 +9,9 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/fabricate.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/options.h"
+#include "gridshell/application/fabricate.h"
+#include "gridshell/application/options.h"
+#include "gridshell/foundation/errors.h"
 #include "remote.h"
 
 namespace gridshell::cli {

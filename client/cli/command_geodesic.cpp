@@ -8,8 +8,8 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/requests.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/v1/reports.pb.h"
 #include "remote.h"
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "remote.h"
 
 namespace gridshell::cli {

@@ -6,10 +6,10 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/options.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/options.h"
+#include "gridshell/application/requests.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 namespace {

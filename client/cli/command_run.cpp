@@ -8,8 +8,8 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/files.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "paper_table1.h"
 #include "remote.h"
 

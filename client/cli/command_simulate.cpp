@@ -11,10 +11,10 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/deployment_job.h"
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/deployment_job.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
+#include "gridshell/foundation/errors.h"
 #include "remote.h"
 
 namespace gridshell::cli {

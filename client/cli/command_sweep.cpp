@@ -13,8 +13,8 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
-#include "sweep.h"
+#include "gridshell/batch/sweep.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 namespace {
@@ -85,11 +85,11 @@ void check_finished_rows_match(const std::string& dir, const sweep::Manifest& ma
                                   "folders to run them again");
 }
 
-int run_sweep(SweepArguments& args) {
-  if (args.manifest.empty()) throw InvalidInput("MANIFEST", "give a manifest (CSV or JSON Lines)");
-  if (args.out.empty()) throw InvalidInput("--out", "give the sweep folder");
-  const sweep::Manifest manifest = sweep::read_manifest(args.manifest);
-  const std::vector<sweep::Problem> problems = sweep::validate(manifest);
+/// The manifest, checked whole; InvalidInput after listing every problem on stderr.
+sweep::Manifest checked_manifest(const std::string& path) {
+  if (path.empty()) throw InvalidInput("MANIFEST", "give a manifest (CSV or JSON Lines)");
+  const sweep::Manifest manifest = sweep::read_manifest(path);
+  const std::vector<sweep::Problem> problems = sweep::validate(manifest, *run_row_checker());
   if (!problems.empty()) {
     finish_progress();
     std::set<std::string> rows;
@@ -97,12 +97,32 @@ int run_sweep(SweepArguments& args) {
       std::cerr << "  " << p.describe() << "\n";
       if (!p.id.empty()) rows.insert(p.id);
     }
-    throw InvalidInput(args.manifest,
-                       std::to_string(problems.size()) + " problem" +
-                           (problems.size() == 1 ? "" : "s") +
-                           (rows.empty() ? "" : " in " + std::to_string(rows.size()) + " rows") +
-                           " (listed above); nothing was started");
+    throw InvalidInput(
+        path, std::to_string(problems.size()) + " problem" + (problems.size() == 1 ? "" : "s") +
+                  (rows.empty() ? "" : " in " + std::to_string(rows.size()) + " rows") +
+                  " (listed above); nothing was started");
   }
+  return manifest;
+}
+
+/// `gridshell sweep check MANIFEST`: the check `gridshell sweep` makes before it starts.
+int run_check(const SweepArguments& args) {
+  const sweep::Manifest manifest = checked_manifest(args.manifest);
+  std::printf("manifest %s: %zu rows, columns %s: no problems\n", manifest.path.c_str(),
+              manifest.rows.size(),
+              [&] {
+                std::string list;
+                for (const std::string& c : manifest.columns)
+                  list += (list.empty() ? "" : ", ") + c;
+                return list;
+              }()
+                  .c_str());
+  return 0;
+}
+
+int run_sweep(SweepArguments& args) {
+  if (args.out.empty()) throw InvalidInput("--out", "give the sweep folder");
+  const sweep::Manifest manifest = checked_manifest(args.manifest);
   if (args.remote.remote()) {
     args.remote.tls_ca = absolute(args.remote.tls_ca);
     args.remote.token_file = absolute(args.remote.token_file);
@@ -115,6 +135,8 @@ int run_sweep(SweepArguments& args) {
   sweep::write_sweep_file(dir, manifest);
 
   sweep::EngineOptions& options = args.options;
+  options.progress = make_progress(options.quiet);
+  options.end_progress = finish_progress;
   options.row.gridshell = self_executable();
   options.row.remote = args.remote;
   options.row.engine = args.engine;
@@ -206,6 +228,9 @@ Command add_sweep_command(CLI::App& app) {
       ->group(slurm);
   add_remote_options(sub, args->remote);
 
+  CLI::App* check = sub->add_subcommand(
+      "check", "Check a manifest as a sweep would before it starts, and run nothing");
+  check->add_option("MANIFEST", args->manifest, "the rows: a .csv or .jsonl file")->required();
   CLI::App* status = sub->add_subcommand("status", "Counts of a sweep's rows and every row not ok");
   status->add_option("DIR", args->dir, "the sweep folder")->required();
   CLI::App* collect =
@@ -217,10 +242,12 @@ Command add_sweep_command(CLI::App& app) {
   task->add_option("--submission", args->submission, "submission number")->required();
   task->add_option("--task", args->task, "array task index")->required();
 
-  return [args, status, collect, task] {
+  return [args, check, status, collect, task] {
+    if (check->parsed()) return run_check(*args);
     if (status->parsed()) return run_status(*args);
     if (collect->parsed()) return run_collect(*args);
-    if (task->parsed()) return sweep::run_task(args->dir, args->submission, args->task);
+    if (task->parsed())
+      return sweep::run_task(args->dir, args->submission, args->task, cancel_flag());
     return run_sweep(*args);
   };
 }

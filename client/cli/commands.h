@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -16,6 +17,10 @@
 namespace CLI {
 class App;
 }  // namespace CLI
+
+namespace gridshell::sweep {
+class RowChecker;  // gridshell/batch/sweep.h
+}  // namespace gridshell::sweep
 
 namespace gridshell::cli {
 
@@ -88,8 +93,11 @@ Command add_health_command(CLI::App& app);
 /// `gridshell bench sweep` (bench_sweep.cpp): the local and Slurm engines on 32 rows, Slurm's
 /// per-task overhead, `sweep collect` over 10 000 rows; section "sweep" of `out`.
 int bench_sweep(const std::string& out, bool no_write, int repeats);
-/// `gridshell sweep` (command_sweep.cpp, sweep.h).
+/// `gridshell sweep` (command_sweep.cpp; the engines are the batch layer's,
+/// gridshell/batch/sweep.h).
 Command add_sweep_command(CLI::App& app);
+/// A sweep row checked as `gridshell run` checks its command line (sweep_check.cpp).
+std::unique_ptr<sweep::RowChecker> run_row_checker();
 
 /// `gridshell bench service` (bench_service.cpp): `repeats` scales the requests per client
 /// count; the table goes to section "service" of `out`.

@@ -10,8 +10,8 @@
 
 #include "cli_support.h"
 #include "commands.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/options.h"
+#include "gridshell/application/options.h"
+#include "gridshell/foundation/errors.h"
 #include "remote.h"
 
 int main(int argc, char** argv) {

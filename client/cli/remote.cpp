@@ -12,9 +12,9 @@
 #include <sstream>
 #include <thread>
 
-#include "gridshell/mesh/errors.h"
-#include "gridshell/patch_routing_key.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/patch_routing_key.h"
+#include "gridshell/application/requests.h"
+#include "gridshell/foundation/errors.h"
 
 #ifdef GRIDSHELL_HAVE_GRPC
 #include <grpcpp/grpcpp.h>

@@ -8,7 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "gridshell/mesh/progress.h"
+#include "gridshell/batch/remote_options.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/v1/fabrication.pb.h"
 #include "gridshell/v1/requests.pb.h"
 
@@ -25,15 +26,6 @@ namespace gridshell::cli {
 class RemoteError : public std::runtime_error {
  public:
   explicit RemoteError(const std::string& message);
-};
-
-struct RemoteOptions {
-  std::string server;      ///< HOST:PORT of gridshelld; empty = run in-process
-  bool tls = false;        ///< TLS, verifying the daemon against the system's roots
-  std::string tls_ca;      ///< PEM file of the CA (or the self-signed certificate); implies TLS
-  std::string token_file;  ///< file holding the bearer token
-  double timeout = 0;      ///< deadline in seconds, 0 = none
-  bool remote() const { return !server.empty(); }
 };
 
 /// Adds --server, --tls, --tls-ca, --token-file and --timeout to a subcommand.

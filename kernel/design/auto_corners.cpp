@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "gridshell/design/target_patch.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "gridshell/mesh/normals.h"
 

@@ -76,7 +76,7 @@
 #include <sstream>
 #include <utility>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

@@ -14,10 +14,10 @@
 #include <optional>
 #include <sstream>
 
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
-#include "gridshell/mesh/parallel.h"
 
 namespace gridshell {
 namespace {

@@ -26,8 +26,8 @@
 #include <sstream>
 #include <string>
 
-#include "gridshell/mesh/errors.h"
-#include "gridshell/mesh/parallel.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 
 namespace gridshell {
 namespace {

@@ -29,8 +29,8 @@
 #include <string>
 
 #include "gridshell/design/distance_map.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/mesh/parallel.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 
 namespace gridshell {
 namespace {

@@ -26,9 +26,9 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/mesh_topology.h"
-#include "gridshell/mesh/parallel.h"
 
 namespace gridshell {
 namespace {

@@ -50,7 +50,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

@@ -17,8 +17,8 @@
 #include <set>
 #include <sstream>
 
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "gridshell/mesh/surface_distance.h"
 

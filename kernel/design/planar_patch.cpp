@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <sstream>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/surface_distance.h"
 
 namespace gridshell {

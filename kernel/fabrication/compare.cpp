@@ -23,9 +23,9 @@
 #include <numeric>
 #include <random>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/mesh_io.h"
-#include "gridshell/mesh/parallel.h"
 
 namespace gridshell {
 namespace {

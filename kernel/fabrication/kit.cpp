@@ -7,7 +7,7 @@
 #include <numeric>
 #include <string>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

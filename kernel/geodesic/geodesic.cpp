@@ -12,7 +12,7 @@
 #include <sstream>
 
 #include "geodesic_fast.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 
 namespace gridshell {

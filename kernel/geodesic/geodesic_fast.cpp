@@ -118,7 +118,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 
 namespace gridshell::geodesic_detail {

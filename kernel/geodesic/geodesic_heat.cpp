@@ -20,7 +20,7 @@
 #include <mutex>
 
 #include "geodesic_fast.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::geodesic_detail {
 namespace {

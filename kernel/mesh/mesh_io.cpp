@@ -32,7 +32,7 @@
 #include <string_view>
 #include <unordered_map>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 
 namespace gridshell {

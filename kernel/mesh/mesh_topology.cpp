@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/normals.h"
 
 namespace gridshell {

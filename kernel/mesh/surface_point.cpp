@@ -3,7 +3,7 @@
 
 #include <sstream>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 

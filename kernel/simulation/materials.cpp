@@ -4,7 +4,7 @@
 // entry in kBuiltIn. A site adds its own with a material library (GRIDSHELL_MATERIALS).
 #include <cmath>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/simulation/simulation.h"
 
 namespace gridshell {

@@ -9,7 +9,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "gridshell/mesh/parallel.h"
+#include "gridshell/foundation/parallel.h"
 #include "sparse_cholesky.h"
 
 namespace gridshell {

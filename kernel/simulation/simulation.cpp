@@ -29,8 +29,8 @@
 #include <thread>
 #include <tuple>
 
-#include "gridshell/mesh/errors.h"
-#include "gridshell/mesh/parallel.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "newton_solver.h"
 #include "rod_derivatives.h"

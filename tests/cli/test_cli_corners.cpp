@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_support.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
 namespace {

@@ -14,8 +14,8 @@
 #include <sstream>
 #include <thread>
 
+#include "gridshell/batch/sweep.h"
 #include "support.h"
-#include "sweep.h"
 
 namespace gridshell {
 namespace {
@@ -73,8 +73,8 @@ TEST(SweepManifest, CsvAndJsonLinesGiveTheSameRows) {
                       "1640], \"alpha\": \"min\", \"members-u\": 4}\n"
                       "{\"id\": \"b\", \"mesh\": \"meshes/x.obj\", \"alpha\": \"70deg\", "
                       "\"members-u\": null}\n");
-  const auto csv = cli::sweep::read_manifest(dir + "/m.csv");
-  const auto jsonl = cli::sweep::read_manifest(dir + "/m.jsonl");
+  const auto csv = sweep::read_manifest(dir + "/m.csv");
+  const auto jsonl = sweep::read_manifest(dir + "/m.jsonl");
   ASSERT_EQ(csv.rows.size(), 2u);
   ASSERT_EQ(jsonl.rows.size(), 2u);
   for (int i = 0; i < 2; ++i) {
@@ -352,31 +352,31 @@ TEST(SweepCollect, SyntheticRowsSummariseWithoutTheRunFiles) {
   // Status files only (collect never opens the large result files): 500 rows, every tenth
   // infeasible, two pending.
   const std::string dir = testing::temp_dir();
-  cli::sweep::Manifest manifest;
+  sweep::Manifest manifest;
   manifest.path = dir + "/m.csv";
   manifest.columns = {"id", "mesh", "alpha"};
   for (int i = 0; i < 500; ++i) {
-    cli::sweep::Row row;
+    sweep::Row row;
     row.id = "r" + std::to_string(i);
     row.line = i + 2;
     row.mesh = "example:plane";
     row.values = {{"mesh", "example:plane"}, {"alpha", std::to_string(0.6 + i * 1e-3)}};
     manifest.rows.push_back(row);
     if (i >= 498) continue;
-    cli::sweep::RowStatus s;
+    sweep::RowStatus s;
     s.id = row.id;
     s.options = row.values;
     s.attempt = 1;
     s.exit_code = i % 10 == 9 ? 3 : 0;
-    s.status = cli::sweep::status_of_exit_code(s.exit_code);
+    s.status = sweep::status_of_exit_code(s.exit_code);
     if (s.status == "ok")
       s.results = {{"alpha_bar", 0.6 + i * 1e-3}, {"rms_with_notches", 1.0 + (i % 37) * 0.01}};
     else
       s.error = "infeasible: --alpha: outside";
     fs::create_directories(dir + "/rows/" + row.id);
-    std::ofstream(dir + "/rows/" + row.id + "/status.json") << cli::sweep::to_json(s);
+    std::ofstream(dir + "/rows/" + row.id + "/status.json") << sweep::to_json(s);
   }
-  cli::sweep::write_sweep_file(dir, manifest);
+  sweep::write_sweep_file(dir, manifest);
   const auto r = run_cli("sweep collect '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("500: 449 ok, 49 infeasible, 2 pending"), std::string::npos) << r.out;

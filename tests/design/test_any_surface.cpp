@@ -12,8 +12,8 @@
 #include <string>
 
 #include "gridshell/design/target_patch.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/mesh/errors.h"
 #include "support.h"
 
 namespace gridshell {

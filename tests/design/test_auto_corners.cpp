@@ -13,7 +13,7 @@
 
 #include "gridshell/design/design.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "support.h"
 

@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "gridshell/design/cladding.h"
-#include "gridshell/mesh/errors.h"
-#include "gridshell/example_surfaces.h"
-#include "gridshell/geodesic/geodesic.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/design/planar_patch.h"
+#include "gridshell/example_surfaces.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/geodesic/geodesic.h"
 #include "support.h"
 
 namespace gridshell {

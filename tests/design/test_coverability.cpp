@@ -8,8 +8,8 @@
 #include <numbers>
 
 #include "gridshell/design/coverability.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "support.h"
 

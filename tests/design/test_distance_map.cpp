@@ -18,8 +18,8 @@
 #include "gridshell/design/patch.h"
 #include "gridshell/design/planar_patch.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/geodesic/geodesic.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "support.h"
 

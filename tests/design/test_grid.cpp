@@ -16,7 +16,7 @@
 #include "gridshell/design/design.h"
 #include "gridshell/design/grid.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "support.h"
 
 namespace gridshell {

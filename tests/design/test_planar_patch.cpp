@@ -6,8 +6,8 @@
 #include <numbers>
 #include <random>
 
-#include "gridshell/mesh/errors.h"
 #include "gridshell/design/planar_patch.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "gridshell/design/suggestions.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 namespace {

@@ -16,8 +16,8 @@
 
 #include "gridshell/design/target_patch.h"
 #include "gridshell/example_surfaces.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/normals.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "support.h"

@@ -13,7 +13,7 @@
 #include <set>
 
 #include "gridshell/example_surfaces.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_topology.h"
 
 namespace gridshell {

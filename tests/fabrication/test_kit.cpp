@@ -14,7 +14,7 @@
 #include "gridshell/fabrication/compare.h"
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/fabrication/kit_export.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/surface_point.h"
 
 namespace gridshell {

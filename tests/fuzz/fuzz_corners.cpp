@@ -7,7 +7,7 @@
 
 #include "cli_syntax.h"
 #include "fuzz_support.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/requests.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const unsigned char* data, std::size_t size) {
   using namespace gridshell;

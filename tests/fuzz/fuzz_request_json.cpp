@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target: the request decoding for every RPC — the strict JSON reader (from_json,
-// proto/convert/json_read.cpp) into the request message, then the request's checks and conversion
+// application/json_read.cpp) into the request message, then the request's checks and conversion
 // into kernel inputs (prepare_patch, prepare_design, ...; to_mesh reads mesh files and examples).
 // The first byte picks the RPC, the rest is the body. A body from_json accepts must also print
 // (to_json) and read back to an equal message: the reader takes everything the writer writes. The
@@ -12,9 +12,9 @@
 #include <string>
 
 #include "fuzz_support.h"
-#include "gridshell/convert_deployment.h"
-#include "gridshell/files.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/convert_deployment.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "gridshell/v1/requests.pb.h"
 
 namespace {

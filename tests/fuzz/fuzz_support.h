@@ -12,7 +12,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/mesh_io.h"
 

@@ -25,8 +25,8 @@
 #include <thread>
 
 #include "gridshell/example_surfaces.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/geodesic/geodesic.h"
-#include "gridshell/mesh/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "support.h"

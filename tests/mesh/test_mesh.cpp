@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh.h"
 #include "support.h"
 

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "support.h"

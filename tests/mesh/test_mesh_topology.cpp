@@ -13,7 +13,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "support.h"

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/surface_distance.h"
 #include "gridshell/mesh/surface_point.h"

@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/surface_point.h"
 #include "support.h"

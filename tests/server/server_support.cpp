@@ -20,9 +20,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "gridshell/example_surfaces.h"
-#include "gridshell/files.h"
-#include "gridshell/requests.h"
 
 namespace gridshell::testing {
 

@@ -14,8 +14,8 @@
 #include <set>
 #include <thread>
 
-#include "gridshell/files.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "server_support.h"
 #include "support.h"
 

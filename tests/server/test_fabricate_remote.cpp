@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "gridshell/fabricate.h"
-#include "gridshell/files.h"
+#include "gridshell/application/fabricate.h"
+#include "gridshell/application/files.h"
 #include "server_support.h"
 #include "support.h"
 

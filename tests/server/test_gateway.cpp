@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "gridshell/files.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "gridshell/mesh/curvature.h"
-#include "gridshell/requests.h"
 #include "server_support.h"
 #include "support.h"
 

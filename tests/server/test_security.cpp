@@ -5,8 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gridshell/files.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/application/files.h"
+#include "gridshell/foundation/errors.h"
 #include "server_support.h"
 #include "support.h"
 

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "gridshell/files.h"
-#include "gridshell/requests.h"
+#include "gridshell/application/files.h"
+#include "gridshell/application/requests.h"
 #include "server_support.h"
 #include "support.h"
 

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "gridshell/design/distance_map.h"
-#include "gridshell/mesh/mesh.h"
 #include "gridshell/design/planar_patch.h"
-#include "gridshell/mesh/progress.h"
+#include "gridshell/foundation/progress.h"
+#include "gridshell/mesh/mesh.h"
 
 namespace gridshell {
 

@@ -14,8 +14,8 @@
 
 #include "gridshell/design/distance_map_copy.h"
 #include "gridshell/design/patch.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/geodesic/geodesic.h"
-#include "gridshell/mesh/progress.h"
 
 namespace gridshell {
 

@@ -22,7 +22,7 @@
 
 #include "gridshell/design/family.h"
 #include "gridshell/design/patch.h"
-#include "gridshell/mesh/progress.h"
+#include "gridshell/foundation/progress.h"
 
 namespace gridshell {
 

@@ -16,8 +16,8 @@
 #include "gridshell/design/members.h"
 #include "gridshell/design/patch.h"
 #include "gridshell/design/planar_patch.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/geodesic/geodesic.h"
-#include "gridshell/mesh/progress.h"
 
 namespace gridshell {
 

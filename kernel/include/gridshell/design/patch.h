@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "gridshell/foundation/progress.h"
 #include "gridshell/geodesic/geodesic.h"
 #include "gridshell/mesh/mesh.h"
-#include "gridshell/mesh/progress.h"
 
 namespace gridshell {
 

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "gridshell/design/design.h"
-#include "gridshell/mesh/errors.h"
+#include "gridshell/foundation/errors.h"
 
 namespace gridshell {
 

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "gridshell/foundation/progress.h"
 #include "gridshell/mesh/mesh.h"
-#include "gridshell/mesh/progress.h"
 #include "gridshell/simulation/simulation.h"
 
 namespace gridshell {

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "gridshell/design/design.h"
-#include "gridshell/mesh/progress.h"
+#include "gridshell/foundation/progress.h"
 
 namespace gridshell {
 

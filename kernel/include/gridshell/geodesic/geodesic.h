@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "gridshell/foundation/progress.h"
 #include "gridshell/mesh/mesh.h"
-#include "gridshell/mesh/progress.h"
 #include "gridshell/mesh/surface_point.h"
 
 namespace gridshell {

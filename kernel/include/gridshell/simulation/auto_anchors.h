@@ -5,8 +5,8 @@
 
 #include "gridshell/design/anchors.h"
 #include "gridshell/design/grid.h"
+#include "gridshell/foundation/progress.h"
 #include "gridshell/mesh/mesh.h"
-#include "gridshell/mesh/progress.h"
 #include "gridshell/simulation/simulation.h"
 
 namespace gridshell {
