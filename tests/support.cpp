@@ -189,10 +189,13 @@ TriangleMesh annulus(double r0, double r1, int rings, int sectors) {
 }
 
 CommandResult run_cli(const std::string& arguments) {
+  return run_command(std::string("'") + GRIDSHELL_CLI + "' " + arguments);
+}
+
+CommandResult run_command(const std::string& command_line) {
   const std::string dir = temp_dir();
   const std::string out_path = dir + "/stdout", err_path = dir + "/stderr";
-  const std::string command = std::string("'") + GRIDSHELL_CLI + "' " + arguments + " >'" +
-                              out_path + "' 2>'" + err_path + "' </dev/null";
+  const std::string command = command_line + " >'" + out_path + "' 2>'" + err_path + "' </dev/null";
   const int status = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);

@@ -32,6 +32,8 @@ struct CommandResult {
 
 /// Runs the gridshell CLI with the given argument string (shell-quoted by the caller).
 CommandResult run_cli(const std::string& arguments);
+/// Runs a shell command line (e.g. "VAR=x 'prog' args") the same way: output and exit code.
+CommandResult run_command(const std::string& command_line);
 
 /// A (nu+1) x (nv+1) grid over (u,v) in [0,1]^2 mapped by `map`, triangulated with alternating
 /// diagonals, faces counter-clockwise in (u,v). Vertex (i,j) has index j*(nu+1)+i.
