@@ -39,9 +39,10 @@ async function until(predicate, ms, what) {
 }
 
 /** Starts gridshelld on free loopback ports serving the page; resolves when it listens. */
-async function startDaemon(extra, http = '127.0.0.1:0') {
+async function startDaemon(extra, http = '127.0.0.1:0', env = {}) {
   const proc = spawn(daemonPath, ['--listen', '127.0.0.1:0', '--http', http, '--static', path.join(web, 'dist'),
-                                  '--workers', '2', ...extra], { stdio: ['ignore', 'ignore', 'pipe'] });
+                                  '--workers', '2', ...extra],
+                     { stdio: ['ignore', 'ignore', 'pipe'], env: { ...process.env, ...env } });
   let log = '';
   proc.stderr.setEncoding('utf8');
   proc.stderr.on('data', (d) => { log += d; });
@@ -65,6 +66,16 @@ async function stopDaemon(proc) {
 
 const byId = (id) => page.getByTestId(id);
 const text = (id) => byId(id).textContent();
+
+/** The daemon's description of every option (POST /v1/options), which the page's form is built from. */
+async function describedOptions(url = base) {
+  const r = await fetch(url + 'v1/options', { method: 'POST', body: '{}', headers: { 'Content-Type': 'application/json' },
+                                              signal: AbortSignal.timeout(10000) });
+  assert.equal(r.status, 200);
+  return r.json();
+}
+const FORM_GROUPS = ['design', 'simulation'];
+const formOptions = (d) => d.options.filter((o) => !o.output && FORM_GROUPS.includes(o.group));
 
 before(async () => {
   assert.ok(existsSync(daemonPath), `no daemon at ${daemonPath} (build it: bash scripts/build.sh)`);
@@ -128,6 +139,79 @@ test('page loads, lists the examples, shows one (page-ready time)', async () => 
   console.log(`# page ready (navigation -> example ${exampleName} shown): ${ms} ms; in the page: bundle ` +
               `loaded ${inPage.dom} ms, examples listed ${inPage.examples} ms, example shown ${inPage.shown} ms`);
   assert.match(await text('mesh-info'), new RegExp(`${exampleName}: \\d+ vertices, \\d+ faces`));
+});
+
+test('the form is the daemon\'s description (/v1/options): one control per option, its range and default, the materials, the mesh formats', async () => {
+  const d = await describedOptions();
+  const described = formOptions(d).map((o) => `${o.group}.${o.name}`);
+  assert.ok(described.includes('design.lamella_width') && described.includes('simulation.material'), described.join(' '));
+  // One to one, by name: a list of its own in the page would fail here once the description changes.
+  const onPage = await page.locator('#panel [data-option]').evaluateAll((es) => es.map((e) => e.dataset.option));
+  assert.equal(new Set(onPage).size, onPage.length, `a control twice: ${onPage}`);
+  assert.deepEqual([...onPage].sort(), [...described].sort());
+  assert.equal(await page.evaluate(() => document.body.dataset.options), String(described.length - 1)); // all but the ᾱ slider
+  // Each control: the description's help as its tooltip, its default, advanced ones under a collapsed
+  // "Advanced", and number inputs whose own validity follows the range (exclusive bounds and
+  // "0 allowed besides the range" included): the immediate feedback.
+  const shown = await page.evaluate((options) => options.map((o) => {
+    const root = document.querySelector(`[data-option="${o.group}.${o.name}"]`);
+    const inputs = [...root.querySelectorAll('input, select')];
+    const input = inputs[0];
+    const r = { key: `${o.group}.${o.name}`, title: root.title, advanced: root.closest('details') !== null,
+                closed: root.closest('details')?.open === false, kind: input?.type ?? '',
+                value: inputs.map((i) => (i.type === 'checkbox' ? (i.checked ? 'on' : 'off') : i.value)).join(','),
+                choices: input?.tagName === 'SELECT' ? [...input.options].map((x) => x.value) : null, valid: {} };
+    if (input?.type === 'number' && o.type !== 'numbers') {
+      const probe = (v) => { input.value = String(v); input.dispatchEvent(new Event('input')); return input.validity.valid; };
+      const candidates = [0];
+      if (o.minimum !== undefined) candidates.push(o.minimum, o.minimum - 1);
+      if (o.maximum !== undefined) candidates.push(o.maximum, o.maximum * 2 + 1);
+      if (o.minimum !== undefined && o.maximum !== undefined) candidates.push(o.type === 'integer' ? Math.ceil((o.minimum + o.maximum) / 2) : (o.minimum + o.maximum) / 2);
+      for (const v of candidates) r.valid[String(v)] = probe(v);
+      input.value = o.default_value;
+      input.dispatchEvent(new Event('input'));
+    }
+    return r;
+  }), formOptions(d));
+  for (const o of formOptions(d)) {
+    const c = shown.find((x) => x.key === `${o.group}.${o.name}`);
+    assert.ok(c.title.startsWith(o.help), `${c.key}: title ${JSON.stringify(c.title)}`);
+    assert.equal(c.advanced, o.advanced, `${c.key} under Advanced`);
+    if (o.advanced) assert.ok(c.closed, `${c.key}: Advanced is collapsed`);
+    if (c.key === 'design.alpha') continue; // the slider: its range is the design's feasible range
+    if (o.type === 'number' || o.type === 'integer') {
+      assert.equal(c.kind, 'number', c.key);
+      assert.equal(Number(c.value), Number(o.default_value), `${c.key} default`);
+      for (const [v, valid] of Object.entries(c.valid)) {
+        const x = Number(v);
+        const inRange = (o.minimum === undefined || x > o.minimum || (x === o.minimum && !o.exclusive_minimum)) &&
+                        (o.maximum === undefined || x < o.maximum || (x === o.maximum && !o.exclusive_maximum)) &&
+                        (o.type !== 'integer' || Number.isInteger(x));
+        assert.equal(valid, inRange || (x === 0 && o.zero_allowed), `${c.key} = ${v}: valid ${valid}`);
+      }
+    } else if (o.type === 'choice' && c.choices) {
+      assert.equal(c.value, o.default_value || c.choices[0], `${c.key} default`);
+      for (const choice of o.choices) assert.ok(c.choices.includes(choice), `${c.key}: ${choice} offered`);
+    } else if (o.type === 'boolean' || (o.type === 'choice' && c.kind === 'checkbox')) {
+      assert.equal(c.kind, 'checkbox', c.key);
+      assert.equal(c.value, o.default_value === 'true' || (o.default_value !== '' && o.default_value !== 'false') ? 'on' : 'off', c.key);
+    } else if (o.type === 'numbers') {
+      assert.deepEqual(c.value.split(',').map(Number), o.default_value.split(',').map(Number), `${c.key} default`);
+    } else if (c.choices === null) {
+      assert.equal(c.value, o.default_value, `${c.key} default`);
+    }
+  }
+  // The materials, in the description's order, the first selected; E and G in each title.
+  const material = byId('material');
+  const listed = await material.locator('option').evaluateAll((os) => os.map((o) => ({ value: o.value, label: o.textContent, title: o.title })));
+  assert.deepEqual(listed.slice(0, d.materials.length).map((m) => [m.value, m.label]), d.materials.map((m) => [m.name, m.label]));
+  assert.equal(await material.inputValue(), d.materials[0].name);
+  for (const m of listed.slice(0, d.materials.length)) assert.match(m.title, /^E = [\d.e+]+ GPa, G = [\d.e+]+ GPa/);
+  assert.deepEqual(await byId('unit').locator('option').evaluateAll((os) => os.map((o) => o.value).filter(Boolean)), d.length_units);
+  assert.equal(await byId('mesh-input').getAttribute('accept'), d.mesh_formats.map((f) => `.${f}`).join(','));
+  // The probes above are undone: nothing but the defaults, so no option in the URL.
+  assert.equal(await page.locator('#panel input:invalid').count(), 0);
+  assert.doesNotMatch(new URL(page.url()).hash, /(design|simulation)\./);
 });
 
 /** Fraction of canvas pixels that differ from the background colour. */
@@ -276,8 +360,8 @@ function assertSameBytes(page, cli, name) {
   assert.ok(cli.equals(page), `design.json differs from the CLI's (${cli.length} vs ${page.length} bytes; see tests/web/out/${name}.*.json)`);
 }
 
-async function downloadJson(testid) {
-  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 10000 }), byId(testid).click()]);
+async function downloadJson(testid, on = page) {
+  const [download] = await Promise.all([on.waitForEvent('download', { timeout: 10000 }), on.getByTestId(testid).click()]);
   const file = await download.path();
   return { name: download.suggestedFilename(), bytes: readFileSync(file) };
 }
@@ -305,24 +389,73 @@ test('the example\'s suggested corners: a redesign from ᾱ min, design.json as 
   assertSameBytes(bytes, await cliDesign(`example:${exampleName}`, null, root, []), `${exampleName}-suggested`);
 });
 
+test('an option the patch depends on too (eta_max): the patch again with it, the design, the daemon\'s patch key', async () => {
+  const seen = [];
+  const onRequest = (r) => {
+    const m = /\/v1\/(patch|design)$/.exec(r.url());
+    if (m) seen.push({ method: m[1], key: r.headers()['x-gridshell-patch-key'], body: JSON.parse(r.postData()) });
+  };
+  const n = await designCount();
+  page.on('request', onRequest);
+  try {
+    await byId('eta-max').fill('1.002');
+    await until(async () => (await designCount()) === n + 1, 60000, 'the design on the new patch');
+  } finally {
+    page.off('request', onRequest);
+  }
+  const patch = seen.filter((x) => x.method === 'patch'), design = seen.filter((x) => x.method === 'design');
+  assert.equal(patch.length, 1);
+  assert.deepEqual(patch[0].body.options, { eta_max: 1.002 }); // the design options a patch takes too
+  assert.equal(design.at(-1).body.options.eta_max, 1.002);
+  assert.match(await text('patch-info'), /limit 1\.002\)/);
+  // The page's key hashes the new eta_max (and the description's defaults): the daemon's.
+  const reply = await (await fetch(base + 'v1/design', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(design.at(-1).body),
+  })).json();
+  assert.match(design.at(-1).key ?? '', /^[0-9a-f]{32}$/);
+  assert.equal(design.at(-1).key, reply.report.patch_key);
+  assert.match(page.url(), /design\.eta_max=1\.002/);
+  seen.length = 0;
+  page.on('request', onRequest);
+  try {
+    await byId('eta-max').fill('1.0015'); // the default again: not sent
+    await until(async () => (await designCount()) === n + 2, 60000, 'the design on the default patch');
+  } finally {
+    page.off('request', onRequest);
+  }
+  assert.deepEqual(seen.find((x) => x.method === 'patch').body.options, {});
+  assert.equal(seen.filter((x) => x.method === 'design').at(-1).body.options.eta_max, undefined);
+  assert.doesNotMatch(page.url(), /eta_max/);
+});
+
 test('member counts redesign live; a bad option shows its field next to the controls', async () => {
   const n = await designCount();
   await byId('members-u').fill('6');
   await until(async () => (await designCount()) === n + 1, 60000, 'the redesign with 6 g-members');
   assert.match(await text('summary'), /members: 6 g × \d+ h inner/);
   assert.match(await text('summary'), /distance maps cached: yes/);
+  const slot = page.locator('.field-error[data-for="design.lamella_width"]');
   allowHttpErrors = true;
   try {
     await byId('lamella-width').fill('-1');
+    // At once, from the description's range: the input is invalid and says why.
+    assert.equal(await byId('lamella-width').evaluate((i) => i.validity.valid), false);
+    assert.match(await slot.textContent(), /^options\.lamella_width: must be > 0 mesh units \(or 0: /);
     await until(() => byId('error').isVisible(), 10000, 'the error of the bad width');
   } finally {
     allowHttpErrors = false;
   }
-  assert.match(await text('error'), /options\.lamella_width: /);
-  assert.match(await page.locator('.field-error[data-for=options]').textContent(), /options\.lamella_width: /);
+  // Then the daemon's error, naming the field, next to that control.
+  const shown = await text('error');
+  assert.match(shown, /INVALID_ARGUMENT.*options\.lamella_width: .*got -1/);
+  const next = await slot.textContent();
+  assert.match(next, /^options\.lamella_width: .*got -1$/);
+  assert.ok(shown.includes(next), `${shown}\n${next}`);
+  assert.equal(await page.locator('.field-error[data-for=options]').textContent(), '');
   await byId('lamella-width').fill('0');
   await until(async () => (await designCount()) === n + 2, 60000, 'the redesign after the fix');
   assert.ok(await byId('error').isHidden());
+  assert.equal(await slot.textContent(), '');
   assert.equal(await page.locator('.field-error[data-for=options]').textContent(), '');
 });
 
@@ -434,7 +567,7 @@ test('inner anchors found by the simulation (waves-bump): listed, in design-anch
   await byId('design').click();
   await until(async () => (await designCount()) === n + 1, 60000, 'its design');
   await byId('auto-anchors').check();
-  assert.match(page.url(), /aa=1/); // kept in the URL with the other options
+  assert.match(page.url(), /simulation\.interior_anchors=auto/); // kept in the URL with the other options
   await byId('simulate').click();
   await until(async () => /inner anchors:/.test(await text('summary')), 120000, 'the simulation with the anchor search');
   const { bytes } = await downloadJson('download-deployment');
@@ -684,11 +817,69 @@ test('a daemon with a token: the page asks for it and keeps it in sessionStorage
     await tab.locator('#token-save').click();
     await until(() => tab.evaluate(() => Number(document.querySelector('[data-testid=example-select]').dataset.loaded ?? 0)),
                 10000, 'the examples with the token');
+    // The options' description too, asked for again with the token: the form is built.
+    await until(() => tab.evaluate(() => Number(document.body.dataset.options ?? 0) > 0), 10000, 'the form with the token');
+    assert.ok(await tab.getByTestId('material').locator('option').count() > 1);
     assert.equal(await tab.evaluate(() => sessionStorage.getItem('gridshell.token')), token);
     assert.equal(await tab.evaluate(() => localStorage.length), 0);
     assert.ok(!tab.url().includes(token));
   } finally {
     allowHttpErrors = false;
+    await tab.close();
+    await stopDaemon(other.proc);
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('a site\'s material library (GRIDSHELL_MATERIALS): its material is listed, simulated and reported', async () => {
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-materials-'));
+  const library = path.join(dir, 'lib.json');
+  writeFileSync(library, JSON.stringify({ materials: [{ name: 'test-larch', label: 'test larch', young_modulus: 1.1e10,
+    shear_modulus: 0.7e9, bending_strength: 7.0e7, shear_strength: 8e6, source: 'test' }] }));
+  const other = await startDaemon([], '127.0.0.1:0', { GRIDSHELL_MATERIALS: library });
+  daemons.push(other.proc);
+  const url = `http://${other.address}/`;
+  const tab = await page.context().newPage();
+  tab.setDefaultTimeout(20000);
+  tab.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(`materials tab: ${m.text()}`); });
+  tab.on('pageerror', (e) => consoleErrors.push(`materials tab: pageerror: ${e.message}`));
+  try {
+    const d = await describedOptions(url);
+    const builtIn = (await describedOptions()).materials.map((m) => m.name);
+    assert.deepEqual(d.materials.map((m) => m.name), [...builtIn, 'test-larch']); // after the built-in ones
+    await tab.goto(url);
+    await until(() => tab.evaluate(() => document.body.dataset.ready === '1'), 15000, 'the page on the second daemon');
+    const material = tab.getByTestId('material');
+    const listed = await material.locator('option').evaluateAll((os) => os.map((o) => [o.value, o.textContent, o.title]));
+    assert.deepEqual(listed.slice(0, d.materials.length).map(([v, l]) => [v, l]), d.materials.map((m) => [m.name, m.label]));
+    assert.ok(listed.some(([v, l, t]) => v === 'test-larch' && l === 'test larch' && /^E = 11 GPa, G = 0\.7 GPa/.test(t)), JSON.stringify(listed));
+    assert.equal(await material.inputValue(), builtIn[0]); // the default: the first
+    // A small design on an example, simulated in test larch.
+    const examples = await tab.getByTestId('example-select').locator('option').evaluateAll((os) => os.map((o) => o.value).filter(Boolean));
+    await tab.getByTestId('example-select').selectOption(examples.includes('double-vault') ? 'double-vault' : examples[0]);
+    await until(() => tab.evaluate(() => document.querySelector('[data-testid=mesh-info]').dataset.ready === '1'), 15000, 'the example');
+    await tab.getByTestId('members-u').fill('4');
+    await tab.getByTestId('members-v').fill('4');
+    await tab.getByTestId('corners-auto').click();
+    await until(async () => /η = /.test(await tab.getByTestId('patch-info').textContent()), 30000, 'the patch');
+    await tab.getByTestId('design').click();
+    await until(() => tab.getByTestId('simulate').isEnabled(), 60000, 'the design');
+    await material.selectOption('test-larch');
+    assert.match(tab.url(), /simulation\.material=test-larch/);
+    const sent = [];
+    const onRequest = (r) => { if (r.url().endsWith('/v1/simulate')) sent.push(JSON.parse(r.postData()).options); };
+    tab.on('request', onRequest);
+    await tab.getByTestId('simulate').click();
+    await until(async () => /RMS/.test(await tab.getByTestId('summary').textContent()), 120000, 'the simulation in test larch');
+    tab.off('request', onRequest);
+    assert.deepEqual(sent, [{ material: 'test-larch' }]); // by field name, only what differs from the defaults
+    assert.match(await tab.getByTestId('summary').textContent(), /material test-larch: E = 11 GPa, bending strength 70 MPa, shear strength 8 MPa/);
+    const dep = JSON.parse((await downloadJson('download-deployment', tab)).bytes.toString('utf8'));
+    assert.equal(dep.options.material, 'test-larch');
+    assert.equal(dep.options.young_modulus, 1.1e10);
+    assert.equal(dep.options.shear_modulus, 0.7e9);
+    assert.equal(dep.options.bending_strength, 7.0e7);
+  } finally {
     await tab.close();
     await stopDaemon(other.proc);
     rmSync(dir, { recursive: true, force: true });

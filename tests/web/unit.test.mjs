@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Unit tests of the page's pure code (client/web/src/format.ts, colormap.ts): bundled on the fly
+// Unit tests of the page's pure code (client/web/src/format.ts, colormap.ts, form.ts, ...): bundled on the fly
 // with the esbuild that Vite brings (no second TypeScript toolchain), then run with node:test.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { fileURLToPath, pathToFileURL } from 'node:url';
-import { mkdtempSync, writeFileSync, rmSync } from 'node:fs';
+import { existsSync, mkdtempSync, writeFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 
@@ -70,19 +70,34 @@ test('deployment summary: each run with its stresses against the material', () =
 });
 
 test('errors go next to the control their field names', () => {
-  assert.equal(f.errorSlot('load', 'mesh.indices[3]'), 'mesh');
-  assert.equal(f.errorSlot('load', ''), 'mesh');
-  assert.equal(f.errorSlot('patch', 'corners.vertices[2]'), 'corners');
-  assert.equal(f.errorSlot('design', 'options.alpha'), 'options.alpha');
-  assert.equal(f.errorSlot('design', 'options.members_u'), 'options');
-  assert.equal(f.errorSlot('simulate', 'options.material'), 'simulation');
-  assert.equal(f.errorSlot('simulate', 'design.members[4]'), 'options');
+  const slots = new Set(['design.alpha', 'design.members_u', 'design.eta_max', 'design.auto_corner_angles', 'simulation.material']);
+  const has = (k) => slots.has(k);
+  assert.equal(f.errorSlot('load', 'mesh.indices[3]', has), 'mesh');
+  assert.equal(f.errorSlot('load', '', has), 'mesh');
+  assert.equal(f.errorSlot('patch', 'corners.vertices[2]', has), 'corners');
+  assert.equal(f.errorSlot('patch', 'options.eta_max', has), 'design.eta_max'); // a patch sends design options too
+  assert.equal(f.errorSlot('patch', 'options.no_smoothing', has), 'corners');
+  assert.equal(f.errorSlot('design', 'options.alpha', has), 'design.alpha');
+  assert.equal(f.errorSlot('design', 'options.members_u', has), 'design.members_u');
+  assert.equal(f.errorSlot('design', 'options.auto_corner_angles[1]', has), 'design.auto_corner_angles');
+  assert.equal(f.errorSlot('design', 'options.members_u'), 'options'); // no such control: under the section
+  assert.equal(f.errorSlot('design', 'options.k_max', has), 'options');
+  assert.equal(f.errorSlot('simulate', 'options.material', has), 'simulation.material');
+  assert.equal(f.errorSlot('simulate', 'options.solver', has), 'simulation');
+  assert.equal(f.errorSlot('simulate', 'design.members[4]', has), 'options');
+  assert.equal(f.errorSlot('fabricate', 'options.unit', has), 'fabricate');
 });
 
-test('URL state round-trips', () => {
-  const s = { example: 'double-vault', corners: [1, 20, 300, 4000], alpha: 71.5, design: true, options: { mu: '5', mat: 'steel', aa: '1' } };
+test('URL state round-trips; option keys are the controls\' (older short keys still read)', () => {
+  const s = { example: 'double-vault', corners: [1, 20, 300, 4000], alpha: 71.5, design: true,
+              options: { 'design.members_u': '5', 'simulation.material': 'steel', 'simulation.interior_anchors': 'auto',
+                         'design.test_extra': '2.5' } };
   const back = f.decodeState('#' + f.encodeState(s));
   assert.deepEqual(back, s);
+  assert.deepEqual(f.decodeState('#example=x&mu=5&w=0.5&mat=steel&aa=1&unit=cm').options,
+                   { 'design.members_u': '5', 'design.lamella_width': '0.5', 'simulation.material': 'steel',
+                     'simulation.interior_anchors': 'auto', 'simulation.unit': 'cm' });
+  assert.deepEqual(f.decodeState('#bogus=1&design.x=2').options, { 'design.x': '2' });
   const up = { file: { name: 'my mesh.obj', hash: '0123456789abcdef' }, corners: [1, 2, 3, 4], options: {} };
   assert.deepEqual(f.decodeState('#' + f.encodeState(up)), up);
   assert.deepEqual(f.decodeState('#file=x.obj&sha256=nothex'), { options: {} });
@@ -173,7 +188,9 @@ test('retries: only calls the daemon did not answer, after a bounded, jittered b
 
 test('patch key bytes: the layout of docs/api.md', () => {
   const mesh = { positions: [0, 0, 0, 1, 0, 0, 0, 1, 0.5], indices: [0, 1, 2] };
-  const b = routing.patchKeyBytes(mesh, { vertices: [0, 1, 2, 0] }, { resolution: 16 });
+  // The values come from the description's defaults on the page (routing.ts keeps no copy).
+  const defaults = { geodesic_method: 'fast', eta_max: 1.0015, max_smoothing_iterations: 60, resolution: 100 };
+  const b = routing.patchKeyBytes(mesh, { vertices: [0, 1, 2, 0] }, { ...defaults, resolution: 16 });
   const v = new DataView(b.buffer);
   const magic = new TextDecoder().decode(b.subarray(0, 23));
   assert.equal(magic, 'gridshell-patch-key-v1\n');
@@ -193,7 +210,183 @@ test('patch key bytes: the layout of docs/api.md', () => {
   assert.equal(b[at + 12], 1);
   assert.equal(v.getUint32(at + 13, true), 16);
   assert.equal(b.length, at + 17);
-  const auto = routing.patchKeyBytes(mesh, {}, {});
+  const auto = routing.patchKeyBytes(mesh, {}, defaults);
   assert.equal(auto[27 + 72 + 16], 0); // automatic corners: nothing follows the kind
   assert.equal(new DataView(auto.buffer).getUint32(auto.length - 4, true), 100); // default resolution
+});
+
+// ---- the form built from the daemon's description of the options (form.ts, issue 34) ------------
+
+const form = await load('src/form.ts');
+
+/** A description as /v1/options answers it (a part of the real one), plus a made-up option and material. */
+function description({ extra = true } = {}) {
+  const options = [
+    { group: 'patch', name: 'eta_max', type: 'number', default_value: '1.0015', minimum: 1, maximum: 10, label: 'Gap factor threshold', help: 'gap factor threshold eta' },
+    { group: 'patch', name: 'max_smoothing_iterations', type: 'integer', default_value: '60', minimum: 0, maximum: 1e5, label: 'Smoothing cap', help: 'smoothing iterations at most' },
+    { group: 'design', name: 'alpha', type: 'text', default_value: 'min', label: 'Planar corner angle', help: 'planar corner angle: min | max | radians | NNdeg' },
+    { group: 'design', name: 'members_u', flag: '--members-u', type: 'integer', default_value: '0', minimum: 1, maximum: 1000, zero_allowed: true, zero_means: 'automatic', label: 'g-members', help: 'inner g-members' },
+    { group: 'design', name: 'lamella_width', type: 'number', default_value: '0', minimum: 0, maximum: 1e15, exclusive_minimum: true, zero_allowed: true, zero_means: '1% of the longest patch side', unit: 'mesh units', label: 'Lamella width', help: 'lamella width' },
+    { group: 'design', name: 'resolution', type: 'integer', default_value: '100', minimum: 8, maximum: 1000, zero_allowed: true, zero_means: 'adaptive', label: 'Map resolution', help: 'distance map resolution R' },
+    { group: 'design', name: 'geodesic_method', type: 'choice', default_value: 'fast', choices: ['fast', 'cgal'], label: 'Geodesics', help: 'geodesic engine' },
+    { group: 'design', name: 'eta_max', type: 'number', default_value: '1.0015', minimum: 1, maximum: 10, label: 'Gap factor threshold', help: 'gap factor threshold eta' },
+    { group: 'design', name: 'interior_anchors', type: 'integer', default_value: '0', minimum: 0, maximum: 100, label: 'Inner anchors', help: 'inner anchors' },
+    { group: 'design', name: 'auto_corner_angles', type: 'numbers', count: 2, default_value: '0.7853981633974483,2.356194490192345', minimum: 0, maximum: Math.PI, exclusive_minimum: true, exclusive_maximum: true, unit: 'radians', label: 'Corner angles', help: 'automatic corners', note: 'min < max' },
+    { group: 'simulation', name: 'notches', type: 'choice', default_value: 'both', choices: ['on', 'off', 'both'], label: 'Notches', help: 'notches' },
+    { group: 'simulation', name: 'material', type: 'choice', default_value: 'lime-wood', choices: ['lime-wood', 'steel', 'custom'], label: 'Material', help: 'material preset; custom: give both moduli' },
+    { group: 'simulation', name: 'unit', type: 'text', default_value: '', label: 'Length unit', help: 'the model\'s length unit' },
+    { group: 'simulation', name: 'interior_anchors', type: 'choice', default_value: '', choices: ['', 'auto'], label: 'Automatic inner anchors', help: 'add inner anchors' },
+    { group: 'simulation', name: 'friction_epsilon', type: 'number', default_value: '1e-04', minimum: 0, maximum: 0.5, exclusive_minimum: true, exclusive_maximum: true, zero_allowed: true, zero_means: 'default', advanced: true, label: 'Friction epsilon', help: 'E_p' },
+    { group: 'simulation', name: 'lamella_width', type: 'number', default_value: '', unit: 'mesh units', label: 'lamella_width', help: 'from the design', output: true },
+    { group: 'fabrication', name: 'kerf', type: 'number', default_value: '0.15', minimum: 0, maximum: 10, exclusive_maximum: true, unit: 'mm', label: 'Kerf', help: 'laser kerf' },
+  ];
+  const materials = [
+    { name: 'lime-wood', label: 'lime wood', young_modulus: 7.4e9, shear_modulus: 4.6e8, bending_strength: 6e7, shear_strength: 6.8e6, source: 'USDA', site: false },
+    { name: 'steel', label: 'steel', young_modulus: 2.1e11, shear_modulus: 8.1e10, bending_strength: 2.35e8, shear_strength: 1.36e8, source: 'S235', site: false },
+  ];
+  if (extra) {
+    options.splice(10, 0, { group: 'design', name: 'test_extra', flag: '--test-extra', type: 'number', default_value: '7', minimum: 2, maximum: 50,
+                            exclusive_maximum: true, unit: 'mm', label: 'Test extra', help: 'a made-up option' });
+    options.push({ group: 'simulation', name: 'test_switch', type: 'boolean', default_value: 'false', advanced: true, label: 'Test switch', help: 'a made-up advanced switch' });
+    materials.push({ name: 'test-larch', label: 'test larch', young_modulus: 1.1e10, shear_modulus: 0.7e9, bending_strength: 7e7, shear_strength: 8e6, source: 'test', site: true });
+  }
+  return { options, materials, mesh_formats: ['obj', 'off', 'ply', 'stl'], length_units: ['mm', 'cm', 'm', 'in', 'ft'] };
+}
+
+test('form: a control for every design and simulation option of the description, none for output or other groups', () => {
+  const keys = form.controlSpecs(description()).map((c) => c.key);
+  assert.deepEqual(keys, ['design.members_u', 'design.lamella_width', 'design.resolution', 'design.geodesic_method',
+    'design.eta_max', 'design.interior_anchors', 'design.auto_corner_angles', 'design.test_extra', 'simulation.notches',
+    'simulation.material', 'simulation.unit', 'simulation.interior_anchors', 'simulation.friction_epsilon', 'simulation.test_switch']);
+  // design.alpha is the page's own slider; the rest is exactly the description's, so an option added
+  // to it is a control more, with no other change.
+  const without = form.controlSpecs(description({ extra: false })).map((c) => c.key);
+  assert.deepEqual(keys.filter((k) => !without.includes(k)), ['design.test_extra', 'simulation.test_switch']);
+});
+
+test('form: a made-up number option gets its range, default, label and help', () => {
+  const spec = form.controlSpecs(description()).find((c) => c.key === 'design.test_extra');
+  assert.equal(spec.kind, 'number');
+  assert.equal(spec.testid, 'test-extra');
+  assert.deepEqual([spec.min, spec.max, spec.step, spec.value, spec.label, spec.unit], ['2', '50', 'any', '7', 'Test extra', 'mm']);
+  assert.equal(spec.title, 'a made-up option\nallowed: [2, 50) mm\ndefault: 7\nCLI: --test-extra');
+  const o = spec.option;
+  assert.equal(form.checkValue(o, '49.5'), '');
+  assert.equal(form.checkValue(o, '50'), 'must be in [2, 50) mm'); // exclusive maximum
+  assert.equal(form.checkValue(o, '1'), 'must be in [2, 50) mm');
+  assert.equal(form.checkValue(o, ''), ''); // empty: the default
+});
+
+test('form: integer, zero-allowed, exclusive and list ranges; choices; what a request sends', () => {
+  const specs = new Map(form.controlSpecs(description()).map((c) => [c.key, c]));
+  const mu = specs.get('design.members_u');
+  assert.deepEqual([mu.kind, mu.min, mu.max, mu.step, mu.value, mu.testid], ['number', '0', '1000', '1', '0', 'members-u']);
+  assert.match(mu.title, /allowed: integer \[1, 1000\] \(or 0: automatic\)\ndefault: 0 \(automatic\)/);
+  assert.equal(form.checkValue(mu.option, '0'), '');
+  assert.equal(form.checkValue(mu.option, '2.5'), 'must be an integer in [1, 1000] (or 0: automatic)');
+  const res = specs.get('design.resolution');
+  assert.deepEqual([res.min, res.max], ['0', '1000']); // 0 or 8..1000: the input reaches 0, the check says the rest
+  assert.equal(form.checkValue(res.option, '5'), 'must be in [8, 1000] (or 0: adaptive)');
+  const w = specs.get('design.lamella_width');
+  assert.equal(form.checkValue(w.option, '0'), '');
+  assert.equal(form.checkValue(w.option, '-1'), 'must be in (0, 1e+15] mesh units (or 0: 1% of the longest patch side)');
+  const eps = specs.get('simulation.friction_epsilon');
+  assert.equal(eps.advanced, true);
+  assert.equal(form.checkValue(eps.option, '0.5'), 'must be in (0, 0.5) (or 0: default)');
+  const angles = specs.get('design.auto_corner_angles');
+  assert.deepEqual([angles.kind, angles.count, angles.min, angles.max], ['numbers', 2, '0', String(Math.PI)]);
+  assert.equal(form.checkValue(angles.option, '0.5,2.5'), '');
+  assert.match(form.checkValue(angles.option, '0.5'), /needs 2 numbers/);
+  assert.match(form.checkValue(angles.option, '0,2'), /^0: must be in \(0, 3\.14159\) radians/);
+  assert.deepEqual(specs.get('design.geodesic_method').items.map((i) => i.value), ['fast', 'cgal']);
+  const aa = specs.get('simulation.interior_anchors');
+  assert.deepEqual([aa.kind, aa.checked, aa.testid], ['checkbox', 'auto', 'auto-anchors']);
+  const unit = specs.get('simulation.unit');
+  assert.deepEqual(unit.items.map((i) => i.value), ['', 'mm', 'cm', 'm', 'in', 'ft']); // the description's length units
+  // Only values other than the default go into a request, typed by the option's type.
+  const d = description();
+  const values = new Map(form.controlSpecs(d).map((c) => [c.key, c.value]));
+  assert.deepEqual(form.requestOptions(values, form.formOptions(d), 'design'), {});
+  assert.deepEqual(form.requestOptions(values, form.formOptions(d), 'simulation'), {});
+  values.set('design.test_extra', '9').set('design.members_u', '6').set('design.eta_max', '1.0015')
+    .set('design.auto_corner_angles', '0.5,2.5').set('simulation.interior_anchors', 'auto').set('simulation.material', 'test-larch');
+  assert.deepEqual(form.requestOptions(values, form.formOptions(d), 'design'),
+                   { members_u: 6, test_extra: 9, auto_corner_angles: [0.5, 2.5] });
+  assert.deepEqual(form.requestOptions(values, form.formOptions(d), 'design', new Set(['eta_max', 'auto_corner_angles'])),
+                   { auto_corner_angles: [0.5, 2.5] });
+  assert.deepEqual(form.requestOptions(values, form.formOptions(d), 'simulation'), { material: 'test-larch', interior_anchors: 'auto' });
+});
+
+test('form: the material select lists the description\'s materials (E and G in each title), then the other choices', () => {
+  const spec = form.controlSpecs(description()).find((c) => c.key === 'simulation.material');
+  assert.equal(spec.kind, 'select');
+  assert.equal(spec.value, 'lime-wood');
+  assert.deepEqual(spec.items.map((i) => [i.value, i.label]),
+                   [['lime-wood', 'lime wood'], ['steel', 'steel'], ['test-larch', 'test larch'], ['custom', 'custom']]);
+  assert.match(spec.items[2].title, /^E = 11 GPa, G = 0\.7 GPa; bending strength 70 MPa, shear strength 8 MPa\ntest\n\(this site's material library\)$/);
+  assert.match(spec.items[0].title, /^E = 7\.4 GPa, G = 0\.46 GPa/);
+});
+
+// The DOM builder in real Chromium (the e2e tests' browser), on an empty page with no network.
+const chromiumPath = process.env.CHROMIUM ?? '/usr/bin/chromium';
+test('form: the built controls in Chromium (a made-up option and material appear with their range)',
+     { timeout: 60000, skip: !existsSync(chromiumPath) && `no Chromium at ${chromiumPath}` }, async () => {
+  const { chromium } = createRequire(path.join(web, 'package.json'))('playwright-core');
+  const bundle = await esbuild.build({ entryPoints: [path.join(web, 'src/form.ts')], bundle: true, format: 'iife',
+                                       globalName: 'gridshellForm', write: false, platform: 'browser' });
+  const browser = await chromium.launch({ executablePath: chromiumPath, timeout: 30000,
+    args: ['--no-sandbox', '--headless', '--disable-background-networking', '--disable-component-update', '--no-first-run'] });
+  try {
+    const page = await browser.newPage();
+    page.setDefaultTimeout(10000);
+    await page.route('**/*', (route) => route.abort()); // nothing leaves the page
+    const errors = [];
+    page.on('pageerror', (e) => errors.push(e.message));
+    await page.setContent(`<div id="dm"></div><details><summary>Advanced</summary><div id="da"></div></details>
+      <div id="sm"></div><details id="sd"><summary>Advanced</summary><div id="sa"></div></details>`);
+    await page.addScriptTag({ content: bundle.outputFiles[0].text });
+    await page.evaluate((d) => {
+      const $ = (id) => document.getElementById(id);
+      window.form = new window.gridshellForm.OptionsForm(d, { design: { main: $('dm'), advanced: $('da') },
+                                                              simulation: { main: $('sm'), advanced: $('sa') } });
+      window.changes = [];
+      window.form.onChange = (key, o, settled) => window.changes.push([key, settled]);
+    }, description());
+    const extra = page.locator('[data-option="design.test_extra"]');
+    const input = page.getByTestId('test-extra');
+    assert.deepEqual(await input.evaluate((i) => [i.type, i.min, i.max, i.step, i.value]), ['number', '2', '50', 'any', '7']);
+    assert.equal(await extra.locator('label').textContent(), 'Test extra (mm)');
+    assert.match(await extra.getAttribute('title'), /^a made-up option\nallowed: \[2, 50\) mm/);
+    assert.ok(await extra.evaluate((e) => e.parentElement.id === 'dm'), 'in the design grid, not under Advanced');
+    // Immediate feedback from the description: the exclusive maximum, next to the control.
+    await input.fill('50');
+    assert.equal(await input.evaluate((i) => i.validity.valid), false);
+    assert.equal(await extra.locator('.field-error').textContent(), 'options.test_extra: must be in [2, 50) mm');
+    await input.fill('9');
+    assert.equal(await input.evaluate((i) => i.validity.valid), true);
+    assert.equal(await extra.locator('.field-error').textContent(), '');
+    assert.deepEqual(await page.evaluate(() => window.form.requestOptions('design')), { test_extra: 9 });
+    assert.deepEqual(await page.evaluate(() => window.changes.at(-1)), ['design.test_extra', false]);
+    // The material select: every material of the description, the first selected.
+    const material = page.getByTestId('material');
+    assert.deepEqual(await material.locator('option').evaluateAll((os) => os.map((o) => [o.value, o.textContent])),
+                     [['lime-wood', 'lime wood'], ['steel', 'steel'], ['test-larch', 'test larch'], ['custom', 'custom']]);
+    assert.equal(await material.inputValue(), 'lime-wood');
+    assert.match(await material.locator('option[value="test-larch"]').getAttribute('title'), /E = 11 GPa, G = 0\.7 GPa/);
+    await material.selectOption('test-larch');
+    assert.deepEqual(await page.evaluate(() => window.form.requestOptions('simulation')), { material: 'test-larch' });
+    // An advanced option goes under the collapsed "Advanced"; an output field and other groups get nothing.
+    assert.ok(await page.locator('#sa [data-option="simulation.test_switch"] input[type=checkbox]').count() === 1);
+    assert.equal(await page.locator('#sd').evaluate((d) => d.open || d.hidden), false);
+    assert.equal(await page.locator('[data-option="simulation.lamella_width"], [data-option^="fabrication."], [data-option^="patch."]').count(), 0);
+    assert.equal(await page.locator('[data-option="design.alpha"]').count(), 0); // the page's own slider
+    await page.getByTestId('auto-anchors').check();
+    assert.deepEqual(await page.evaluate(() => window.form.changed()),
+                     { 'design.test_extra': '9', 'simulation.material': 'test-larch', 'simulation.interior_anchors': 'auto' });
+    assert.equal(await page.evaluate(() => window.form.set('design.test_extra', '51')), true);
+    assert.equal(await input.evaluate((i) => i.validity.valid), false);
+    assert.deepEqual(errors, []);
+  } finally {
+    await browser.close();
+  }
 });

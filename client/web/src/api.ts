@@ -202,6 +202,49 @@ export interface SimulateResult {
   views: FileJson[];
 }
 
+/** One request option (gridshell.v1.OptionDescription, proto/gridshell/v1/options.proto). */
+export interface OptionDescription {
+  group: string;          // "patch" | "design" | "simulation" | "fabrication"
+  name: string;           // the proto field name in that group's options message
+  flag?: string;
+  type: string;           // "number" | "integer" | "boolean" | "choice" | "text" | "numbers"
+  default_value?: string;
+  minimum?: number;
+  maximum?: number;
+  exclusive_minimum?: boolean;
+  exclusive_maximum?: boolean;
+  zero_allowed?: boolean;
+  zero_means?: string;
+  choices?: string[];
+  unit?: string;
+  help?: string;
+  label?: string;
+  advanced?: boolean;
+  count?: number;
+  note?: string;
+  output?: boolean;       // recorded in results only, not a request option
+}
+
+/** A material preset (gridshell.v1.MaterialPreset): Pa, 0 = unknown strength. */
+export interface MaterialPreset {
+  name: string;
+  label?: string;
+  young_modulus?: number;
+  shear_modulus?: number;
+  bending_strength?: number;
+  shear_strength?: number;
+  source?: string;
+  site?: boolean;
+}
+
+/** The Options RPC's answer (gridshell.v1.OptionsResult): every option, the materials (default first). */
+export interface OptionsResult {
+  options?: OptionDescription[];
+  materials?: MaterialPreset[];
+  mesh_formats?: string[];
+  length_units?: string[];
+}
+
 // ---- transport --------------------------------------------------------------------------------
 
 const TOKEN_KEY = 'gridshell.token';

@@ -98,20 +98,27 @@ export function maxDeviation(dep: Deployment): number {
 
 /**
  * Which control an error concerns: the daemon's field path (`mesh.indices[3]`,
- * `corners.vertices[2]`, `options.alpha`, `design.members[4]`) mapped to the page's
- * `data-for` slots, given the call it came from.
+ * `corners.vertices[2]`, `options.lamella_width`, `options.auto_corner_angles[1]`,
+ * `design.members[4]`) mapped to the page's `data-for` slots, given the call it came from. An
+ * option's error goes next to its own control (`design.NAME`, `simulation.NAME`) when
+ * `hasSlot` says the page has one, else under its section.
  */
-export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate', field: string): string {
+export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate', field: string,
+                          hasSlot: (slot: string) => boolean = () => false): string {
   if (call === 'fabricate') return 'fabricate';
-  if (call === 'simulate') return field.startsWith('design') ? 'options' : 'simulation';
+  const name = /^options\.([A-Za-z0-9_]+)/.exec(field)?.[1];
+  if (call === 'simulate') {
+    if (field.startsWith('design')) return 'options';
+    return name && hasSlot(`simulation.${name}`) ? `simulation.${name}` : 'simulation';
+  }
   if (field.startsWith('mesh')) return 'mesh';
   if (field.startsWith('corners')) return 'corners';
-  if (field.startsWith('options.alpha')) return 'options.alpha';
+  if (name && hasSlot(`design.${name}`)) return `design.${name}`; // a patch sends design options too
   if (field.startsWith('options')) return call === 'patch' ? 'corners' : 'options';
   return call === 'load' ? 'mesh' : call === 'patch' ? 'corners' : 'options';
 }
 
-/** The page's state in the URL hash: example, corners, options. */
+/** The page's state in the URL hash: example, corners, options (`design.NAME`, `simulation.NAME`). */
 export interface UrlState {
   example?: string;
   file?: { name: string; hash: string }; // an uploaded mesh: its name and SHA-256 (hex, 16 digits)
@@ -120,10 +127,16 @@ export interface UrlState {
   suggested?: boolean; // the example's suggested corners
   alpha?: number;
   design?: boolean;
-  options: Record<string, string>;
+  options: Record<string, string>; // control key -> its text, for the controls not at their default
 }
 
-export const OPTION_KEYS = ['mu', 'mv', 'w', 't', 'ia', 'unit', 'mat', 'aa'] as const;
+const STATE_KEYS = new Set(['example', 'file', 'sha256', 'corners', 'auto', 'suggested', 'alpha', 'design']);
+
+/** Option keys of URLs written before the form was built from the daemon's description. */
+const LEGACY_KEYS: Record<string, string> = {
+  mu: 'design.members_u', mv: 'design.members_v', w: 'design.lamella_width', t: 'design.lamella_thickness',
+  ia: 'design.interior_anchors', unit: 'simulation.unit', mat: 'simulation.material', aa: 'simulation.interior_anchors',
+};
 
 export function encodeState(s: UrlState): string {
   const p = new URLSearchParams();
@@ -137,7 +150,7 @@ export function encodeState(s: UrlState): string {
   if (s.suggested) p.set('suggested', '1');
   if (s.alpha !== undefined) p.set('alpha', String(s.alpha));
   if (s.design) p.set('design', '1');
-  for (const k of OPTION_KEYS) if (s.options[k] !== undefined && s.options[k] !== '') p.set(k, s.options[k]!);
+  for (const [k, v] of Object.entries(s.options)) if (v !== '' && !STATE_KEYS.has(k)) p.set(k, v);
   return p.toString();
 }
 
@@ -155,9 +168,11 @@ export function decodeState(hash: string): UrlState {
   const alpha = Number(p.get('alpha'));
   if (p.has('alpha') && Number.isFinite(alpha)) s.alpha = alpha;
   if (p.get('design') === '1') s.design = true;
-  for (const k of OPTION_KEYS) {
-    const v = p.get(k);
-    if (v !== null) s.options[k] = v;
+  for (const [k, v] of p) {
+    if (STATE_KEYS.has(k)) continue;
+    const legacy = LEGACY_KEYS[k];
+    if (legacy) s.options[legacy] = k === 'aa' ? (v === '1' ? 'auto' : '') : v;
+    else if (/^[a-z]+\.[A-Za-z0-9_]+$/.test(k)) s.options[k] = v;
   }
   return s;
 }

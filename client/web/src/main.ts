@@ -2,28 +2,32 @@
 // The gridshell page: mesh in (example or file) -> four corners -> patch -> design (live ᾱ
 // slider and counts) -> simulate, with progress, Cancel, errors next to their controls and
 // downloads of the daemon's files. One call in flight at a time: a new one aborts the previous
-// (the daemon cancels a job whose HTTP client went away).
+// (the daemon cancels a job whose HTTP client went away). The design and simulation controls,
+// the materials and the mesh formats come from the daemon's description of the options
+// (/v1/options, form.ts).
 
 import './style.css';
 import {
   ApiError, base64ToBytes, bytesToBase64, call, isCancelled, setToken,
   type DesignResult, type ExampleInfo, type FileJson, type LoadResult, type MeshJson, type PatchResult,
-  type Design, type Progress, type SimulateResult,
+  type Design, type OptionsResult, type Progress, type SimulateResult,
 } from './api';
 import { diverging, drawBar, formatNumber, sequential, symmetricRange } from './colormap';
 import {
   alphaOption, decodeState, deploymentSummary, designSummary, encodeState, errorSlot, maxDeviation,
   patchSummary, sliderRange, stress, type UrlState,
 } from './format';
+import { OptionsForm, optionKey, tooltip } from './form';
 import { fabricateRequest, kitSummary, kitZip, type FabricateResult } from './kit';
 import { appendSuggestions } from './suggestions';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
-import { patchKey, type KeyCorners } from './routing';
+import { patchKey, type KeyCorners, type KeyOptions } from './routing';
 
-// The example list is asked for first, so the daemon answers while the WebGL context is created
-// (half a second on a software GL).
+// The example list and the options' description are asked for first, so the daemon answers
+// while the WebGL context is created (half a second on a software GL).
 let examplesRequest: Promise<{ examples: ExampleInfo[] }> | null = call('examples', {});
+let optionsRequest: Promise<OptionsResult> | null = call('options', {});
 
 function el<T extends HTMLElement = HTMLElement>(id: string): T {
   const e = document.getElementById(id);
@@ -48,19 +52,17 @@ const ui = {
   legendMin: el('legend-min'),
   legendMid: el('legend-mid'),
   legendMax: el('legend-max'),
+  meshFormats: el('mesh-formats'),
+  alphaOption: el('alpha-option'),
   alpha: el<HTMLInputElement>('alpha-slider'),
   alphaValue: el<HTMLOutputElement>('alpha-value'),
   alphaMin: el('alpha-min'),
   alphaMax: el('alpha-max'),
-  membersU: el<HTMLInputElement>('members-u'),
-  membersV: el<HTMLInputElement>('members-v'),
-  width: el<HTMLInputElement>('lamella-width'),
-  thickness: el<HTMLInputElement>('lamella-thickness'),
-  anchors: el<HTMLInputElement>('interior-anchors'),
-  autoAnchors: el<HTMLInputElement>('auto-anchors'),
+  designOptions: el('design-options'),
+  designAdvanced: el('design-advanced'),
+  simulationOptions: el('simulation-options'),
+  simulationAdvanced: el('simulation-advanced'),
   design: el<HTMLButtonElement>('design'),
-  unit: el<HTMLSelectElement>('unit'),
-  material: el<HTMLSelectElement>('material'),
   simulate: el<HTMLButtonElement>('simulate'),
   kit: el<HTMLButtonElement>('kit'),
   progress: el<HTMLProgressElement>('progress'),
@@ -160,15 +162,21 @@ ui.cancel.addEventListener('click', () => {
 
 // ---- errors -----------------------------------------------------------------------------------
 
+function errorSlotElement(key: string): HTMLElement | null {
+  return document.querySelector<HTMLElement>(`.field-error[data-for="${CSS.escape(key)}"]`);
+}
+
 function clearErrors(kind: CallKind): void {
   ui.error.hidden = true;
   ui.error.textContent = '';
-  const slots = kind === 'simulate' ? ['simulation'] : kind === 'load' ? ['mesh', 'corners', 'options', 'options.alpha']
-    : kind === 'patch' ? ['corners', 'options', 'options.alpha'] : ['options', 'options.alpha'];
+  const slots = kind === 'simulate' ? ['simulation'] : kind === 'load' ? ['mesh', 'corners', 'options', 'design.alpha']
+    : kind === 'patch' ? ['corners', 'options', 'design.alpha'] : ['options', 'design.alpha'];
   for (const s of slots) {
-    const slot = document.querySelector<HTMLElement>(`.field-error[data-for="${s}"]`);
+    const slot = errorSlotElement(s);
     if (slot) slot.textContent = '';
   }
+  // Next to each control: the daemon's error goes, the description's own check stays.
+  if (kind !== 'fabricate') form?.clearErrors(kind === 'simulate' ? 'simulation' : 'design');
 }
 
 function showError(kind: CallKind, e: unknown): void {
@@ -178,7 +186,7 @@ function showError(kind: CallKind, e: unknown): void {
   ui.error.textContent = `${kind} failed (${err.status}): ${err.describe()}`;
   appendSuggestions(ui.error, err.suggestions);
   ui.status.textContent = `${kind}: failed`;
-  const slot = document.querySelector<HTMLElement>(`.field-error[data-for="${errorSlot(kind, err.field)}"]`);
+  const slot = errorSlotElement(errorSlot(kind, err.field, (key) => errorSlotElement(key) !== null));
   if (slot) slot.textContent = err.describe();
 }
 
@@ -191,8 +199,58 @@ el<HTMLFormElement>('token-form').addEventListener('submit', (e) => {
   e.preventDefault(); // never sent anywhere (the CSP has form-action 'none' anyway)
   setToken(ui.token.value.trim());
   ui.tokenBox.hidden = true;
-  void loadExamples();
+  void (async () => {
+    if (!form) await loadDescription();
+    await loadExamples();
+  })();
 });
+
+// ---- the options' description: the design and simulation controls ------------------------------
+
+let form: OptionsForm | null = null;
+
+/** Asks the daemon for its description of the options (once), then builds the controls from it. */
+async function loadDescription(): Promise<void> {
+  const request = optionsRequest ?? call<OptionsResult>('options', {});
+  optionsRequest = null; // a retry (after a token was given) asks again
+  const result = await request.catch((e: unknown) => {
+    showError('load', e);
+    return null;
+  });
+  if (!result || form) return;
+  buildForm(result);
+}
+
+function buildForm(d: OptionsResult): void {
+  form = new OptionsForm(d, {
+    design: { main: ui.designOptions, advanced: ui.designAdvanced },
+    simulation: { main: ui.simulationOptions, advanced: ui.simulationAdvanced },
+  });
+  form.onChange = (_key, option, settled) => {
+    saveUrl();
+    if (option.group !== 'design') return; // a simulation option: the next Simulate takes it
+    if (patchOptionNames().has(option.name)) repatchSoon(settled ? 0 : 350);
+    else redesignSoon(settled ? 0 : 350);
+  };
+  // The ᾱ slider is the page's own control of design.alpha: its help and default are the description's.
+  const alpha = form.option('design.alpha');
+  ui.alphaOption.hidden = !alpha; // an option the daemon no longer describes: no control for it
+  if (alpha) {
+    ui.alphaOption.dataset['option'] = optionKey(alpha);
+    ui.alphaOption.title = tooltip(alpha);
+    if (state.alphaDeg === null) ui.alphaValue.textContent = alpha.default_value ?? '';
+  }
+  const formats = d.mesh_formats ?? [];
+  ui.file.accept = formats.map((f) => `.${f}`).join(',');
+  ui.meshFormats.textContent = formats.length ? `(${formats.map((f) => f.toUpperCase()).join(', ')})` : '';
+  document.body.dataset['options'] = String(form.controls.size);
+}
+
+/** Names of the design options a patch request takes too (the patch preview uses them). */
+function patchOptionNames(): Set<string> {
+  const patch = new Set((form?.description.options ?? []).filter((o) => o.group === 'patch' && !o.output).map((o) => o.name));
+  return new Set([...(form?.names('design') ?? [])].filter((n) => patch.has(n)));
+}
 
 // ---- mesh in ------------------------------------------------------------------------------------
 
@@ -227,7 +285,7 @@ function resetFromMesh(): void {
   state.simulation = null;
   state.alphaDeg = null;
   ui.alpha.disabled = ui.design.disabled = ui.simulate.disabled = ui.kit.disabled = true;
-  ui.alphaValue.textContent = 'min';
+  ui.alphaValue.textContent = form?.option('design.alpha')?.default_value ?? '';
   ui.alphaMin.textContent = ui.alphaMax.textContent = '';
   ui.patchInfo.textContent = '';
   ui.summary.textContent = '';
@@ -396,7 +454,10 @@ async function computePatch(): Promise<void> {
   if (!state.mesh) return;
   state.patch = state.design = state.simulation = null;
   ui.design.disabled = ui.simulate.disabled = ui.kit.disabled = true;
-  const result = await run<PatchResult>('patch', 'patch', { mesh: state.mesh, corners: cornersJson() });
+  // The design options a patch takes too (geodesics, eta_max, the automatic corners' angles), so
+  // that the patch shown is the one the design will use.
+  const options = form?.requestOptions('design', patchOptionNames()) ?? {};
+  const result = await run<PatchResult>('patch', 'patch', { mesh: state.mesh, corners: cornersJson(), options });
   if (!result) {
     if (!current) { // failed or cancelled (not superseded): no stale patch
       viewer.clearPatch();
@@ -410,8 +471,11 @@ async function computePatch(): Promise<void> {
   const r = result.report;
   if (state.cornersLabel === 'auto') {
     state.corners = r.corners.map((c) => c.input_vertex);
+    // Other corners, another feasible range: ᾱ starts again from the default.
+    if (repickedFrom && repickedFrom.join() !== state.corners.join()) state.alphaDeg = null;
     updateCorners();
   }
+  repickedFrom = null;
   const range = symmetricRange(result.gaussian_curvature);
   viewer.setPatch(result.patch.positions, result.patch.indices, result.gaussian_curvature, range,
                   r.sides.map((s) => s.vertices));
@@ -431,27 +495,36 @@ async function computePatch(): Promise<void> {
 
 // ---- design -------------------------------------------------------------------------------------
 
-/** A number input's value; empty = 0 (automatic). Bad values go to the daemon, which names them. */
-function numberOption(input: HTMLInputElement): number {
-  return Number(input.value);
-}
-
+/**
+ * The design request's options, by field name: each control whose value is not the default (bad
+ * values too: the daemon names them), and ᾱ once the slider moved.
+ */
 function designOptions(): Record<string, unknown> {
-  const o: Record<string, unknown> = {
-    members_u: numberOption(ui.membersU), members_v: numberOption(ui.membersV),
-    lamella_width: numberOption(ui.width), lamella_thickness: numberOption(ui.thickness),
-    interior_anchors: numberOption(ui.anchors),
-  };
+  const o = form?.requestOptions('design') ?? {};
   if (state.alphaDeg !== null) o['alpha'] = alphaOption(state.alphaDeg);
   return o;
 }
 
-/** The patch routing key of the designs on this mesh and corners (the slider keeps it). */
-let keyMemo: { loaded: LoadResult; corners: string; key: Promise<string | null> } | null = null;
+/** The values the routing key hashes: the controls', else the description's defaults. */
+function keyOptions(): KeyOptions | null {
+  if (!form) return null;
+  const method = form.effective('design.geodesic_method') ?? form.effective('patch.geodesic_method');
+  const eta = form.effective('design.eta_max') ?? form.effective('patch.eta_max');
+  const iterations = form.effective('patch.max_smoothing_iterations');
+  const resolution = form.effective('design.resolution');
+  if (typeof method !== 'string' || typeof eta !== 'number' || typeof iterations !== 'number' || typeof resolution !== 'number')
+    return null;
+  return { geodesic_method: method, eta_max: eta, max_smoothing_iterations: iterations, resolution };
+}
+
+/** The patch routing key of the designs on this mesh, corners and options (the slider keeps it). */
+let keyMemo: { loaded: LoadResult; input: string; key: Promise<string | null> } | null = null;
 function designKey(loaded: LoadResult, corners: KeyCorners | undefined): Promise<string | null> {
-  const text = JSON.stringify(corners ?? null);
-  if (keyMemo?.loaded !== loaded || keyMemo.corners !== text)
-    keyMemo = { loaded, corners: text, key: patchKey(loaded.mesh, corners, {}).catch(() => null) };
+  const options = keyOptions();
+  if (!options) return Promise.resolve(null); // the call goes without it
+  const input = JSON.stringify([corners ?? null, options]);
+  if (keyMemo?.loaded !== loaded || keyMemo.input !== input)
+    keyMemo = { loaded, input, key: patchKey(loaded.mesh, corners, options).catch(() => null) };
   return keyMemo.key;
 }
 
@@ -505,15 +578,31 @@ function redesignSoon(ms: number): void {
   redesignTimer = window.setTimeout(() => void computeDesign(), ms);
 }
 
+/**
+ * After a change of an option the patch depends on too: the patch again (and the design, if one
+ * is wanted). Automatic corners are chosen again (their angles may have changed).
+ */
+let repatchTimer = 0;
+let repickedFrom: number[] | null = null; // the automatic corners before they were chosen again
+function repatchSoon(ms: number): void {
+  window.clearTimeout(repatchTimer);
+  window.clearTimeout(redesignTimer);
+  if (!state.mesh || !(state.patch || state.corners.length === 4 || state.cornersLabel === 'auto')) return;
+  repatchTimer = window.setTimeout(() => {
+    if (state.cornersLabel === 'auto') {
+      repickedFrom = state.corners.length === 4 ? [...state.corners] : null;
+      state.corners = [];
+      updateCorners();
+    }
+    void computePatch();
+  }, ms);
+}
+
 ui.alpha.addEventListener('input', () => {
   state.alphaDeg = Number(ui.alpha.value);
   ui.alphaValue.textContent = `${state.alphaDeg.toFixed(1)}°`;
   redesignSoon(120);
 });
-for (const input of [ui.membersU, ui.membersV, ui.width, ui.thickness, ui.anchors]) {
-  input.addEventListener('input', () => redesignSoon(350));
-}
-for (const s of [ui.unit, ui.material, ui.autoAnchors]) s.addEventListener('change', () => saveUrl());
 
 // ---- simulate -----------------------------------------------------------------------------------
 
@@ -522,9 +611,8 @@ ui.simulate.addEventListener('click', () => void simulate());
 async function simulate(): Promise<void> {
   const d = state.design;
   if (!d) return;
-  const options: Record<string, unknown> = { notches: 'both', material: ui.material.value };
-  if (ui.unit.value) options['unit'] = ui.unit.value;
-  if (ui.autoAnchors.checked) options['interior_anchors'] = 'auto';
+  // By field name, each control not at its default (what is left out takes the daemon's default).
+  const options = form?.requestOptions('simulation') ?? {};
   const result = await run<SimulateResult>('simulate', 'simulate', {
     design: d.design, options, design_name: 'design.json', files: true,
   });
@@ -565,7 +653,8 @@ async function downloadKit(): Promise<void> {
   // anchored design the daemon returned with the deployment (design-anchored.json).
   const anchored = state.simulation?.views.find((f) => f.name === 'design-anchored.json');
   const design = anchored ? JSON.parse(new TextDecoder().decode(base64ToBytes(anchored.content))) as Design : d.design;
-  const result = await run<FabricateResult>('fabricate', 'fabricate', fabricateRequest(design, ui.unit.value));
+  const unit = form?.value('simulation.unit') ?? '';
+  const result = await run<FabricateResult>('fabricate', 'fabricate', fabricateRequest(design, unit));
   if (!result) return;
   const a = document.createElement('a');
   a.href = URL.createObjectURL(new Blob([kitZip(result.files)], { type: 'application/zip' }));
@@ -621,11 +710,7 @@ for (const tab of document.querySelectorAll<HTMLButtonElement>('.tab')) {
 let restoring = false;
 function saveUrl(): void {
   if (restoring) return;
-  const s: UrlState = {
-    options: { mu: ui.membersU.value, mv: ui.membersV.value, w: ui.width.value, t: ui.thickness.value,
-               ia: ui.anchors.value, unit: ui.unit.value, mat: ui.material.value,
-               ...(ui.autoAnchors.checked ? { aa: '1' } : {}) },
-  };
+  const s: UrlState = { options: form?.changed() ?? {} };
   if (state.source?.kind === 'example') s.example = state.source.name;
   if (state.source?.kind === 'file' && state.source.hash) s.file = { name: state.source.name, hash: state.source.hash };
   if (state.corners.length) s.corners = state.corners;
@@ -638,11 +723,7 @@ function saveUrl(): void {
 
 async function restore(): Promise<void> {
   const s = decodeState(location.hash);
-  const o = s.options;
-  const set = (input: HTMLInputElement | HTMLSelectElement, v: string | undefined) => { if (v !== undefined) input.value = v; };
-  set(ui.membersU, o['mu']); set(ui.membersV, o['mv']); set(ui.width, o['w']); set(ui.thickness, o['t']);
-  set(ui.anchors, o['ia']); set(ui.unit, o['unit']); set(ui.material, o['mat']);
-  ui.autoAnchors.checked = o['aa'] === '1';
+  for (const [key, value] of Object.entries(s.options)) form?.set(key, value); // an option gone is skipped
   if (s.file && !s.example) {
     // The bytes of an uploaded file are not in the URL: ask for the file, restore when it comes.
     pendingFileState = s;
@@ -679,7 +760,7 @@ async function applyState(s: UrlState): Promise<void> {
 // ---- start ------------------------------------------------------------------------------------
 
 void (async () => {
-  await loadExamples();
+  await Promise.all([loadDescription(), loadExamples()]);
   await restore();
   document.body.dataset['ready'] = '1';
 })();

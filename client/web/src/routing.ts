@@ -3,7 +3,7 @@
 // SHA-256 over the mesh as loaded, the corners and the options a design's patch work depends on,
 // as 32 hex digits. Sent as X-Gridshell-Patch-Key with every design, so that haproxy in front of
 // several daemons sends the designs of one patch to the replica that has its work cached. The
-// byte layout is proto/convert/gridshell/patch_routing_key.h's; every design result carries the
+// byte layout is application/include/gridshell/application/patch_routing_key.h's; every design result carries the
 // daemon's own computation (report.patch_key), which the tests compare with this one.
 
 export interface KeyMesh {
@@ -14,22 +14,21 @@ export interface KeyCorners {
   vertices?: number[];
   points?: number[];
 }
+/**
+ * The values the design's patch work uses: the request's, else the daemon's defaults, which the
+ * page takes from the daemon's description of the options (/v1/options) rather than a copy here.
+ */
 export interface KeyOptions {
-  geodesic_method?: string;
-  eta_max?: number;
-  resolution?: number;
+  geodesic_method: string;
+  eta_max: number;
+  max_smoothing_iterations: number; // a design request cannot set it: the patch group's default
+  resolution: number;               // 0 = adaptive
 }
-
-// The daemon's defaults for options a design request leaves out (docs/api.md).
-const DEFAULT_METHOD = 'fast';
-const DEFAULT_ETA_MAX = 1.0015;
-const DEFAULT_SMOOTHING_ITERATIONS = 60;
-const DEFAULT_RESOLUTION = 100;
 
 /** The byte string the key hashes (little-endian; f64 as IEEE 754 bits). */
 export function patchKeyBytes(mesh: KeyMesh, corners: KeyCorners | undefined, options: KeyOptions): Uint8Array<ArrayBuffer> {
   const magic = new TextEncoder().encode('gridshell-patch-key-v1\n');
-  const method = new TextEncoder().encode(options.geodesic_method || DEFAULT_METHOD);
+  const method = new TextEncoder().encode(options.geodesic_method);
   const vertices = corners?.vertices ?? [];
   const points = corners?.points ?? [];
   const cornerBytes = vertices.length === 4 ? 16 : points.length === 12 ? 96 : 0;
@@ -59,12 +58,12 @@ export function patchKeyBytes(mesh: KeyMesh, corners: KeyCorners | undefined, op
   at += 4;
   bytes.set(method, at);
   at += method.length;
-  view.setFloat64(at, options.eta_max ?? DEFAULT_ETA_MAX, true);
+  view.setFloat64(at, options.eta_max, true);
   at += 8;
-  view.setUint32(at, DEFAULT_SMOOTHING_ITERATIONS, true);
+  view.setUint32(at, options.max_smoothing_iterations, true);
   at += 4;
   bytes[at++] = 1; // smoothing on (a design request cannot turn it off)
-  view.setUint32(at, options.resolution ?? DEFAULT_RESOLUTION, true);
+  view.setUint32(at, options.resolution, true);
   return bytes;
 }
 
