@@ -8,7 +8,10 @@ A dome (a primitive grid displaced, moved, rotated and scaled) with four selecte
 shared mesh imported with Blender's own OBJ importer go through design and simulation; the tests
 check the objects made (member counts as in design.json, the world frame, the deviation colours,
 the RMS on the collection as the daemon computes it), that the add-on, the CLI and curl get the
-same design.json byte for byte from the same request, and the error reports.
+same design.json byte for byte from the same request, and the error reports. Against a daemon
+with a site's material library (GRIDSHELL_MATERIALS): the material choices are the daemon's
+description (its built-in materials and the site's), a run with the site's material selected
+simulates with it, and the panel's initial values and choices are the described defaults.
 """
 
 import json
@@ -30,7 +33,7 @@ sys.path.insert(0, os.path.join(ROOT, "client", "blender"))
 import gridshell_testing as T  # noqa: E402,N812
 
 import gridshell_blender  # noqa: E402
-from gridshell_blender import mesh_input, results  # noqa: E402
+from gridshell_blender import described, mesh_input, properties, results  # noqa: E402
 from gridshell_blender.remote import gs  # noqa: E402
 from gridshell_client.client import encode_request  # noqa: E402
 
@@ -126,7 +129,7 @@ class BlenderAddonTest(unittest.TestCase):
         s.server = self.daemon.url
         s.resolution = RESOLUTION
         s.notches = "on"
-        s.material = "lime-wood"
+        s.material_name = ""  # the daemon's default
         s.unit = "SCENE"
         s.lamella_width = 0
         s.auto_anchors = False
@@ -329,8 +332,124 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertEqual(self.client.health(), "SERVING")
 
 
+class BlenderMaterialsTest(unittest.TestCase):
+    """The material choices and the option defaults from the daemon's description."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="gridshell-blender-materials-")
+        cls.daemon = T.Daemon(env=T.material_library(cls.tmp))
+        gridshell_blender.register()
+        cls.settings = bpy.context.scene.gridshell
+        cls.client = gs.Client(cls.daemon.url)
+
+    @classmethod
+    def tearDownClass(cls):
+        gridshell_blender.unregister()
+        cls.daemon.stop()
+
+    def setUp(self):
+        s = self.settings
+        s.server = self.daemon.url
+        s.material_name = ""
+        s.resolution = RESOLUTION
+        s.notches = "on"
+        s.unit = "SCENE"
+        s.auto_anchors = False
+
+    def choices(self):
+        return [item[0] for item in described.material_items(self.settings)]
+
+    def test_materials_from_the_description_and_a_run_with_the_sites(self):
+        s, scene = self.settings, bpy.context.scene
+        site = T.SITE_MATERIAL["name"]
+        # Nothing read from this daemon yet: the daemon's default alone, and no material sent.
+        gs.options.forget(self.daemon.url)
+        self.assertEqual(self.choices(), [described.DEFAULT])
+        self.assertEqual(s.material, described.DEFAULT)
+        self.assertNotIn("material", s.simulation_options(scene))
+        with self.assertRaises(TypeError):
+            s.material = site  # not a choice before the description is read
+        # Refresh reads the description: the built-in materials (as the CLI lists them), then
+        # the site's.
+        self.assertEqual(bpy.ops.gridshell.refresh_options(), {"FINISHED"})
+        names = gs.options.cached(s.server).material_names()
+        self.assertEqual(self.choices(), names)
+        cli = T.cli("options", "--json")
+        self.assertEqual(cli.returncode, 0, cli.stderr)
+        built_in = [m["name"] for m in json.loads(cli.stdout)["materials"] if not m.get("site")]
+        self.assertEqual(names, built_in + [site])
+        self.assertEqual(s.material, built_in[0])  # none chosen: the default is shown
+        self.assertNotIn("material", s.simulation_options(scene))
+        for name in names:  # every item can be chosen
+            s.material = name
+            self.assertEqual((s.material, s.material_name), (name, name))
+        labels = {item[0]: item[1] for item in described.material_items(s)}
+        self.assertEqual(labels[site], "Test larch")
+        s.material = site
+        self.assertEqual(s.simulation_options(scene)["material"], site)
+
+        # Design + Simulate with it: the deployment was simulated with the site's material.
+        obj = dome("larch dome", n=10)
+        select(obj, grid_corners(obj))
+        self.assertEqual(bpy.ops.gridshell.run(), {"FINISHED"})
+        top = bpy.data.collections[results.COLLECTION]
+        self.assertEqual(top["material"], site)
+        self.assertIn(("Material", site), results.summary(scene))
+        answer = self.client.simulate(
+            results.design_json(bpy.context), s.simulation_options(scene), design_name=results.DESIGN_TEXT
+        )
+        options = answer["deployment"]["options"]
+        self.assertEqual(options["material"], site)
+        self.assertEqual(options["young_modulus"], T.SITE_MATERIAL["young_modulus"])
+        self.assertEqual(top["rms_with_notches"], answer["deployment"]["rms_with_notches"])
+
+        # A daemon without the library: the chosen material stays (added to its list) and is
+        # sent; the daemon refuses it, naming the panel's field.
+        with T.Daemon() as plain:
+            s.server = plain.url
+            self.assertEqual(bpy.ops.gridshell.refresh_options(), {"FINISHED"})
+            self.assertEqual(self.choices(), built_in + [site])
+            self.assertEqual(s.material, site)
+            with self.assertRaisesRegex(RuntimeError, r"invalid input: Material \(options.material\)"):
+                bpy.ops.gridshell.simulate()
+            s.material = built_in[0]
+            self.assertEqual(self.choices(), built_in)
+        # An unreachable daemon: Refresh reports it.
+        with T.refusing_port() as port:
+            s.server = "http://127.0.0.1:%d" % port
+            with self.assertRaisesRegex(RuntimeError, "cannot reach the daemon"):
+                bpy.ops.gridshell.refresh_options()
+            # Nothing read: the daemon's default and the chosen material, still selected.
+            self.assertEqual(self.choices(), [described.DEFAULT, built_in[0]])
+            self.assertEqual(s.material, built_in[0])
+            self.assertEqual(s.simulation_options(scene)["material"], built_in[0])
+
+    def test_initial_values_and_choices_are_the_described_ones(self):
+        description = gs.describe(self.client)
+        rna = properties.GridshellSettings.bl_rna.properties
+        for name in ("members_u", "members_v", "lamella_width", "lamella_thickness", "resolution",
+                     "interior_anchors"):
+            self.assertEqual(rna[name].default, description.default("design", name), name)
+            # No copy of the described range: only the floor at 0 (0 = automatic).
+            self.assertEqual(rna[name].hard_min, 0, name)
+            maximum = description.option("design", name).get("maximum")  # none: unbounded
+            if maximum is not None:
+                self.assertGreater(rna[name].hard_max, maximum, name)
+        self.assertEqual(rna["notches"].default, description.default("simulation", "notches"))
+        self.assertEqual({i.identifier for i in rna["notches"].enum_items},
+                         set(description.choices("simulation", "notches")))
+        units = [i.identifier for i in rna["unit"].enum_items if i.identifier not in ("SCENE", "NONE")]
+        self.assertEqual(units, description.length_units)
+        # The design options the panel sends pass the description's check.
+        for name, value in self.settings.design_options().items():
+            if description.option("design", name) is not None:
+                self.assertIsNone(description.check("design", name, value), name)
+
+
 def main():
     suite = unittest.defaultTestLoader.loadTestsFromTestCase(BlenderAddonTest)
+    suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(BlenderMaterialsTest))
     result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
     failed = len(result.failures) + len(result.errors)
     print("blender: %d passed, %d failed" % (result.testsRun - failed, failed))

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The Blender add-on in Blender's real UI (a window under Xvfb) against a real gridshelld: the
 operators started as a button starts them (INVOKE) run without blocking Blender (its timers keep
-running while the daemon computes), report progress, build the results when the answer is in,
+running while the daemon computes), report progress, the panel reads the daemon's materials on
+its first draw, build the results when the answer is in,
 and Esc (a real key event) cancels the daemon's work. With GRIDSHELL_SCREENSHOTS=DIR it also saves
 the docs' screenshots of the window there.
 
@@ -28,7 +29,7 @@ sys.path.insert(0, os.path.join(ROOT, "client", "blender"))
 import gridshell_testing as T  # noqa: E402,N812
 
 import gridshell_blender  # noqa: E402
-from gridshell_blender import panel, results  # noqa: E402
+from gridshell_blender import described, panel, results  # noqa: E402
 from gridshell_blender.operators import STATE  # noqa: E402
 from gridshell_blender.remote import gs  # noqa: E402
 
@@ -141,6 +142,16 @@ def steps(daemon):
         yield 0.25
     window.event_simulate(type="MOUSEMOVE", value="NOTHING", x=region.x + 20, y=region.y + 20)
     check(panel.DRAWS[0] > 0, "the sidebar shows the gridshell panel")
+    # Its first draw with the daemon's address read the daemon's description in the background
+    # (the loop kept turning): the material list is the daemon's.
+    started = time.monotonic()
+    while gs.options.cached(daemon.url) is None and time.monotonic() - started < 30:
+        yield 0.1
+    description = gs.options.cached(daemon.url)
+    names = [item[0] for item in described.material_items(bpy.context.scene.gridshell)]
+    check(description is not None and names == description.material_names(),
+          "the panel read the daemon's materials: %s" % ", ".join(names))
+    check(described.status(bpy.context.scene.gridshell) is None, "no note about the materials")
 
     # Design from the UI while the daemon's only worker is busy with another client's long job:
     # the add-on's call waits in the daemon's queue until this test ends that job, which it does

@@ -36,6 +36,8 @@ try:
     assert not here.startswith(os.path.join(ROOT, "client")), here
     assert os.path.dirname(gs.__file__) == os.path.join(here, "gridshell_client"), gs.__file__
     assert hasattr(bpy.ops.gridshell, "design") and hasattr(bpy.types.Scene, "gridshell")
+    assert hasattr(bpy.ops.gridshell, "refresh_options"), "no refresh of the daemon's materials"
+    assert hasattr(gs, "Description") and hasattr(gs.options, "cached"), "the client it carries is old"
     assert bpy.context.scene.gridshell.server, "no default server"
     bpy.ops.preferences.addon_disable(module="gridshell_blender")
     assert not hasattr(bpy.types.Scene, "gridshell")

@@ -9,7 +9,10 @@ A dome Mesh object with a Placement, corners as vertices and as picked points, a
 read by FreeCAD's own Mesh module go through design and simulation; the tests check the document
 objects (member wires as in design.json, the global frame, the deployed lamellas and their
 deviation, RMS as the daemon computes it), design.json byte for byte as the CLI writes it, progress
-and cancellation, and the error messages.
+and cancellation, and the error messages. Against a daemon with a site's material library
+(GRIDSHELL_MATERIALS): the material choices are the daemon's description (built-in and the
+site's), a run with the site's material simulates with it, and the settings' initial values and
+the spin boxes' ranges are the described ones.
 """
 
 import json
@@ -275,9 +278,88 @@ class FreeCADWorkbenchTest(unittest.TestCase):
         self.assertEqual(self.client.health(), "SERVING")
 
 
+class FreeCADMaterialsTest(unittest.TestCase):
+    """The material choices and the option ranges from the daemon's description."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="gridshell-freecad-materials-")
+        cls.daemon = T.Daemon(env=T.material_library(cls.tmp))
+        cls.client = gs.Client(cls.daemon.url)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.daemon.stop()
+
+    def setUp(self):
+        self.doc = FreeCAD.newDocument("gridshell_materials")
+        self.settings = core.Settings(server=self.daemon.url, resolution=RESOLUTION, notches="on")
+
+    def tearDown(self):
+        FreeCAD.closeDocument(self.doc.Name)
+
+    def test_materials_from_the_description_and_a_run_with_the_sites(self):
+        site = T.SITE_MATERIAL["name"]
+        gs.options.forget(self.daemon.url)
+        self.assertIsNone(core.cached_description(self.settings))
+        # Before the description is read: the daemon's default alone (nothing sent), and a
+        # chosen material kept.
+        self.assertEqual([name for name, _ in core.material_choices(None)], [""])
+        self.assertEqual([name for name, _ in core.material_choices(None, site)], ["", site])
+        self.assertNotIn("material", self.settings.simulation_options())
+        description = core.describe(self.settings)
+        self.assertIs(core.cached_description(self.settings), description)
+        choices = core.material_choices(description)
+        cli = T.cli("options", "--json")
+        self.assertEqual(cli.returncode, 0, cli.stderr)
+        built_in = [m["name"] for m in json.loads(cli.stdout)["materials"] if not m.get("site")]
+        self.assertEqual([name for name, _ in choices], built_in + [site])
+        self.assertEqual(dict(choices)[site], "Test larch (site)")
+        self.assertEqual(description.default_material, built_in[0])
+
+        # Design + Simulate with the site's material: the deployment used it.
+        positions, indices, corners = dome_arrays(n=8)
+        obj = mesh_feature(self.doc, "larch_dome", positions, indices)
+        self.settings.material = site
+        self.assertEqual(self.settings.simulation_options()["material"], site)
+        top = core.run(self.doc, obj, self.settings)
+        self.assertEqual(top.Material, site)
+        answer = self.client.simulate(top.DesignJson, self.settings.simulation_options(), design_name="design.json")
+        options = answer["deployment"]["options"]
+        self.assertEqual(options["material"], site)
+        self.assertEqual(options["shear_modulus"], T.SITE_MATERIAL["shear_modulus"])
+        self.assertEqual(top.RmsWithNotches, answer["deployment"]["rms_with_notches"])
+        # None chosen: the daemon's default (the description's first).
+        self.settings.material = ""
+        core.simulate(self.doc, self.settings)
+        self.assertEqual(top.Material, description.default_material)
+
+    def test_initial_values_and_ranges_are_the_described_ones(self):
+        description = core.describe(self.settings)
+        fields = core.Settings.FIELDS
+        for name in ("members_u", "members_v", "lamella_width", "lamella_thickness", "resolution",
+                     "interior_anchors"):
+            self.assertEqual(fields[name], description.default("design", name), name)
+            option = description.option("design", name)
+            low, high = core.spin_range(description, "design", name)
+            self.assertEqual(high, option.get("maximum", core.UNBOUNDED), name)
+            self.assertEqual(low, 0, name)  # 0 is allowed (automatic) or the minimum
+            self.assertIsNone(description.check("design", name, fields[name]), name)
+        self.assertEqual(fields["notches"], description.default("simulation", "notches"))
+        self.assertEqual(fields["alpha"], description.default("design", "alpha"))
+        self.assertIn(fields["unit"], description.length_units)
+        self.assertIsNone(core.spin_range(description, "design", "alpha"))  # text: no range
+        self.assertIsNone(core.spin_range(description, "design", "no_such_option"))
+        self.assertIsNone(core.spin_range(None, "design", "resolution"))
+        # What the settings send passes the description's check.
+        for name, value in core.Settings(server=self.daemon.url).design_options().items():
+            self.assertIsNone(description.check("design", name, value), name)
+
+
 def main():
     try:
         suite = unittest.defaultTestLoader.loadTestsFromTestCase(FreeCADWorkbenchTest)
+        suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(FreeCADMaterialsTest))
         result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
         failed = len(result.failures) + len(result.errors)
         print("freecad: %d passed, %d failed" % (result.testsRun - failed, failed))

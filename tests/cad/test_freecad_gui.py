@@ -2,8 +2,10 @@
 """The FreeCAD workbench in FreeCAD's real GUI (a window under Xvfb), installed from
 build/gridshell_freecad.zip into a temporary user folder as a user installs it, against a real
 gridshelld: the workbench loads, a Design from the task panel with four picked points runs without
-blocking FreeCAD (its event loop keeps running), shows progress and builds the result objects; a
-Design + Simulate run; the panel's Cancel stops the daemon's work. With GRIDSHELL_SCREENSHOTS=DIR
+blocking FreeCAD (its event loop keeps running), shows progress and builds the result objects, its
+spin boxes' ranges the daemon's; a Design + Simulate run with a site's material (the daemon runs
+with a material library, GRIDSHELL_MATERIALS), chosen from the panel's material list, which is the
+daemon's description; the panel's Cancel stops the daemon's work. With GRIDSHELL_SCREENSHOTS=DIR
 it also saves the docs' screenshots. Run by scripts/test-cad.sh:
 
     FREECAD_USER_HOME=TMP (with TMP/Mod/gridshell unzipped) QTWEBENGINE_DISABLE_SANDBOX=1 \\
@@ -12,9 +14,12 @@ it also saves the docs' screenshots. Run by scripts/test-cad.sh:
 The script ends FreeCAD itself: exit code 0 when every check passed, 1 otherwise.
 """
 
+import json
 import os
 import re
+import shutil
 import sys
+import tempfile
 import time
 import traceback
 
@@ -130,6 +135,15 @@ def steps(daemon):
     panel = gui.TaskPanel.current
     check(panel is not None and panel.points is not None and len(panel.points) == 4,
           "the panel took the 4 picked points as corners")
+    started = time.monotonic()
+    while panel.description is None and time.monotonic() - started < 30:
+        yield 0.05
+    description = panel.description
+    spans = {name: (box.minimum(), box.maximum()) for name, box in panel.fields.items()}
+    check(description is not None
+          and all(spans[name][1] == description.option("design", name).get("maximum", gui.core.UNBOUNDED)
+                  for name in spans),
+          "the spin boxes' ranges are the daemon's: %s" % spans)
     ticks = Ticks()
     started = time.monotonic()
     panel.accept()  # the OK button
@@ -164,10 +178,23 @@ def steps(daemon):
     FreeCADGui.runCommand("Gridshell_Run")
     yield 0.5
     panel = gui.TaskPanel.current
+    # The material list is the daemon's description: its built-in materials (as the CLI lists
+    # them), then the site's; choose the site's.
+    site = T.SITE_MATERIAL["name"]
+    started = time.monotonic()
+    while panel.description is None and time.monotonic() - started < 30:
+        yield 0.05
+    listed = [panel.material.itemData(k) for k in range(panel.material.count())]
+    cli = T.cli("options", "--json")
+    built_in = [m["name"] for m in json.loads(cli.stdout)["materials"] if not m.get("site")] if cli.returncode == 0 else []
+    check(built_in and listed == built_in + [site], "the panel's materials are the daemon's: %s" % ", ".join(listed))
+    panel.material.setCurrentIndex(panel.material.findData(site))
+    check(panel.material.currentText() == "Test larch (site)", "chose %s" % panel.material.currentText())
     panel.accept()
     started = time.monotonic()
     while panel.call is not None and time.monotonic() - started < 300:
         yield 0.1
+    check(top.Material == site, "simulated with the site's material: %s" % top.Material)
     deployed = doc.getObject("gridshell_deployed")
     check(deployed is not None and len(deployed.Group) == 1, "the deployed lamellas are in the document")
     check("RmsWithNotches" in top.PropertiesList and top.RmsWithNotches > 0, "RMS on the group")
@@ -208,7 +235,8 @@ def steps(daemon):
 
 
 def main():
-    daemon = T.Daemon()
+    library = tempfile.mkdtemp(prefix="gridshell-freecad-gui-")
+    daemon = T.Daemon(env=T.material_library(library))
     runner = steps(daemon)
     deadline = time.monotonic() + LIMIT
     timer = QtCore.QTimer()
@@ -216,6 +244,7 @@ def main():
 
     def finish(ok):
         daemon.stop()
+        shutil.rmtree(library, ignore_errors=True)
         failed = sum(1 for passed, _ in checks if not passed) + (0 if ok else 1)
         print("freecad gui: %d passed, %d failed" % (len(checks) - failed + (0 if ok else 1), failed), flush=True)
         os._exit(0 if failed == 0 else 1)

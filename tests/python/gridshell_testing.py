@@ -41,10 +41,11 @@ class Daemon:
     """gridshelld on 127.0.0.1 (any free ports unless ``http_port`` is given), its log kept.
 
     ``url`` is the HTTP address (http:// or https:// with TLS), ``log`` the JSON lines so far.
-    Use as a context manager, or call ``stop()``.
+    ``env``: environment variables to set for the daemon (e.g. GRIDSHELL_MATERIALS), on top of
+    this process's. Use as a context manager, or call ``stop()``.
     """
 
-    def __init__(self, *args, http_port=0, tls=False, start_timeout=60):
+    def __init__(self, *args, http_port=0, tls=False, start_timeout=60, env=None):
         self.log = []
         self._lines = threading.Condition()
         command = [
@@ -56,7 +57,11 @@ class Daemon:
             "--no-static",
         ] + list(args)
         self.process = subprocess.Popen(
-            command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+            command,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            env=dict(os.environ, **env) if env else None,
         )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -125,6 +130,29 @@ class Daemon:
 
     def __exit__(self, *exc):
         self.stop()
+
+
+# A site's material library (gridshell.v1.MaterialLibrary) with one material besides the built-in
+# ones, for the daemon's GRIDSHELL_MATERIALS: the tests check that every client lists it from the
+# daemon's description and that a simulation with it selected uses it.
+SITE_MATERIAL = {
+    "name": "test-larch",
+    "label": "test larch",
+    "young_modulus": 1.1e10,
+    "shear_modulus": 0.7e9,
+    "bending_strength": 7.0e7,
+    "shear_strength": 8e6,
+    "source": "test",
+}
+
+
+def material_library(folder):
+    """Writes a material library with SITE_MATERIAL into ``folder``; returns the daemon's
+    environment that names it (``Daemon(env=...)``)."""
+    path = os.path.join(folder, "materials.json")
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump({"materials": [SITE_MATERIAL]}, f)
+    return {"GRIDSHELL_MATERIALS": path}
 
 
 def cli(*args, timeout=600):

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Operators ``gridshell.design``, ``gridshell.simulate`` and ``gridshell.run``.
+"""Operators ``gridshell.design``, ``gridshell.simulate`` and ``gridshell.run``, and
+``gridshell.refresh_options`` (reads the daemon's description: its materials and option ranges).
 
 Started from the UI (a button: INVOKE) they call the daemon on a background thread and keep
 Blender responsive: a timer shows the progress in the status bar, Esc cancels (the daemon stops
@@ -13,7 +14,7 @@ import time
 
 import bpy
 
-from . import mesh_input, results
+from . import described, mesh_input, results
 from .properties import FIELD_LABELS
 from .remote import gs
 
@@ -72,6 +73,7 @@ class _GridshellOperator:
             call.finish(context.scene, result, seconds)
         except gs.GridshellError as e:
             return self._report_error(e, call)
+        described.reached(context.scene.gridshell.server)
         self.report({"INFO"}, "gridshell: %s done in %.1f s" % (call.label, seconds))
         return {"FINISHED"}
 
@@ -233,5 +235,32 @@ class GRIDSHELL_OT_cancel(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (GRIDSHELL_OT_design, GRIDSHELL_OT_simulate, GRIDSHELL_OT_run, GRIDSHELL_OT_cancel)
+class GRIDSHELL_OT_refresh_options(bpy.types.Operator):
+    """Read the daemon's materials and option ranges (its description) again"""
+
+    bl_idname = "gridshell.refresh_options"
+    bl_label = "Refresh materials"
+    bl_options = {"REGISTER"}
+
+    def execute(self, context):
+        settings = context.scene.gridshell
+        try:
+            description = described.fetch(settings)
+        except gs.GridshellError as e:
+            self.report({"ERROR"}, "\n".join(gs.plugin.error_text(e, settings.server, FIELD_NAMES)))
+            return {"CANCELLED"}
+        if context.window_manager.windows:
+            described.redraw()
+        names = description.material_names()
+        self.report({"INFO"}, "gridshell: %d materials from %s: %s" % (len(names), settings.server, ", ".join(names)))
+        return {"FINISHED"}
+
+
+CLASSES = (
+    GRIDSHELL_OT_design,
+    GRIDSHELL_OT_simulate,
+    GRIDSHELL_OT_run,
+    GRIDSHELL_OT_cancel,
+    GRIDSHELL_OT_refresh_options,
+)
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -1,12 +1,13 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The sidebar panel of the 3D viewport (N panel, tab "gridshell"), with a sub-panel for the
-daemon's address and credentials (closed by default)."""
+daemon's address and credentials (closed by default). Its first draw with a server starts
+reading that daemon's description (materials, option ranges) in the background (described.py)."""
 
 from array import array
 
 import bpy
 
-from . import results
+from . import described, results
 from .operators import STATE
 
 DRAWS = [0]  # how often the panel was drawn (for tests of the UI)
@@ -38,6 +39,16 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
         DRAWS[0] += 1
         layout = self.layout
         settings = context.scene.gridshell
+        described.ensure(settings)
+        description = described.description(settings)
+
+        def field(column, name, **kwargs):
+            """A design option's field, red when the daemon's description refuses its value."""
+            row = column.row()
+            if description is not None and description.option("design", name) is not None:
+                row.alert = description.check("design", name, getattr(settings, name)) is not None
+            row.prop(settings, name, **kwargs)
+
         layout.label(text=corners_text(context.active_object), icon="MESH_DATA")
 
         box = layout.box()
@@ -47,18 +58,24 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
         if settings.alpha_mode == "value":
             box.prop(settings, "alpha_value")
         col = box.column(align=True)
-        col.prop(settings, "members_u")
-        col.prop(settings, "members_v")
+        field(col, "members_u")
+        field(col, "members_v")
         col = box.column(align=True)
-        col.prop(settings, "lamella_width", text="Width")
-        col.prop(settings, "lamella_thickness", text="Thickness")
-        box.prop(settings, "resolution")
-        box.prop(settings, "interior_anchors")
+        field(col, "lamella_width", text="Width")
+        field(col, "lamella_thickness", text="Thickness")
+        field(box, "resolution")
+        field(box, "interior_anchors")
 
         box = layout.box()
-        box.label(text="Simulation", icon="PHYSICS")
+        row = box.row()
+        row.label(text="Simulation", icon="PHYSICS")
+        # Reads the daemon's materials (its description) again.
+        row.operator("gridshell.refresh_options", text="", icon="FILE_REFRESH", emboss=False)
         box.prop(settings, "unit")
         box.prop(settings, "material")
+        note = described.status(settings)
+        if note:
+            box.label(text=note, icon="INFO")
         row = box.row()
         row.prop(settings, "notches", expand=True)
         box.prop(settings, "auto_anchors")

@@ -1,5 +1,13 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The add-on's settings, kept with the scene: ``bpy.context.scene.gridshell``."""
+"""The add-on's settings, kept with the scene: ``bpy.context.scene.gridshell``.
+
+The material choices are the daemon's (its description, described.py); the design options'
+ranges are the daemon's too: the properties keep no copy of them (only a floor of 0 where 0
+means automatic), the panel marks a value outside the described range red, and the daemon's
+answer names the field (``options.resolution``) of a value it refuses. The initial values of the
+properties are the API's defaults (the tests compare them with the description), and what the
+panel shows is what is sent.
+"""
 
 import math
 import os
@@ -7,17 +15,9 @@ import os
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
-DEFAULT_SERVER = "http://127.0.0.1:8080"
+from . import described
 
-MATERIALS = [
-    ("lime-wood", "Lime wood", "E 7.4 GPa (the paper's material)"),
-    ("birch-plywood", "Birch plywood", ""),
-    ("beech-wood", "Beech wood", ""),
-    ("gfrp", "GFRP", "glass-fibre reinforced plastic"),
-    ("aluminium", "Aluminium", ""),
-    ("steel", "Steel", ""),
-    ("hdpe", "HDPE", "high-density polyethylene"),
-]
+DEFAULT_SERVER = "http://127.0.0.1:8080"
 
 UNITS = [
     ("SCENE", "Scene", "The scene's unit system and scale (Scene > Units); none when it has none"),
@@ -80,8 +80,8 @@ class GridshellSettings(bpy.types.PropertyGroup):
     alpha_value: FloatProperty(
         name="ᾱ", subtype="ANGLE", default=math.radians(70), min=0.01, max=math.pi - 0.01
     )
-    members_u: IntProperty(name="Members u", description="Inner g-members (0 = automatic)", min=0, max=1000)
-    members_v: IntProperty(name="Members v", description="Inner h-members (0 = automatic)", min=0, max=1000)
+    members_u: IntProperty(name="Members u", description="Inner g-members (0 = automatic)", min=0)
+    members_v: IntProperty(name="Members v", description="Inner h-members (0 = automatic)", min=0)
     lamella_width: FloatProperty(
         name="Lamella width",
         description="Width of the lamellas (0 = 1% of the longest patch side)",
@@ -101,13 +101,11 @@ class GridshellSettings(bpy.types.PropertyGroup):
         description="Resolution R of the distance maps (0 = adaptive)",
         default=100,
         min=0,
-        max=1000,
     )
     interior_anchors: IntProperty(
         name="Inner anchors",
         description="Also pin up to N inner crossings at the target's bumps and dips",
         min=0,
-        max=100,
     )
     auto_anchors: BoolProperty(
         name="Find inner anchors",
@@ -116,7 +114,17 @@ class GridshellSettings(bpy.types.PropertyGroup):
         default=False,
     )
     unit: EnumProperty(name="Unit", description="Length unit of the model", items=UNITS, default="SCENE")
-    material: EnumProperty(name="Material", items=MATERIALS, default="lime-wood")
+    # The chosen material by name ("" = none chosen: the daemon's default, not sent); the enum
+    # below shows it among the daemon's materials.
+    material_name: StringProperty(name="Material name", options={"HIDDEN"})
+    material: EnumProperty(
+        name="Material",
+        description="Material of the lamellas: the daemon's presets and its site's own (Refresh "
+        "reads them from the daemon)",
+        items=described.material_items,
+        get=described.get_material,
+        set=described.set_material,
+    )
     notches: EnumProperty(
         name="Notches",
         description="Simulate the grid with notched crossings, without, or both",
@@ -145,12 +153,14 @@ class GridshellSettings(bpy.types.PropertyGroup):
             value = getattr(self, name)
             if value:
                 options[name] = value
-        if self.resolution != 100:
-            options["resolution"] = self.resolution
+        options["resolution"] = self.resolution
         return options
 
     def simulation_options(self, scene):
-        options = {"notches": self.notches, "material": self.material}
+        """SimulationOptions: the material only when one was chosen (else the daemon's default)."""
+        options = {"notches": self.notches}
+        if self.material_name:
+            options["material"] = self.material_name
         if self.auto_anchors:
             options["interior_anchors"] = "auto"
         if self.unit == "SCENE":

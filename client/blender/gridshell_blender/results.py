@@ -150,7 +150,7 @@ def show_design(scene, result, source, server, call_seconds):
     top["design_seconds"] = report.get("seconds", 0.0)
     top["design_call_seconds"] = call_seconds
     for key in list(top.keys()):
-        if key.startswith(("rms_", "simulate_", "seconds_")) or key == "converged":
+        if key.startswith(("rms_", "simulate_", "seconds_")) or key in ("converged", "material"):
             del top[key]
 
     text = bpy.data.texts.get(DESIGN_TEXT) or bpy.data.texts.new(DESIGN_TEXT)
@@ -219,6 +219,7 @@ def show_deployment(scene, result, call_seconds):
             del top[key]
     top["converged"] = bool(deployment.get("converged", False))
     top["simulate_call_seconds"] = call_seconds
+    top["material"] = deployment.get("options", {}).get("material", "")  # the one simulated
     # Inner anchors the simulation added (interior_anchors "auto"): empties beside the design's.
     anchors = collection(scene, ANCHORS, top)
     for obj in [o for o in anchors.objects if o.get("added", False)]:
@@ -261,6 +262,8 @@ def summary(scene):
         rows.append(("RMS1", "%.4g" % top["rms_without_notches"]))  # without notches
     if "rms_with_notches" in top:
         rows.append(("RMS2", "%.4g" % top["rms_with_notches"]))  # with notches (paper's RMS2)
+    if top.get("material"):
+        rows.append(("Material", top["material"]))
     if "simulate_call_seconds" in top:
         seconds = [top[k] for k in ("seconds_without_notches", "seconds_with_notches") if k in top]
         rows.append(("Simulation", "%.1f s, call %.1f s" % (sum(seconds), top["simulate_call_seconds"])))

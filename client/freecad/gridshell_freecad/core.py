@@ -32,8 +32,6 @@ PLANAR = "gridshell planar"
 DEPLOYED = "gridshell deployed"
 PARAMETERS = "User parameter:BaseApp/Preferences/Mod/Gridshell"
 
-MATERIALS = ("lime-wood", "birch-plywood", "beech-wood", "gfrp", "aluminium", "steel", "hdpe")
-
 # Request fields -> the labels of the task panel (error messages name the field this way).
 FIELD_LABELS = {
     "options.alpha": "Planar angle",
@@ -56,8 +54,11 @@ class InputError(Exception):
 
 
 class Settings:
-    """Server and options of a request; the defaults are the API's. FreeCAD's length unit is the
-    millimetre, so the simulation's unit is mm (energies in joules, stresses in pascals)."""
+    """Server and options of a request; the initial values are the API's defaults (the tests
+    compare them with the daemon's description), and what is set is sent. ``material`` "" is
+    none chosen: the request names none and the daemon takes its default (the first of its
+    description). FreeCAD's length unit is the millimetre, so the simulation's unit is mm
+    (energies in joules, stresses in pascals)."""
 
     FIELDS = {
         "server": "",
@@ -72,7 +73,7 @@ class Settings:
         "resolution": 100,
         "interior_anchors": 0,
         "unit": "mm",
-        "material": "lime-wood",
+        "material": "",  # a name of the daemon's materials; "" = its default
         "notches": "both",
         "auto_anchors": False,  # simulate with interior_anchors "auto"
     }
@@ -132,17 +133,74 @@ class Settings:
         for name in ("members_u", "members_v", "lamella_width", "lamella_thickness", "interior_anchors"):
             if getattr(self, name):
                 options[name] = getattr(self, name)
-        if self.resolution != 100:
-            options["resolution"] = self.resolution
+        options["resolution"] = self.resolution
         return options
 
     def simulation_options(self):
-        options = {"notches": self.notches, "material": self.material}
+        options = {"notches": self.notches}
+        if self.material:
+            options["material"] = self.material
         if self.auto_anchors:
             options["interior_anchors"] = "auto"
         if self.unit:
             options["unit"] = self.unit
         return options
+
+
+def describe(settings, refresh=False, timeout=10.0):
+    """The daemon's description of its options and materials (``gridshell_client.Description``),
+    read once per daemon address for the FreeCAD session (``refresh``: read again); a call with
+    no retries, so that an unreachable daemon answers at once."""
+    client = settings.client()
+    client.retries = 0
+    return gs.describe(client, refresh=refresh, timeout=timeout)
+
+
+def cached_description(settings):
+    """The description ``describe`` read for the settings' daemon, or None (no call)."""
+    return gs.options.cached(settings.server)
+
+
+def material_choices(description, chosen=""):
+    """(name, label) of the materials to offer: the daemon's (its default first, then its
+    site's own), or, without a description, its default alone (name "": none sent); a chosen
+    name the description lacks is kept at the end (sent as it is: the daemon checks it)."""
+    if description is not None and description.materials:
+        rows = []
+        for m in description.materials:
+            label = m.get("label") or m.get("name", "")
+            label = label[:1].upper() + label[1:]
+            rows.append((m.get("name", ""), label + (" (site)" if m.get("site") else "")))
+    else:
+        rows = [("", "Default (the daemon's)")]
+    if chosen and chosen not in [name for name, _ in rows]:
+        rows.append((chosen, "%s (not in the daemon's list)" % chosen))
+    return rows
+
+
+# A spin box's maximum for an option the description bounds only from below (a Qt spin box needs
+# one): the largest int32, which is also the API's largest integer.
+UNBOUNDED = 2**31 - 1
+
+
+def spin_range(description, group, name):
+    """(low, high) for a spin box of a numeric option from the daemon's description: 0 where 0 is
+    allowed (automatic), else its minimum, up to its maximum (UNBOUNDED where the description sets
+    none); None when the description has no minimum (the box keeps its own, and the daemon checks
+    the value)."""
+    option = None if description is None else description.option(group, name)
+    if option is None or option.get("type") not in ("number", "integer"):
+        return None
+    low, high = option.get("minimum"), option.get("maximum")
+    if low is None:
+        return None
+    if high is None:
+        high = UNBOUNDED
+    if option.get("zero_allowed"):
+        low = min(low, 0)
+    if option.get("type") == "integer":
+        return int(-(-low // 1)), int(high // 1)
+    return float(low), float(high)
 
 
 def _vector(v):
@@ -279,7 +337,7 @@ def show_design(doc, result, source, server, call_seconds):
     _set(top, "DesignSeconds", "App::PropertyFloat", report.get("seconds", 0.0))
     _set(top, "DesignCallSeconds", "App::PropertyFloat", call_seconds)
     _set(top, "DesignJson", "App::PropertyString", files["design.json"].decode("utf-8"), hidden=True)
-    for name in ("RmsWithNotches", "RmsWithoutNotches", "SimulateCallSeconds"):
+    for name in ("RmsWithNotches", "RmsWithoutNotches", "SimulateCallSeconds", "Material"):
         if name in top.PropertiesList:
             top.removeProperty(name)
     doc.recompute()
@@ -325,6 +383,8 @@ def show_deployment(doc, result, call_seconds):
             top.removeProperty(name)
     _set(top, "Converged", "App::PropertyBool", bool(deployment.get("converged", False)))
     _set(top, "SimulateCallSeconds", "App::PropertyFloat", call_seconds)
+    # The material the simulation used (a name of the daemon's materials, or "custom").
+    _set(top, "Material", "App::PropertyString", deployment.get("options", {}).get("material", ""))
     # Inner anchors the simulation added (interior_anchors "auto"): vertices beside the design's.
     anchors = _group(doc, ANCHORS, top)
     for obj in list(anchors.Group):

@@ -2,8 +2,14 @@
 """The workbench's GUI: commands Design, Simulate and Run, each opening a task panel with the
 server and the options; the call runs on a background thread while FreeCAD stays responsive
 (progress in the panel and the status bar, Cancel stops the daemon's work), and the results are
-built in the document when the answer is in. Errors go to the panel and the report view."""
+built in the document when the answer is in. Errors go to the panel and the report view.
 
+The panel reads the daemon's description (its materials, the options' ranges and help) in the
+background when it opens and when the server is edited: the material list and the spin boxes'
+ranges are the daemon's (until it is read: the saved material, or the daemon's default, and
+ranges only the box's own; the daemon checks every value and names the field it refuses)."""
+
+import sys
 import time
 
 import FreeCAD
@@ -43,7 +49,13 @@ class TaskPanel:
         self.timer = QtCore.QTimer()
         self.timer.setInterval(100)
         self.timer.timeout.connect(self.poll)
+        self.description = None  # the daemon's description, once read
+        self.describing = None  # (server, BackgroundCall) reading the daemon's description
+        self.description_timer = QtCore.QTimer()
+        self.description_timer.setInterval(50)
+        self.description_timer.timeout.connect(self._poll_description)
         self.form = self._build_form()
+        self._describe()
 
     def _build_form(self):
         s = self.settings
@@ -61,6 +73,7 @@ class TaskPanel:
             )
         layout.addRow("Target", QtWidgets.QLabel(target))
         self.server = QtWidgets.QLineEdit(s.server)
+        self.server.editingFinished.connect(self._describe)
         layout.addRow("Server", self.server)
         self.token = QtWidgets.QLineEdit(s.token)
         self.token.setEchoMode(QtWidgets.QLineEdit.Password)
@@ -84,30 +97,33 @@ class TaskPanel:
             row.addWidget(self.alpha)
             row.addWidget(self.alpha_value)
             layout.addRow("Planar angle", row)
-            for name, label, maximum in (
-                ("members_u", "Members u (0 = auto)", 1000),
-                ("members_v", "Members v (0 = auto)", 1000),
-                ("resolution", "Map resolution", 1000),
-                ("interior_anchors", "Inner anchors", 100),
+            # The ranges are the daemon's (_described); until its description is read, only the
+            # boxes' own.
+            for name, label in (
+                ("members_u", "Members u (0 = auto)"),
+                ("members_v", "Members v (0 = auto)"),
+                ("resolution", "Map resolution"),
+                ("interior_anchors", "Inner anchors"),
             ):
                 box = QtWidgets.QSpinBox()
-                box.setRange(0, maximum)
+                box.setRange(0, 2147483647)
                 box.setValue(int(getattr(s, name)))
                 layout.addRow(label, box)
                 self.fields[name] = box
             for name, label in (("lamella_width", "Lamella width (0 = auto)"),
                                 ("lamella_thickness", "Lamella thickness (0 = auto)")):
                 box = QtWidgets.QDoubleSpinBox()
-                box.setRange(0, 1e9)
+                box.setRange(0, sys.float_info.max)
                 box.setDecimals(3)
                 box.setSuffix(" mm")
                 box.setValue(float(getattr(s, name)))
                 layout.addRow(label, box)
                 self.fields[name] = box
         if self.mode in ("simulate", "run"):
+            # The daemon's materials (_described); until they are read, the saved one or the
+            # daemon's default.
             self.material = QtWidgets.QComboBox()
-            self.material.addItems(list(core.MATERIALS))
-            self.material.setCurrentText(s.material)
+            self._fill_materials(None, s.material)
             layout.addRow("Material", self.material)
             self.notches = QtWidgets.QComboBox()
             self.notches.addItems(["both", "on", "off"])
@@ -125,6 +141,67 @@ class TaskPanel:
         layout.addRow(self.status)
         return form
 
+    def _fill_materials(self, description, chosen):
+        self.material.clear()
+        for name, label in core.material_choices(description, chosen):
+            self.material.addItem(label, name)
+        self.material.setCurrentIndex(max(0, self.material.findData(chosen)))
+
+    def _form_settings(self):
+        """The settings with the server and token as the form has them now."""
+        s = self.settings
+        return core.Settings(server=self.server.text().strip(), token=self.token.text().strip(),
+                             ca_file=s.ca_file, timeout=s.timeout)
+
+    def _describe(self):
+        """Reads the description of the form's daemon (kept for the session) in the background."""
+        settings = self._form_settings()
+        if self.describing is not None and self.describing[0] == settings.server:
+            return
+        known = core.cached_description(settings)
+        if known is not None:
+            self._described(known)
+            return
+        self.describing = (settings.server, gs.plugin.BackgroundCall(
+            lambda progress, cancel: core.describe(settings)))
+        self.description_timer.start()
+
+    def _poll_description(self):
+        if self.describing is None or not self.describing[1].done:
+            return
+        self.description_timer.stop()
+        (server, call), self.describing = self.describing, None
+        try:
+            if server != self._form_settings().server:
+                self._describe()  # the server was edited meanwhile
+                return
+            try:
+                description = call.result()
+            except Exception as e:  # the call's own error says more when the user presses OK
+                if hasattr(self, "material"):
+                    self.material.setToolTip("The daemon's materials were not read: %s"
+                                             % (e.message if isinstance(e, gs.GridshellError) else e))
+                return
+            self._described(description)
+        except RuntimeError:
+            pass  # the panel was closed meanwhile: its widgets are gone
+
+    def _described(self, description):
+        """The daemon's materials into the combo box, its ranges and help into the spin boxes."""
+        self.description = description
+        if hasattr(self, "material"):
+            chosen = self.material.currentData() or self.settings.material
+            self._fill_materials(description, chosen)
+            option = description.option("simulation", "material")
+            self.material.setToolTip(option.get("help", "") if option else "")
+        for name, box in self.fields.items():
+            span = core.spin_range(description, "design", name)
+            if span is not None:
+                box.setRange(*span)
+            option = description.option("design", name)
+            if option is not None:
+                box.setToolTip(option.get("help", ""))
+
     def _read_form(self):
         s = self.settings
         s.server = self.server.text().strip()
@@ -135,7 +212,7 @@ class TaskPanel:
             for name, box in self.fields.items():
                 setattr(s, name, box.value())
         if self.mode in ("simulate", "run"):
-            s.material = self.material.currentText()
+            s.material = self.material.currentData() or ""
             s.notches = self.notches.currentText()
             s.auto_anchors = self.auto_anchors.isChecked()
         s.save()

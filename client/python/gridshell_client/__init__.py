@@ -8,6 +8,10 @@
     deployment = client.simulate(design["design"], options={"unit": "cm"})
     print(deployment["deployment"]["rms_with_notches"])
 
+The daemon describes every request option (type, default, range, help) and its materials:
+``Description(client.options())`` (options.py) looks them up, ``describe(client)`` keeps the
+description per daemon.
+
 Used by the Blender add-on (client/blender) and the FreeCAD workbench (client/freecad); see
 docs/api.md ("Python client").
 """
@@ -24,8 +28,9 @@ from .errors import (
     Unauthenticated,
     Unavailable,
 )
-from .meshes import MESH_FORMATS, mesh_arrays, mesh_example, mesh_file
-from . import plugin  # noqa: E402 (helpers of the CAD plugins)
+from .meshes import mesh_arrays, mesh_example, mesh_file
+from .options import Description, describe
+from . import options, plugin  # noqa: E402 (the description's helpers; helpers of the CAD plugins)
 
 __version__ = "0.1.0"
 
@@ -38,7 +43,8 @@ __all__ = [
     "mesh_arrays",
     "mesh_file",
     "mesh_example",
-    "MESH_FORMATS",
+    "Description",
+    "describe",
     "GridshellError",
     "InvalidInput",
     "Infeasible",

@@ -54,7 +54,7 @@ USER_AGENT = "gridshell-python/0.1"
 # Every API method is a pure function of its request (the same request gives the same result on
 # any daemon), so trying it again on another replica is safe.
 IDEMPOTENT_METHODS = frozenset(
-    ["patch", "design", "simulate", "run", "geodesic", "load", "examples"]
+    ["patch", "design", "simulate", "run", "geodesic", "load", "examples", "options"]
 )
 # The calls that use the daemon's per-patch cache and so carry the patch routing key.
 ROUTED_METHODS = frozenset(["design", "run"])
@@ -344,6 +344,15 @@ class Client:
         """The built-in example surfaces: ``{"examples": [{name, description, vertices, corners}]}``."""
         return self.call("examples", {}, **call)
 
+    def options(self, **call):
+        """The description of every request option and of the material presets
+        (``OptionsResult``): ``{"options": [{group, name, flag, type, default_value, minimum,
+        maximum, zero_allowed, choices, unit, help, label, ...}], "materials": [{name, label,
+        young_modulus, ...}], "mesh_formats": [...], "length_units": [...]}``; a site's own
+        materials (the daemon's ``GRIDSHELL_MATERIALS``) included. ``Description(result)``
+        (options.py) looks options and materials up; ``describe(client)`` keeps it per daemon."""
+        return self.call("options", {}, **call)
+
     def load(self, mesh, **call):
         """A mesh as the daemon reads it: ``{"mesh": arrays as loaded, "report": ..., ...}``."""
         return self.call("load", {"mesh": mesh}, **call)
@@ -359,7 +368,7 @@ class Client:
         corners  None (automatic), 4 vertex indices, 4 points (x, y, z) or a ``Corners`` dict
         options  ``DesignRequest.Options`` as a dict: alpha, members_u, members_v,
                  lamella_width, lamella_thickness, resolution, geodesic_method, eta_max,
-                 interior_anchors
+                 interior_anchors, ... (``options()`` describes each: type, default, range)
         files    also return design.json and report.json in ``views``, the CLI's bytes
         """
         request = _with(mesh=mesh, corners=_corners(corners), options=options)
@@ -371,7 +380,8 @@ class Client:
         """The deployment simulation of a design (``SimulateResult``: deployment, views).
 
         design   the ``Design``: a dict, or design.json's text or bytes (sent as they are)
-        options  ``SimulationOptions`` as a dict: notches, material, unit, ...
+        options  ``SimulationOptions`` as a dict: notches, material, unit, ... (``options()``
+                 describes each, and lists the daemon's materials)
         """
         if isinstance(design, (str, bytes, bytearray)):
             design = RawJSON(design)

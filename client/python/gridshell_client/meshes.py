@@ -2,7 +2,9 @@
 """Building the API's ``Mesh`` message (docs/api.md): packed arrays, a file's bytes, or an example.
 
 The daemon reads every form with the CLI's own loader (the same repairs, warnings and errors), so
-a client never parses mesh files itself.
+a client never parses mesh files itself, nor checks their format: the formats the daemon reads
+are in its description (``Client.options()["mesh_formats"]``), and a format it does not read is
+refused with the field ``mesh.format``, naming the ones it does.
 """
 
 import base64
@@ -10,9 +12,7 @@ import os
 
 from .errors import InvalidInput
 
-__all__ = ["mesh_arrays", "mesh_file", "mesh_example", "MESH_FORMATS"]
-
-MESH_FORMATS = ("obj", "off", "ply", "stl")
+__all__ = ["mesh_arrays", "mesh_file", "mesh_example"]
 
 
 def _flat(values, width, what):
@@ -49,8 +49,11 @@ def mesh_arrays(positions, indices, name=""):
 def mesh_file(source, format=None, name=None):
     """A mesh file's bytes for the daemon's loader: ``source`` is a path or the bytes themselves.
 
-    ``format`` is obj, off, ply or stl (default: the path's or name's extension); ``name`` is
-    recorded as ``input`` (default: the path's file name)."""
+    ``format`` is one of the daemon's ``mesh_formats`` (``Client.options()``: obj, off, ply, stl)
+    (default: the path's or name's extension); ``name`` is recorded as ``input`` (default: the
+    path's file name). The format is not checked here: without one (bytes without a name with
+    an extension) or with one the daemon does not read, the call is refused with the field
+    ``mesh.format`` and the daemon's list."""
     if isinstance(source, (bytes, bytearray, memoryview)):
         data = bytes(source)
     else:
@@ -66,9 +69,9 @@ def mesh_file(source, format=None, name=None):
             format = os.path.splitext(path)[1].lstrip(".")
     if format is None and name:
         format = os.path.splitext(name)[1].lstrip(".")
-    if not format:
-        raise InvalidInput("give the format (obj, off, ply, stl)", "INVALID_ARGUMENT", "mesh.format")
-    mesh = {"file": base64.b64encode(data).decode("ascii"), "format": format}
+    mesh = {"file": base64.b64encode(data).decode("ascii")}
+    if format:
+        mesh["format"] = format
     if name:
         mesh["name"] = name
     return mesh

@@ -5,7 +5,7 @@ on, as 32 lowercase hex digits. The client sends it as ``X-Gridshell-Patch-Key``
 and Run, so that haproxy in front of several daemons sends the designs of one patch to the replica
 whose per-patch cache holds its work.
 
-The byte layout is proto/convert/gridshell/patch_routing_key.h's (all numbers little-endian, f64
+The byte layout is application/include/gridshell/application/patch_routing_key.h's (all numbers little-endian, f64
 as IEEE 754 bits); every design result carries the daemon's own computation
 (``report["patch_key"]``), which the tests compare with this one.
 
