@@ -44,25 +44,75 @@ std::string described_help(const char* group, const char* name) {
   return help;
 }
 
-namespace {
-template <class T>
-void add_described(CLI::App* sub, const char* group, const char* name, std::optional<T>& value) {
-  const OptionSpec& spec = option_spec(group, name);
-  sub->add_option(spec.flag, value, described_help(group, name));
+void add_described_flags(CLI::App* sub, const char* group, DescribedFlags& flags,
+                         const std::set<std::string>& except) {
+  flags.group = group;
+  for (const OptionSpec& spec : option_specs()) {
+    if (spec.group != group || spec.flag.empty() || spec.output || except.count(spec.name))
+      continue;
+    const std::string help = described_help(group, spec.name.c_str());
+    if (spec.type == OptionType::Boolean)
+      sub->add_flag(spec.flag, flags.switches[spec.name], help);
+    else
+      sub->add_option(spec.flag, flags.values[spec.name], help)
+          ->type_name(spec.type == OptionType::Number    ? "FLOAT"
+                      : spec.type == OptionType::Integer ? "INT"
+                                                         : "TEXT");
+  }
 }
+
+namespace {
+
+/// `text` as a double, whole (strict); nullopt if it is not one.
+std::optional<double> number_of(const std::string& text) {
+  double value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
 }  // namespace
 
-void add_described_option(CLI::App* sub, const char* group, const char* name,
-                          std::optional<double>& value) {
-  add_described(sub, group, name, value);
-}
-void add_described_option(CLI::App* sub, const char* group, const char* name,
-                          std::optional<int>& value) {
-  add_described(sub, group, name, value);
-}
-void add_described_option(CLI::App* sub, const char* group, const char* name,
-                          std::optional<std::string>& value) {
-  add_described(sub, group, name, value);
+void set_described(const DescribedFlags& flags, google::protobuf::Message& options) {
+  using google::protobuf::FieldDescriptor;
+  const google::protobuf::Reflection& reflection = *options.GetReflection();
+  for (const auto& [name, on] : flags.switches)
+    if (on) reflection.SetBool(&options, options.GetDescriptor()->FindFieldByName(name), true);
+  for (const auto& [name, value] : flags.values) {
+    if (!value) continue;
+    const OptionSpec& spec = option_spec(flags.group, name);
+    const FieldDescriptor* field = options.GetDescriptor()->FindFieldByName(name);
+    const std::string& text = *value;
+    switch (spec.type) {
+      case OptionType::Number: {
+        const std::optional<double> number = number_of(text);
+        if (!number) throw InvalidInput(spec.flag, "expected a number, got '" + text + "'");
+        reflection.SetDouble(&options, field, *number);
+        break;
+      }
+      case OptionType::Integer: {
+        int number = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), number);
+        if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+          throw InvalidInput(spec.flag, "expected a whole number, got '" + text + "'");
+        reflection.SetInt32(&options, field, number);
+        break;
+      }
+      case OptionType::Numbers: {
+        reflection.ClearField(&options, field);
+        std::stringstream items(text);
+        for (std::string item; std::getline(items, item, ',');) {
+          const std::optional<double> number = number_of(trim(item));
+          if (!number)
+            throw InvalidInput(spec.flag, "expected numbers a,b,..., got '" + text + "'");
+          reflection.AddDouble(&options, field, *number);
+        }
+        break;
+      }
+      default:
+        reflection.SetString(&options, field, text);
+    }
+  }
 }
 
 InputMesh load_input(const std::string& name) {

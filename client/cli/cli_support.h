@@ -6,7 +6,9 @@
 #include <google/protobuf/repeated_field.h>
 
 #include <array>
+#include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -86,17 +88,24 @@ v1::Mesh request_mesh(const InputMesh& input);
 
 /// The file-order index of a loaded mesh vertex (the first, for welded duplicates), or -1.
 int file_vertex(const InputMesh& input, int mesh_vertex);
-/// Adds the flag of the request option `group`.`name`: its flag name, help, unit, range and
-/// default come from the one description (gridshell/options.h). The value stays unset unless the
-/// flag is given (the request then carries the option's default); the request check names the
-/// flag when the value is out of range (cli_errors.cpp maps the field through the description).
-void add_described_option(CLI::App* sub, const char* group, const char* name,
-                          std::optional<double>& value);
-void add_described_option(CLI::App* sub, const char* group, const char* name,
-                          std::optional<int>& value);
-void add_described_option(CLI::App* sub, const char* group, const char* name,
-                          std::optional<std::string>& value);
-/// The help line of a described option: "lamella width, mesh units; above 0 (or 0: 1% of the
+/// The flags of one group of request options (gridshell/options.h: "patch", "design",
+/// "simulation", "fabrication"), added from the one description: every described option with a
+/// flag gets it, with its help, unit, range and default, unless the command handles it itself
+/// (`except`). A new described option is a new flag with no change here. Values stay text until
+/// set_described puts them into the request; an option not given stays unset there, so the
+/// request's default applies, and the request check names the flag when a value is out of range
+/// (cli_errors.cpp maps the field through the description).
+struct DescribedFlags {
+  std::string group;
+  std::map<std::string, std::optional<std::string>> values;  ///< field name -> text as given
+  std::map<std::string, bool> switches;                      ///< boolean options
+};
+void add_described_flags(CLI::App* sub, const char* group, DescribedFlags& flags,
+                         const std::set<std::string>& except = {});
+/// Sets each given option in `options` (the group's options message) by its field name; a value
+/// that is not of the option's type throws InvalidInput naming the flag.
+void set_described(const DescribedFlags& flags, google::protobuf::Message& options);
+/// The help line of a described option: "lamella width; positive, in mesh units (or 0: 1% of the
 /// longest patch side); default 0".
 std::string described_help(const char* group, const char* name);
 /// --corner-angles MIN,MAX (degrees) of the automatic corners' search.

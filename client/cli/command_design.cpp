@@ -38,23 +38,12 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags) {
   sub->add_option(
       "--corners", flags.corners,
       "i,j,k,l | \"x,y,z;x,y,z;x,y,z;x,y,z\" | auto (default: example corners or auto)");
-  add_described_option(sub, "design", "alpha", flags.alpha);
-  add_described_option(sub, "design", "members_u", flags.members_u);
-  add_described_option(sub, "design", "members_v", flags.members_v);
-  add_described_option(sub, "design", "lamella_width", flags.lamella_width);
-  add_described_option(sub, "design", "lamella_thickness", flags.lamella_thickness);
-  add_described_option(sub, "design", "resolution", flags.resolution);
-  add_described_option(sub, "design", "geodesic_method", flags.method);
-  add_described_option(sub, "design", "eta_max", flags.eta_max);
+  add_described_flags(sub, "design", flags.options, {"interior_anchors", "auto_corner_angles"});
   sub->add_option("--interior-anchors", flags.interior_anchors,
                   described_help("design", "interior_anchors") + "; or (run only) " +
                       option_spec("simulation", "interior_anchors").help)
       ->capture_default_str();
   add_corner_angles_flag(sub, flags.corner_angles);
-  add_described_option(sub, "design", "suggest", flags.suggest);
-  add_described_option(sub, "design", "k_min", flags.k_min);
-  add_described_option(sub, "design", "k_max", flags.k_max);
-  add_described_option(sub, "design", "map_vertices", flags.map_vertices);
 }
 
 bool automatic_interior_anchors(const DesignFlags& flags) {
@@ -72,14 +61,7 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
   *request.mutable_mesh() = request_mesh(input);
   *request.mutable_corners() = to_proto(spec, corners_used);
   v1::DesignRequest::Options& options = *request.mutable_options();
-  if (flags.alpha) options.set_alpha(*flags.alpha);
-  if (flags.members_u) options.set_members_u(*flags.members_u);
-  if (flags.members_v) options.set_members_v(*flags.members_v);
-  if (flags.lamella_width) options.set_lamella_width(*flags.lamella_width);
-  if (flags.lamella_thickness) options.set_lamella_thickness(*flags.lamella_thickness);
-  if (flags.resolution) options.set_resolution(*flags.resolution);
-  if (flags.method) options.set_geodesic_method(*flags.method);
-  if (flags.eta_max) options.set_eta_max(*flags.eta_max);
+  set_described(flags.options, options);
   // auto: the design places none; the simulation adds them (run, simulate).
   if (!automatic_interior_anchors(flags)) {
     char* end = nullptr;
@@ -90,10 +72,6 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
     options.set_interior_anchors(static_cast<int>(n));
   }
   set_corner_angles(flags.corner_angles, options.mutable_auto_corner_angles());
-  if (flags.suggest) options.set_suggest(*flags.suggest);
-  if (flags.k_min) options.set_k_min(*flags.k_min);
-  if (flags.k_max) options.set_k_max(*flags.k_max);
-  if (flags.map_vertices) options.set_map_vertices(*flags.map_vertices);
   return request;
 }
 

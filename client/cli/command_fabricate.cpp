@@ -21,11 +21,8 @@ struct FabricateArguments {
   std::string design;
   OutputFlags output;
   std::string unit;
-  std::string sheet;  // WIDTHxHEIGHT mm; "" = the default sheet
-  // Described options (gridshell/options.h): unset unless given, then the request's default.
-  std::optional<double> kerf, hole_diameter, end_allowance, spacing, thickness, min_slot,
-      text_height;
-  std::optional<std::string> material;
+  std::string sheet;       // WIDTHxHEIGHT mm; "" = the default sheet
+  DescribedFlags options;  // every described fabrication option with a flag but --unit
 };
 
 /// "1200x600" -> {1200, 600} (mm).
@@ -53,14 +50,7 @@ int run_fabricate(const FabricateArguments& args) {
     o.set_sheet_width(w);
     o.set_sheet_height(h);
   }
-  if (args.kerf) o.set_kerf(*args.kerf);
-  if (args.hole_diameter) o.set_hole_diameter(*args.hole_diameter);
-  if (args.end_allowance) o.set_end_allowance(*args.end_allowance);
-  if (args.spacing) o.set_spacing(*args.spacing);
-  if (args.thickness) o.set_thickness(*args.thickness);
-  if (args.min_slot) o.set_min_slot(*args.min_slot);
-  if (args.text_height) o.set_text_height(*args.text_height);
-  if (args.material) o.set_material(*args.material);
+  set_described(args.options, o);
   prepare_fabrication_options(o);  // checked here, before anything runs or is sent
   prepare_output_folder(args.output.out);
   const Progress progress = make_progress(args.output.quiet);
@@ -103,14 +93,7 @@ Command add_fabricate_command(CLI::App& app) {
                   "sheet size WIDTHxHEIGHT in mm; default " +
                       option_spec("fabrication", "sheet_width").default_value + "x" +
                       option_spec("fabrication", "sheet_height").default_value);
-  add_described_option(sub, "fabrication", "kerf", args->kerf);
-  add_described_option(sub, "fabrication", "hole_diameter", args->hole_diameter);
-  add_described_option(sub, "fabrication", "end_allowance", args->end_allowance);
-  add_described_option(sub, "fabrication", "spacing", args->spacing);
-  add_described_option(sub, "fabrication", "thickness", args->thickness);
-  add_described_option(sub, "fabrication", "min_slot", args->min_slot);
-  add_described_option(sub, "fabrication", "text_height", args->text_height);
-  add_described_option(sub, "fabrication", "material", args->material);
+  add_described_flags(sub, "fabrication", args->options, {"unit"});
   add_output_flags(sub, args->output, false);
   return [args] { return run_fabricate(*args); };
 }

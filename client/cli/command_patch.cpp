@@ -21,11 +21,7 @@ struct PatchArguments {
   std::string mesh;
   std::string corners;
   OutputFlags output;
-  // Described options (gridshell/options.h): unset unless given.
-  std::optional<std::string> method;
-  std::optional<double> eta_max;
-  std::optional<int> max_iterations;
-  bool no_smoothing = false;
+  DescribedFlags options;  // every described patch option with a flag but --corner-angles
   std::string corner_angles;
 };
 
@@ -36,10 +32,7 @@ int run_patch(const PatchArguments& args) {
   *request.mutable_mesh() = request_mesh(input);
   *request.mutable_corners() = to_proto(spec, args.corners);
   v1::PatchRequest::Options& options = *request.mutable_options();
-  if (args.method) options.set_geodesic_method(*args.method);
-  if (args.eta_max) options.set_eta_max(*args.eta_max);
-  if (args.max_iterations) options.set_max_smoothing_iterations(*args.max_iterations);
-  options.set_no_smoothing(args.no_smoothing);
+  set_described(args.options, options);
   set_corner_angles(args.corner_angles, options.mutable_auto_corner_angles());
 
   prepare_output_folder(args.output.out);  // fail early on an unusable --out
@@ -98,10 +91,7 @@ Command add_patch_command(CLI::App& app) {
   sub->add_option("--corners", args->corners,
                   "i,j,k,l (vertex indices, file order from 0) | \"x,y,z;x,y,z;x,y,z;x,y,z\" | "
                   "auto (default: the example's corners, or auto)");
-  add_described_option(sub, "patch", "geodesic_method", args->method);
-  add_described_option(sub, "patch", "eta_max", args->eta_max);
-  add_described_option(sub, "patch", "max_smoothing_iterations", args->max_iterations);
-  sub->add_flag("--no-smoothing", args->no_smoothing, described_help("patch", "no_smoothing"));
+  add_described_flags(sub, "patch", args->options, {"auto_corner_angles"});
   add_corner_angles_flag(sub, args->corner_angles);
   add_output_flags(sub, args->output, false);
   return [args] { return run_patch(*args); };

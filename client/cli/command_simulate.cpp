@@ -20,42 +20,22 @@
 namespace gridshell::cli {
 
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags) {
-  add_described_option(sub, "simulation", "notches", flags.notches);
-  add_described_option(sub, "simulation", "material", flags.material);
-  add_described_option(sub, "simulation", "young_modulus", flags.young);
-  add_described_option(sub, "simulation", "shear_modulus", flags.shear);
-  add_described_option(sub, "simulation", "bending_strength", flags.bending_strength);
-  add_described_option(sub, "simulation", "shear_strength", flags.shear_strength);
+  add_described_flags(sub, "simulation", flags.options, {"unit", "interior_anchors"});
   sub->add_option("--unit", flags.unit, described_help("simulation", "unit"));
-  add_described_option(sub, "simulation", "friction_mu", flags.mu);
-  add_described_option(sub, "simulation", "edges_per_interval", flags.edges_per_interval);
-  add_described_option(sub, "simulation", "max_iterations", flags.max_iterations);
-  add_described_option(sub, "simulation", "solver", flags.solver);
-  add_described_option(sub, "simulation", "anchor_goal", flags.anchor_goal);
 }
 
 /// The request's options from the flags as given; their checks are the request's
-/// (resolve_simulation_options), whose fields the CLI shows as these flags.
+/// (resolve_simulation_options), whose fields the CLI shows as these flags. Without --material
+/// the moduli override the default material's (the request then calls it "custom"); 0 means
+/// the material's.
 v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags) {
   v1::SimulationOptions o;
-  if (flags.notches) o.set_notches(*flags.notches);
-  if (flags.solver) o.set_solver(*flags.solver);
-  if (flags.material) o.set_material(*flags.material);
-  // Without --material the moduli override the default material's (resolve_simulation_options
-  // then calls it "custom"); 0 means the material's.
-  if (flags.young) o.set_young_modulus(*flags.young);
-  if (flags.shear) o.set_shear_modulus(*flags.shear);
-  if (flags.bending_strength) o.set_bending_strength(*flags.bending_strength);
-  if (flags.shear_strength) o.set_shear_strength(*flags.shear_strength);
+  set_described(flags.options, o);
   o.set_unit(flags.unit);
   o.set_unit_in_meters(parse_length_unit(flags.unit, "--unit"));
-  if (flags.mu) o.set_friction_mu(*flags.mu);
-  if (flags.edges_per_interval) o.set_edges_per_interval(*flags.edges_per_interval);
   if (!flags.interior_anchors.empty() && flags.interior_anchors != "auto")
     throw InvalidInput("--interior-anchors", "expected auto, got '" + flags.interior_anchors + "'");
   o.set_interior_anchors(flags.interior_anchors);
-  if (flags.anchor_goal) o.set_anchor_goal(*flags.anchor_goal);
-  if (flags.max_iterations) o.set_max_iterations(*flags.max_iterations);
   return o;
 }
 

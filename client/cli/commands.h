@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "cli_support.h"
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/requests.pb.h"
 #include "remote.h"
@@ -56,9 +57,7 @@ void print_heading(const char* command, const std::string& input, const OutputFl
 struct DesignFlags {
   std::string mesh;
   std::string corners;
-  std::optional<std::string> alpha, method;
-  std::optional<int> members_u, members_v, resolution, suggest, map_vertices;
-  std::optional<double> lamella_width, lamella_thickness, eta_max, k_min, k_max;
+  DescribedFlags options;              // every described design option with a flag, but:
   std::string interior_anchors = "0";  // N (0..100) placed by the design, or auto (`run` only)
   std::string corner_angles;           // "MIN,MAX" degrees for automatic corners, "" = 45,135
 };
@@ -74,15 +73,9 @@ bool automatic_interior_anchors(const DesignFlags& flags);
 /// Simulation flags shared by `simulate` and `run`.
 /// The simulation flags (described options, unset unless given; see DesignFlags).
 struct SimulationFlags {
-  std::optional<std::string> notches, material, solver;  // no material: the default, or custom
-                                                         // when --young/--shear are given
-  std::optional<double> young, shear;
-  std::optional<double> bending_strength, shear_strength;  // Pa; default: the material's
-  std::string unit;
-  std::optional<double> mu, edges_per_interval;
-  std::optional<int> max_iterations;
-  std::string interior_anchors;       // "auto" or "" (the design's anchors)
-  std::optional<double> anchor_goal;  // percent of the patch diagonal (auto anchors only)
+  DescribedFlags options;        // every described simulation option with a flag, but:
+  std::string unit;              // sets unit and unit_in_meters
+  std::string interior_anchors;  // "auto" or "" (the design's anchors): --interior-anchors of run
 };
 void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
 /// The options as given (the request check, resolve_simulation_options, names the flag).
