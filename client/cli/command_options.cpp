@@ -52,7 +52,7 @@ Command add_options_command(CLI::App& app) {
       std::string range;
       for (const OptionSpec& spec : option_specs())
         if (spec.group == d.group() && spec.name == d.name()) range = allowed_text(spec);
-      std::printf("  %-28s %-22s %-8s default %-8s %s%s\n", d.name().c_str(),
+      std::printf("  %-28s %-28s %-8s default %-10s %s%s\n", d.name().c_str(),
                   d.flag().empty() ? "(request only)" : d.flag().c_str(), d.type().c_str(),
                   d.default_value().empty() ? "-" : d.default_value().c_str(), range.c_str(),
                   d.advanced() ? " [advanced]" : "");
