@@ -262,20 +262,23 @@ namespace {
 // and the corner vertices. The input mesh itself when every corner is a vertex already.
 struct CornerMesh {
   TriangleMesh mesh;
-  std::array<int, 4> corners{};
+  std::vector<int> corners;
 };
-CornerMesh make_corners_vertices(const TriangleMesh& input,
-                                 const std::array<SurfacePoint, 4>& corner_points, double snap) {
-  for (int i = 0; i < 4; ++i)
+CornerMesh corner_vertices(const TriangleMesh& input,
+                           const std::vector<SurfacePoint>& corner_points, double snap,
+                           const std::string& what) {
+  const int n = static_cast<int>(corner_points.size());
+  for (int i = 0; i < n; ++i)
     if (corner_points[i].face < 0 || corner_points[i].face >= input.face_count())
-      throw InvalidInput("corners[" + std::to_string(i) + "]",
+      throw InvalidInput(what + "[" + std::to_string(i) + "]",
                          "face index " + std::to_string(corner_points[i].face) +
                              " is out of range (the mesh has " +
                              std::to_string(input.face_count()) + " faces)");
   CornerMesh out;
+  out.corners.assign(n, -1);
   EditedMesh edited;
   bool edited_any = false;
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < n; ++i) {
     if (!edited_any) {
       const int v = snapped(corner_points[i], snap).vertex(input);
       if (v >= 0) {
@@ -297,15 +300,44 @@ CornerMesh make_corners_vertices(const TriangleMesh& input,
     out.corners[i] = vertex >= 0 ? vertex : insert_point(edited, q);
   }
   out.mesh = edited_any ? TriangleMesh(std::move(edited.vertices), std::move(edited.faces)) : input;
-  for (int i = 0; i < 4; ++i)
-    for (int j = i + 1; j < 4; ++j)
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
       if (out.corners[i] == out.corners[j])
-        throw InvalidInput("corners[" + std::to_string(j) + "]",
-                           "the same surface point as corners[" + std::to_string(i) + "]");
+        throw InvalidInput(what + "[" + std::to_string(j) + "]",
+                           "the same surface point as " + what + "[" + std::to_string(i) + "]");
   return out;
 }
 
 // Step 2: the four boundary geodesics c_i -> c_{i+1}, exact shortest paths, as locations.
+std::vector<SurfacePoint> solve_side(const GeodesicSolver& solver, const TriangleMesh& mesh, int a,
+                                     int b, const std::string& names, const Progress& progress) {
+  if (!std::isfinite(edge_path_bound(mesh, SurfacePoint::at_vertex(mesh, a),
+                                     SurfacePoint::at_vertex(mesh, b))))
+    throw Infeasible("corners", "corners " + names +
+                                    " lie on separate pieces of the surface: no geodesic joins "
+                                    "them");
+  // A goal-pruned solve (shortest_path): on a 60k-vertex mesh a complete field held 2 GB.
+  return solver.shortest_path(SurfacePoint::at_vertex(mesh, a), SurfacePoint::at_vertex(mesh, b),
+                              progress.checker());
+}
+
+std::vector<Location> side_locations(const TriangleMesh& mesh,
+                                     const std::vector<SurfacePoint>& path, int from, int to,
+                                     double snap, int side) {
+  std::vector<Location> locations;
+  for (const SurfacePoint& p : path) {
+    Location loc = classify(mesh, p, snap);
+    if (!locations.empty() && locations.back().a == loc.a && locations.back().b == loc.b &&
+        (loc.is_vertex() || std::abs(locations.back().t - loc.t) < snap))
+      continue;
+    locations.push_back(loc);
+  }
+  if (locations.size() < 2 || !locations.front().is_vertex() || locations.front().a != from ||
+      !locations.back().is_vertex() || locations.back().a != to)
+    throw std::logic_error("patch cut: geodesic " + side_name(side) + " does not join its corners");
+  return locations;
+}
+
 std::array<std::vector<Location>, 4> boundary_geodesics(const TriangleMesh& mesh,
                                                         const std::array<int, 4>& corners,
                                                         const GeodesicOptions& geodesic,
@@ -315,28 +347,10 @@ std::array<std::vector<Location>, 4> boundary_geodesics(const TriangleMesh& mesh
   for (int i = 0; i < 4; ++i) {
     progress.report("patch: boundary geodesics", 0.1 + 0.2 * i);
     const int next = corners[(i + 1) % 4];
-    if (!std::isfinite(edge_path_bound(mesh, SurfacePoint::at_vertex(mesh, corners[i]),
-                                       SurfacePoint::at_vertex(mesh, next))))
-      throw Infeasible("corners", "corners c" + std::to_string(i) + " and c" +
-                                      std::to_string((i + 1) % 4) +
-                                      " lie on separate pieces of the surface: no geodesic "
-                                      "joins them");
-    // A goal-pruned solve (shortest_path): on a 60k-vertex mesh a complete field held 2 GB.
-    const auto path = solver.shortest_path(SurfacePoint::at_vertex(mesh, corners[i]),
-                                           SurfacePoint::at_vertex(mesh, next), progress.checker());
-    std::vector<Location> locations;
-    for (const SurfacePoint& p : path) {
-      Location loc = classify(mesh, p, snap);
-      if (!locations.empty() && locations.back().a == loc.a && locations.back().b == loc.b &&
-          (loc.is_vertex() || std::abs(locations.back().t - loc.t) < snap))
-        continue;
-      locations.push_back(loc);
-    }
-    if (locations.size() < 2 || !locations.front().is_vertex() ||
-        locations.front().a != corners[i] || !locations.back().is_vertex() ||
-        locations.back().a != corners[(i + 1) % 4])
-      throw std::logic_error("patch cut: geodesic " + side_name(i) + " does not join its corners");
-    paths[i] = std::move(locations);
+    const std::vector<SurfacePoint> path =
+        solve_side(solver, mesh, corners[i], next,
+                   "c" + std::to_string(i) + " and c" + std::to_string((i + 1) % 4), progress);
+    paths[i] = side_locations(mesh, path, corners[i], next, snap, i);
   }
   return paths;
 }
@@ -705,14 +719,12 @@ Patch extract_patch(const TriangleMesh& cut, const std::vector<char>& region, bo
 
 }  // namespace
 
-Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& corner_points,
-                const GeodesicOptions& geodesic, const PatchCutOptions& options,
-                const Progress& progress) {
-  progress.report("patch: corners", 0.0);
-  const double snap = options.snap_fraction;
-  const CornerMesh corner_mesh = make_corners_vertices(input, corner_points, snap);
-  const TriangleMesh& mesh = corner_mesh.mesh;
-  const auto paths = boundary_geodesics(mesh, corner_mesh.corners, geodesic, snap, progress);
+namespace {
+
+/// Steps 3-5 for corners that are vertices of `mesh` and their sides as locations.
+Patch cut_along(const TriangleMesh& mesh, const std::array<int, 4>& corners,
+                const std::array<std::vector<Location>, 4>& paths, double snap,
+                int input_vertex_count, const Progress& progress) {
   // Each step below is linear in the mesh (0.1-0.2 s at 59k vertices): a report between them
   // keeps a cancellation within 0.2 s (it took 0.55 s through the daemon).
   progress.report("patch: cutting", 0.9);
@@ -727,10 +739,53 @@ Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& co
   bool reversed = false;
   const std::vector<char> region = patch_region(cut, path.nodes, &reversed);
   progress.report("patch: cutting", 0.98);
-  Patch patch = extract_patch(cut, region, reversed, corner_mesh.corners, path.nodes,
-                              input.vertex_count(), progress);
+  Patch patch =
+      extract_patch(cut, region, reversed, corners, path.nodes, input_vertex_count, progress);
   progress.report("patch: cut", 1.0);
   return patch;
+}
+
+}  // namespace
+
+Patch cut_patch(const TriangleMesh& input, const std::array<SurfacePoint, 4>& corner_points,
+                const GeodesicOptions& geodesic, const PatchCutOptions& options,
+                const Progress& progress) {
+  progress.report("patch: corners", 0.0);
+  const double snap = options.snap_fraction;
+  const CornerMesh corner_mesh =
+      corner_vertices(input, std::vector<SurfacePoint>(corner_points.begin(), corner_points.end()),
+                      snap, "corners");
+  const std::array<int, 4> corners{corner_mesh.corners[0], corner_mesh.corners[1],
+                                   corner_mesh.corners[2], corner_mesh.corners[3]};
+  const auto paths = boundary_geodesics(corner_mesh.mesh, corners, geodesic, snap, progress);
+  return cut_along(corner_mesh.mesh, corners, paths, snap, input.vertex_count(), progress);
+}
+
+MeshWithCorners insert_corners(const TriangleMesh& mesh, const std::vector<SurfacePoint>& points,
+                               const std::string& field, const PatchCutOptions& options) {
+  CornerMesh corner_mesh = corner_vertices(mesh, points, options.snap_fraction, field);
+  return {std::move(corner_mesh.mesh), std::move(corner_mesh.corners)};
+}
+
+std::vector<SurfacePoint> side_geodesic(const GeodesicSolver& solver, const TriangleMesh& mesh,
+                                        int from, int to, const Progress& progress) {
+  return solve_side(solver, mesh, from, to,
+                    std::to_string(from) + " and " + std::to_string(to) + " (vertices)", progress);
+}
+
+Patch cut_patch_along(const TriangleMesh& mesh, const std::array<int, 4>& corners,
+                      const std::array<std::vector<SurfacePoint>, 4>& sides, int input_vertex_count,
+                      const PatchCutOptions& options, const Progress& progress) {
+  const double snap = options.snap_fraction;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j)
+      if (corners[i] == corners[j])
+        throw InvalidInput("corners[" + std::to_string(j) + "]",
+                           "the same vertex as corners[" + std::to_string(i) + "]");
+  std::array<std::vector<Location>, 4> paths;
+  for (int i = 0; i < 4; ++i)
+    paths[i] = side_locations(mesh, sides[i], corners[i], corners[(i + 1) % 4], snap, i);
+  return cut_along(mesh, corners, paths, snap, input_vertex_count, progress);
 }
 
 std::array<double, 4> corner_angles(const Patch& patch) {

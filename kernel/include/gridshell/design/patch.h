@@ -69,6 +69,30 @@ Patch cut_patch(const TriangleMesh& mesh, const std::array<SurfacePoint, 4>& cor
                 const GeodesicOptions& geodesic = {}, const PatchCutOptions& options = {},
                 const Progress& progress = {});
 
+/// A mesh with given surface points made vertices (faces or edges split where a point lies
+/// inside), and the vertex of each point.
+struct MeshWithCorners {
+  TriangleMesh mesh;
+  std::vector<int> corners;
+};
+/// Inserts `points` (on `mesh`) as vertices; InvalidInput "<field>[i]" for a point on no face or
+/// two points at one spot.
+MeshWithCorners insert_corners(const TriangleMesh& mesh, const std::vector<SurfacePoint>& points,
+                               const std::string& field, const PatchCutOptions& options = {});
+
+/// The exact shortest geodesic between two vertices, as cut_patch computes a side (Infeasible
+/// when no geodesic joins them).
+std::vector<SurfacePoint> side_geodesic(const GeodesicSolver& solver, const TriangleMesh& mesh,
+                                        int from, int to, const Progress& progress = {});
+
+/// Cuts the patch of the corner vertices `corners` of `mesh` along the given sides (sides[i] from
+/// corners[i] to corners[i+1], e.g. side_geodesic's): for patches that share a side (layouts),
+/// which is computed once and given to both. `input_vertex_count`: vertices of the mesh the
+/// caller's indices refer to (Patch::input_vertex); Infeasible as cut_patch.
+Patch cut_patch_along(const TriangleMesh& mesh, const std::array<int, 4>& corners,
+                      const std::array<std::vector<SurfacePoint>, 4>& sides, int input_vertex_count,
+                      const PatchCutOptions& options = {}, const Progress& progress = {});
+
 /// Inner angle of the patch at each corner (sum of incident face angles), radians.
 std::array<double, 4> corner_angles(const Patch& patch);
 /// Length of each side (polyline length of sides[i]).

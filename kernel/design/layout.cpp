@@ -1,0 +1,243 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Patch layouts: cut each patch, check the layout whole (see gridshell/design/layout.h).
+#include "gridshell/design/layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "gridshell/foundation/errors.h"
+#include "gridshell/mesh/surface_distance.h"
+
+namespace gridshell {
+namespace {
+
+std::string corner_field(size_t patch, int k) {
+  return "layout.patches[" + std::to_string(patch) + "].corners[" + std::to_string(k) + "]";
+}
+
+/// Distance from p to segment ab.
+double point_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+/// Largest distance from a point of `from` to the polyline `to`.
+double one_sided(const std::vector<Vec3>& from, const std::vector<Vec3>& to) {
+  double worst = 0;
+  for (const Vec3& p : from) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k + 1 < to.size(); ++k)
+      best = std::min(best, point_segment(p, to[k], to[k + 1]));
+    if (to.size() == 1) best = (p - to[0]).norm();
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+/// The side of a cut patch that runs between the positions `a` and `b` (either direction), as
+/// points from a to b; empty if none does.
+std::vector<Vec3> side_between(const Patch& patch, const Vec3& a, const Vec3& b, double tolerance) {
+  for (const std::vector<int>& side : patch.sides) {
+    if (side.size() < 2) continue;
+    const Vec3& p = patch.mesh.vertices()[side.front()];
+    const Vec3& q = patch.mesh.vertices()[side.back()];
+    std::vector<Vec3> points;
+    for (int v : side) points.push_back(patch.mesh.vertices()[v]);
+    if ((p - a).norm() <= tolerance && (q - b).norm() <= tolerance) return points;
+    if ((p - b).norm() <= tolerance && (q - a).norm() <= tolerance) {
+      std::reverse(points.begin(), points.end());
+      return points;
+    }
+  }
+  return {};
+}
+
+double polyline_length(const std::vector<Vec3>& points) {
+  double length = 0;
+  for (size_t k = 0; k + 1 < points.size(); ++k) length += (points[k + 1] - points[k]).norm();
+  return length;
+}
+
+}  // namespace
+
+LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
+                        const TargetPatchOptions& options, const Progress& progress) {
+  LayoutResult out;
+  out.layout = layout;
+  const int corner_count = static_cast<int>(layout.corners.size());
+  if (layout.patches.empty()) throw InvalidInput("layout.patches", "a layout needs a patch");
+  for (int i = 0; i < corner_count; ++i) {
+    const LayoutCorner& c = layout.corners[i];
+    const std::string field = "layout.corners[" + std::to_string(i) + "]";
+    if (c.vertex >= mesh.vertex_count())
+      throw InvalidInput(field, "vertex index " + std::to_string(c.vertex) +
+                                    " is out of range (the mesh has " +
+                                    std::to_string(mesh.vertex_count()) + " vertices)");
+    if (c.vertex < 0 && !c.point.allFinite()) throw InvalidInput(field, "not a finite point");
+  }
+  // Names and corners of each patch.
+  std::set<std::string> names;
+  for (size_t j = 0; j < layout.patches.size(); ++j) {
+    PatchLayout::Quad& quad = out.layout.patches[j];
+    if (quad.name.empty()) quad.name = "P" + std::to_string(j + 1);
+    if (!names.insert(quad.name).second)
+      throw InvalidInput("layout.patches[" + std::to_string(j) + "].name",
+                         "'" + quad.name + "' names two patches");
+    for (int k = 0; k < 4; ++k) {
+      if (quad.corners[k] < 0 || quad.corners[k] >= corner_count)
+        throw InvalidInput(corner_field(j, k), "corner " + std::to_string(quad.corners[k]) +
+                                                   " is out of range (the layout has " +
+                                                   std::to_string(corner_count) + " corners)");
+      for (int m = 0; m < k; ++m)
+        if (quad.corners[m] == quad.corners[k])
+          throw InvalidInput(corner_field(j, k), "corner " + std::to_string(quad.corners[k]) +
+                                                     " is in the patch twice");
+    }
+  }
+  // Sides: each joins two corners and belongs to at most two patches.
+  std::map<std::pair<int, int>, LayoutSeam> sides;
+  for (size_t j = 0; j < out.layout.patches.size(); ++j)
+    for (int k = 0; k < 4; ++k) {
+      const int a = out.layout.patches[j].corners[k],
+                b = out.layout.patches[j].corners[(k + 1) % 4];
+      LayoutSeam& seam = sides[{std::min(a, b), std::max(a, b)}];
+      seam.corners = {std::min(a, b), std::max(a, b)};
+      seam.uses.emplace_back(static_cast<int>(j), k);
+      if (seam.uses.size() > 2)
+        throw InvalidInput("layout.patches[" + std::to_string(j) + "]",
+                           "the side between corners " + std::to_string(seam.corners[0]) + " and " +
+                               std::to_string(seam.corners[1]) +
+                               " is a side of three patches; a seam joins two");
+    }
+
+  // Every corner a vertex of one mesh, every side one exact shortest geodesic on it, computed
+  // once: two patches that share a side are cut along the same points.
+  progress.report("layout: corners", 0);
+  std::vector<SurfacePoint> points(corner_count);
+  {
+    std::optional<SurfaceDistance> closest;
+    for (int i = 0; i < corner_count; ++i) {
+      const LayoutCorner& c = layout.corners[i];
+      if (c.vertex >= 0) {
+        points[i] = SurfacePoint::at_vertex(mesh, c.vertex);
+        continue;
+      }
+      if (c.point.cwiseAbs().maxCoeff() > kMaxCoordinate)
+        throw InvalidInput("layout.corners[" + std::to_string(i) + "]",
+                           "a coordinate is not within +-1e15");
+      if (!closest) closest.emplace(mesh);
+      points[i] = closest->closest(c.point);
+    }
+  }
+  const MeshWithCorners cornered = insert_corners(mesh, points, "layout.corners", options.cut);
+  const GeodesicSolver solver(cornered.mesh, options.geodesic);
+  std::map<std::pair<int, int>, std::vector<SurfacePoint>> side_paths;  // from .first to .second
+  std::map<std::pair<int, int>, Error> side_errors;
+  size_t solved = 0;
+  for (auto& [key, seam] : sides) {
+    progress.report("layout: sides", static_cast<double>(solved++) / sides.size());
+    try {
+      side_paths[key] = side_geodesic(solver, cornered.mesh, cornered.corners[key.first],
+                                      cornered.corners[key.second], progress.checker());
+    } catch (const Cancelled&) {
+      throw;
+    } catch (const Error& e) {
+      side_errors.emplace(key, Error(e.code(), "corners",
+                                     "corners " + std::to_string(key.first) + " and " +
+                                         std::to_string(key.second) + ": " + e.message()));
+    }
+  }
+
+  // Each patch cut along its sides and checked as a single patch is, without smoothing.
+  TargetPatchOptions patch_options = options;
+  patch_options.smooth = false;
+  out.input_area = surface_area(mesh);
+  for (size_t j = 0; j < out.layout.patches.size(); ++j) {
+    const PatchLayout::Quad& quad = out.layout.patches[j];
+    const std::string field = "layout.patches[" + std::to_string(j) + "]";
+    progress.report("layout: " + quad.name, static_cast<double>(j) / out.layout.patches.size());
+    LayoutPatch result;
+    result.name = quad.name;
+    try {
+      std::array<int, 4> corners{};
+      std::array<std::vector<SurfacePoint>, 4> patch_sides;
+      std::array<SurfacePoint, 4> input_corners;
+      for (int k = 0; k < 4; ++k) {
+        const int a = quad.corners[k], b = quad.corners[(k + 1) % 4];
+        const std::pair<int, int> key{std::min(a, b), std::max(a, b)};
+        if (side_errors.count(key)) throw side_errors.at(key);
+        patch_sides[k] = side_paths.at(key);
+        if (a != key.first) std::reverse(patch_sides[k].begin(), patch_sides[k].end());
+        corners[k] = cornered.corners[a];
+        input_corners[k] = points[a];
+      }
+      Patch cut = cut_patch_along(cornered.mesh, corners, patch_sides, mesh.vertex_count(),
+                                  options.cut, progress.checker());
+      result.target =
+          target_patch_from_cut(std::move(cut), input_corners, patch_options, progress.checker());
+      const CoverabilityReport& c = result.target->coverability;
+      if (c.gap.eta > patch_options.coverability.eta_max) {
+        std::ostringstream msg;
+        msg << "gap factor eta " << c.gap.eta << " is above eta_max "
+            << patch_options.coverability.eta_max
+            << " (smoothing next to seams is not done yet: docs/multi-patch.md)";
+        result.problem = Infeasible(field, msg.str());
+      }
+    } catch (const Cancelled&) {
+      throw;
+    } catch (const Error& e) {
+      result.problem = Error(e.code(), join_field(field, e.field()), e.message(), e.reason());
+    }
+    if (result.target && !result.problem) out.covered_area += result.target->area;
+    out.patches.push_back(std::move(result));
+  }
+
+  // Seams: two patches on opposite sides, cut along the same curve.
+  const double scale = std::max(1.0, bounding_box_size(mesh).norm());
+  for (auto& [key, seam] : sides) {
+    if (seam.shared()) {
+      const auto [j1, k1] = seam.uses[0];
+      const auto [j2, k2] = seam.uses[1];
+      // The side runs corners[k] -> corners[k+1] in each patch's own order: neighbours on either
+      // side of it run it in opposite directions.
+      const bool forward1 = out.layout.patches[j1].corners[k1] == seam.corners[0];
+      const bool forward2 = out.layout.patches[j2].corners[k2] == seam.corners[0];
+      if (forward1 == forward2)
+        throw Infeasible("layout.patches[" + std::to_string(j2) + "]",
+                         "patches " + out.layout.patches[j1].name + " and " +
+                             out.layout.patches[j2].name + " run the side between corners " +
+                             std::to_string(seam.corners[0]) + " and " +
+                             std::to_string(seam.corners[1]) +
+                             " in the same direction: give both patches' corners in the same "
+                             "turning sense, so that they lie on either side of it");
+    }
+    // Each cut patch's side along the seam, from its first corner to its second.
+    std::vector<std::vector<Vec3>> polylines;
+    for (const auto& [j, k] : seam.uses) {
+      if (!out.patches[j].target) continue;
+      const TargetPatch& target = *out.patches[j].target;
+      const std::array<int, 4>& quad = out.layout.patches[j].corners;
+      const Vec3 a = cornered.mesh.vertices()[cornered.corners[quad[k]]];
+      const Vec3 b = cornered.mesh.vertices()[cornered.corners[quad[(k + 1) % 4]]];
+      std::vector<Vec3> side = side_between(target.patch, a, b, 1e-9 * scale);
+      if (out.layout.patches[j].corners[k] != seam.corners[0])
+        std::reverse(side.begin(), side.end());
+      polylines.push_back(std::move(side));
+    }
+    if (!polylines.empty() && !polylines[0].empty()) seam.length = polyline_length(polylines[0]);
+    if (polylines.size() == 2 && !polylines[0].empty() && !polylines[1].empty())
+      seam.mismatch =
+          std::max(one_sided(polylines[0], polylines[1]), one_sided(polylines[1], polylines[0]));
+    out.seams.push_back(seam);
+  }
+  progress.report("layout", 1.0);
+  return out;
+}
+
+}  // namespace gridshell

@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// gridshell — patch layouts (issue 35, docs/multi-patch.md): a surface covered by several
+// four-sided patches that share corners. A side that two patches share is a seam; both patches
+// are cut along the same exact shortest geodesic there, which the result checks (seam mismatch).
+//
+// This is the first step of multi-patch gridshells: a layout given by the user is cut, each patch
+// is checked as a single patch is (corners, convexity, coverability), and the coverage of the
+// input is reported, with the reason of every patch that fails. Smoothing is not run on a layout
+// yet (it would move a seam once per patch): eta is reported against eta_max.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gridshell/design/target_patch.h"
+
+namespace gridshell {
+
+/// A corner of a layout: a vertex of the input mesh, or a point snapped to the surface.
+struct LayoutCorner {
+  int vertex = -1;  ///< >= 0: this vertex; else `point`
+  Vec3 point = Vec3::Zero();
+};
+
+struct PatchLayout {
+  std::vector<LayoutCorner> corners;
+  struct Quad {
+    std::string name;              ///< "" = "P<k>" (1-based)
+    std::array<int, 4> corners{};  ///< indices into `corners`, in order around the patch
+  };
+  std::vector<Quad> patches;
+};
+
+/// One side of one or two patches: the corners it joins and which patch sides run along it.
+struct LayoutSeam {
+  std::array<int, 2> corners{};  ///< layout corner indices, the smaller first
+  /// (patch, side) of each patch that has this side; side k joins the patch's corners k, k+1.
+  std::vector<std::pair<int, int>> uses;
+  double length = 0;  ///< of the first cut patch's side along it
+  /// Largest distance between the two patches' boundary polylines along a shared seam (both cut
+  /// patches), 0 for an outer edge or when a patch could not be cut.
+  double mismatch = 0;
+  bool shared() const { return uses.size() == 2; }
+};
+
+/// A layout patch as cut and checked, or why it could not be.
+struct LayoutPatch {
+  std::string name;
+  std::optional<TargetPatch> target;  ///< the cut patch (no smoothing), when it could be cut
+  /// Its first problem: an error from the patch stage (the field within the patch: "corners[1]")
+  /// or eta above eta_max. Empty when the patch meets the checks.
+  std::optional<Error> problem;
+};
+
+struct LayoutResult {
+  PatchLayout layout;                ///< with names filled in
+  std::vector<LayoutPatch> patches;  ///< in layout order
+  std::vector<LayoutSeam> seams;     ///< every side, shared or not, ordered by corners
+  double input_area = 0;
+  double covered_area = 0;  ///< sum of the areas of the patches that meet the checks
+  double coverage() const { return input_area > 0 ? covered_area / input_area : 0; }
+};
+
+/// Cuts every patch of `layout` from `mesh` (as make_target_patch with options.smooth off) and
+/// checks the layout as a whole. Throws InvalidInput for a malformed layout (field
+/// "layout.corners[i]", "layout.patches[j].corners[k]", ...: indices out of range, a patch with
+/// a corner twice, a name taken twice, a side used by three patches) and Infeasible
+/// ("layout.patches[j]") when two patches lie on the same side of a seam (they overlap). A patch
+/// that cannot be cut or misses a criterion is reported in its LayoutPatch, not thrown.
+LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
+                        const TargetPatchOptions& options = {}, const Progress& progress = {});
+
+}  // namespace gridshell
