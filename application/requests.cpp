@@ -129,7 +129,8 @@ std::string corner_label(const v1::Corners& corners) {
   return label;
 }
 
-/// The mesh vertex that sent vertex `v` became; InvalidInput naming `at` if there is none.
+}  // namespace
+
 int loaded_vertex(const LoadReport& load, int v, const std::string& field) {
   const auto& map = load.vertex_of_file_vertex;
   if (v < 0 || v >= static_cast<int>(map.size()))
@@ -141,6 +142,8 @@ int loaded_vertex(const LoadReport& load, int v, const std::string& field) {
                                   " was removed as an isolated vertex (no face uses it)");
   return map[v];
 }
+
+namespace {
 
 /// Index of the sent vertex that became mesh vertex `v` (the first one, for welded duplicates).
 int sent_vertex(const LoadReport& load, int v) {

@@ -38,6 +38,7 @@ Command add_run_command(CLI::App& app);
 Command add_fabricate_command(CLI::App& app);
 Command add_compare_command(CLI::App& app);
 Command add_options_command(CLI::App& app);
+Command add_layout_command(CLI::App& app);
 
 /// Flags of every command that computes and writes a folder: --out, --threads (in-process only;
 /// left out where a command has no parallel work), --quiet and the remote options.

@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   add(cli::add_fabricate_command);
   add(cli::add_compare_command);
   add(cli::add_options_command);
+  add(cli::add_layout_command);
 
   try {
     app.parse(argc, argv);

@@ -54,6 +54,10 @@ v1::LoadResult run_load(const v1::LoadRequest& request, const Progress& progress
 v1::ExamplesResult run_examples(const v1::ExamplesRequest& request, const Progress& progress = {},
                                 const RunSettings& settings = {});
 
+/// The mesh vertex that sent vertex `v` (an index into the request's mesh as sent) became;
+/// InvalidInput naming `field` if it is out of range or was removed.
+int loaded_vertex(const LoadReport& load, int v, const std::string& field);
+
 /// Mesh -> packed arrays.
 v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name);
 

@@ -1,0 +1,141 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Layout requests -> kernel -> results (see gridshell/application/layout.h).
+#include <cmath>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include "gridshell/application/convert.h"
+#include "gridshell/application/layout.h"
+#include "gridshell/design/layout.h"
+#include "gridshell/foundation/errors.h"
+#include "gridshell/mesh/mesh_io.h"
+
+namespace gridshell {
+namespace {
+
+PatchLayout to_kernel(const v1::Layout& in, const LoadReport& load) {
+  PatchLayout out;
+  for (int i = 0; i < in.corners_size(); ++i) {
+    const v1::Layout::Corner& c = in.corners(i);
+    const std::string field = "layout.corners[" + std::to_string(i) + "]";
+    LayoutCorner corner;
+    if (c.has_vertex() == (c.point_size() > 0))
+      throw InvalidInput(field, "give either vertex or point (3 numbers)");
+    if (c.has_vertex()) {
+      corner.vertex = loaded_vertex(load, c.vertex(), field + ".vertex");
+    } else {
+      if (c.point_size() != 3)
+        throw InvalidInput(field + ".point",
+                           "expected 3 numbers x, y, z, got " + std::to_string(c.point_size()));
+      for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(c.point(k)) || std::abs(c.point(k)) > kMaxCoordinate)
+          throw InvalidInput(field + ".point[" + std::to_string(k) + "]",
+                             "not a finite number within +-1e15");
+        corner.point[k] = c.point(k);
+      }
+    }
+    out.corners.push_back(corner);
+  }
+  for (int j = 0; j < in.patches_size(); ++j) {
+    const v1::Layout::Patch& p = in.patches(j);
+    if (p.corners_size() != 4)
+      throw InvalidInput("layout.patches[" + std::to_string(j) + "].corners",
+                         "expected 4 corner indices, got " + std::to_string(p.corners_size()));
+    PatchLayout::Quad quad;
+    quad.name = p.name();
+    for (int k = 0; k < 4; ++k) quad.corners[k] = p.corners(k);
+    out.patches.push_back(quad);
+  }
+  return out;
+}
+
+}  // namespace
+
+v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& progress,
+                            const RunSettings& settings) {
+  // The mesh and the patch options as a patch request checks them.
+  v1::PatchRequest patch_request;
+  *patch_request.mutable_mesh() = request.mesh();
+  *patch_request.mutable_options() = request.options();
+  PatchInputs in = prepare_patch(patch_request);
+  in.options.coverability.threads = settings.threads;
+  const PatchLayout layout = to_kernel(request.layout(), in.load);
+  const LayoutResult cut = cut_layout(in.mesh, layout, in.options, progress);
+
+  v1::LayoutResult out;
+  v1::LayoutReport& report = *out.mutable_report();
+  report.set_input(request.mesh().name().empty() ? request.mesh().example()
+                                                 : request.mesh().name());
+  *report.mutable_layout() = request.layout();
+  for (size_t j = 0; j < cut.layout.patches.size(); ++j)
+    report.mutable_layout()
+        ->mutable_patches(static_cast<int>(j))
+        ->set_name(cut.layout.patches[j].name);
+  report.set_input_area(cut.input_area);
+  report.set_covered_area(cut.covered_area);
+  report.set_coverage(cut.coverage());
+  for (const LayoutPatch& p : cut.patches) {
+    v1::LayoutReport::PatchSummary& s = *report.add_patches();
+    s.set_name(p.name);
+    s.set_ok(p.target.has_value() && !p.problem);
+    if (p.problem) {
+      s.set_problem_code(to_string(p.problem->code()));
+      s.set_problem_field(p.problem->field());
+      s.set_problem(p.problem->message());
+    }
+    v1::Mesh* mesh = out.add_patches();
+    mesh->set_name(p.name);
+    if (!p.target) continue;
+    const TargetPatch& t = *p.target;
+    s.set_vertices(t.patch.mesh.vertex_count());
+    s.set_area(t.area);
+    for (double a : t.corner_angles) s.add_corner_angles(a);
+    for (double l : t.boundary_lengths) s.add_side_lengths(l);
+    s.set_eta(t.coverability.gap.eta);
+    *mesh = to_proto(t.patch.mesh, p.name);
+  }
+  for (const LayoutSeam& seam : cut.seams) {
+    v1::LayoutReport::Seam& s = *report.add_seams();
+    s.add_corners(seam.corners[0]);
+    s.add_corners(seam.corners[1]);
+    for (const auto& [j, k] : seam.uses) s.add_patches(cut.layout.patches[j].name);
+    s.set_length(seam.length);
+    s.set_mismatch(seam.mismatch);
+  }
+  return out;
+}
+
+FileBundle layout_files(const v1::LayoutResult& result) {
+  // One OBJ object per cut patch, vertices numbered on through the file.
+  std::ostringstream obj;
+  obj << "# gridshell layout: " << result.report().input() << ", " << result.report().patches_size()
+      << " patches\n";
+  int offset = 0;
+  for (const v1::Mesh& mesh : result.patches()) {
+    if (mesh.indices().empty()) continue;
+    obj << "o " << mesh.name() << "\n";
+    std::vector<Vec3> vertices;
+    for (int k = 0; k + 2 < mesh.positions_size(); k += 3)
+      vertices.emplace_back(mesh.positions(k), mesh.positions(k + 1), mesh.positions(k + 2));
+    std::vector<Face> faces;
+    for (int k = 0; k + 2 < mesh.indices_size(); k += 3)
+      faces.push_back({mesh.indices(k), mesh.indices(k + 1), mesh.indices(k + 2)});
+    const std::string text = obj_text(vertices, faces);
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.rfind("v ", 0) == 0) {
+        obj << line << "\n";
+      } else if (line.rfind("f ", 0) == 0) {
+        std::istringstream f(line.substr(2));
+        obj << "f";
+        for (int v; f >> v;) obj << " " << v + offset;
+        obj << "\n";
+      }
+    }
+    offset += static_cast<int>(vertices.size());
+  }
+  return {{"layout.json", to_json(result.report()) + "\n"}, {"layout.obj", obj.str()}};
+}
+
+}  // namespace gridshell

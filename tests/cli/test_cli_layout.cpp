@@ -1,0 +1,113 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// `gridshell layout`: a layout file cut into patches that share seams; the files it writes are
+// read back (layout.json's coverage and seams, layout.obj's objects), and bad layouts are
+// refused naming the field, a failing patch with exit 3 after the files are written.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "support.h"
+
+namespace gridshell {
+namespace {
+
+using json = nlohmann::json;
+using testing::run_cli;
+
+/// The sphere example's 33 x 33 grid in a 2 x 2 layout (corners by file-order vertex index).
+json sphere_layout() {
+  json corners = json::array();
+  for (int j : {0, 16, 32})
+    for (int i : {0, 16, 32}) corners.push_back({{"vertex", j * 33 + i}});
+  return {{"corners", corners},
+          {"patches",
+           {{{"corners", {0, 1, 4, 3}}},
+            {{"corners", {1, 2, 5, 4}}},
+            {{"name", "north-west"}, {"corners", {3, 4, 7, 6}}},
+            {{"corners", {4, 5, 8, 7}}}}}};
+}
+
+TEST(CliLayout, ATwoByTwoLayoutCoversTheSphereAndItsFilesReadBack) {
+  const std::string dir = testing::temp_dir();
+  const std::string file = testing::write_text(dir, "layout.json", sphere_layout().dump());
+  const auto r =
+      run_cli("layout example:sphere --layout '" + file + "' --quiet --out '" + dir + "/out'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(testing::read_text(dir + "/out/layout.json"));
+  EXPECT_NEAR(report["coverage"].get<double>(), 1.0, 1e-9);
+  ASSERT_EQ(report["patches"].size(), 4u);
+  double areas = 0;
+  int vertices = 0;
+  for (const json& p : report["patches"]) {
+    EXPECT_TRUE(p["ok"].get<bool>()) << p.dump();
+    areas += p["area"].get<double>();
+    vertices += p["vertices"].get<int>();
+  }
+  EXPECT_NEAR(areas, report["input_area"].get<double>(), 1e-9 * areas);
+  EXPECT_EQ(report["layout"]["patches"][0]["name"], "P1");
+  EXPECT_EQ(report["layout"]["patches"][2]["name"], "north-west");
+  EXPECT_EQ(report["layout"]["corners"][4]["vertex"], 16 * 33 + 16);  // file order, as given
+  int shared = 0;
+  for (const json& s : report["seams"])
+    if (s["patches"].size() == 2) {
+      ++shared;
+      EXPECT_LE(s["mismatch"].get<double>(), 1e-9 * 100);
+    }
+  EXPECT_EQ(shared, 4);
+  // layout.obj: one object per patch, faces within the vertices before them.
+  std::istringstream obj(testing::read_text(dir + "/out/layout.obj"));
+  int objects = 0, v = 0;
+  for (std::string line; std::getline(obj, line);) {
+    if (line.rfind("o ", 0) == 0) ++objects;
+    if (line.rfind("v ", 0) == 0) ++v;
+    if (line.rfind("f ", 0) == 0) {
+      std::istringstream f(line.substr(2));
+      for (int k; f >> k;) EXPECT_TRUE(k >= 1 && k <= v) << line;
+    }
+  }
+  EXPECT_EQ(objects, 4);
+  EXPECT_EQ(v, vertices);
+}
+
+TEST(CliLayout, BadLayoutsAreRefusedNamingTheFieldAndAFailingPatchIsExitThree) {
+  const std::string dir = testing::temp_dir();
+  const auto run = [&](const json& layout) {
+    const std::string file = testing::write_text(dir, "l.json", layout.dump());
+    return run_cli("layout example:sphere --layout '" + file + "' --quiet --out '" + dir + "/out'");
+  };
+  json bad = sphere_layout();
+  bad["patches"][0]["corners"][2] = 12;
+  auto r = run(bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("layout.patches[0].corners[2]: corner 12 is out of range"),
+            std::string::npos)
+      << r.err;
+  bad = sphere_layout();
+  bad["corners"][8]["vertex"] = 5000;
+  r = run(bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("layout.corners[8]"), std::string::npos) << r.err;
+  bad = sphere_layout();
+  bad["patches"][1]["corners"] = {4, 5, 2, 1};  // on P1's side of their seam
+  r = run(bad);
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("layout.patches[1]: patches P1 and P2"), std::string::npos) << r.err;
+  r = run_cli("layout example:sphere --layout /nonexistent.json --quiet --out '" + dir + "/o'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--layout"), std::string::npos) << r.err;
+  // A patch whose corners make a bow-tie: reported, the others covered, exit 3 after writing.
+  bad = sphere_layout();
+  bad["patches"][3]["corners"] = {4, 8, 5, 7};
+  r = run(bad);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("layout.patches[3]"), std::string::npos) << r.err;
+  const json report = json::parse(testing::read_text(dir + "/out/layout.json"));
+  EXPECT_FALSE(report["patches"][3]["ok"].get<bool>());
+  EXPECT_EQ(report["patches"][3]["problem_code"], "infeasible");
+  EXPECT_NEAR(report["coverage"].get<double>(), 0.75, 0.01);
+}
+
+}  // namespace
+}  // namespace gridshell
