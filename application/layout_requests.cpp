@@ -95,6 +95,9 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
     s.set_eta(t.coverability.gap.eta);
     *mesh = to_proto(t.patch.mesh, p.name);
   }
+  v1::File& svg = *out.add_views();
+  svg.set_name("layout.svg");
+  svg.set_content(layout_svg(in.mesh, cut));
   for (const LayoutSeam& seam : cut.seams) {
     v1::LayoutReport::Seam& s = *report.add_seams();
     s.add_corners(seam.corners[0]);
@@ -135,7 +138,9 @@ FileBundle layout_files(const v1::LayoutResult& result) {
     }
     offset += static_cast<int>(vertices.size());
   }
-  return {{"layout.json", to_json(result.report()) + "\n"}, {"layout.obj", obj.str()}};
+  FileBundle files{{"layout.json", to_json(result.report()) + "\n"}, {"layout.obj", obj.str()}};
+  for (const v1::File& view : result.views()) files[view.name()] = view.content();
+  return files;
 }
 
 }  // namespace gridshell

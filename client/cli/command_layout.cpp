@@ -87,8 +87,8 @@ int run_layout_command(const LayoutArguments& args) {
   std::printf("  seams           %d shared (largest mismatch %.1e), %d outer edges\n", seams,
               mismatch, r.seams_size() - seams);
   const std::filesystem::path out(args.out);
-  std::printf("  wrote           %s, %s\n", (out / "layout.json").c_str(),
-              (out / "layout.obj").c_str());
+  std::printf("  wrote           %s, %s, %s\n", (out / "layout.json").c_str(),
+              (out / "layout.obj").c_str(), (out / "layout.svg").c_str());
   if (failed)
     throw Infeasible(failed->problem_field(), failed->problem() + " (patch " + failed->name() +
                                                   "; every patch's checks: layout.json)");

@@ -2,8 +2,10 @@
 // Patch layouts: cut each patch, check the layout whole (see gridshell/design/layout.h).
 #include "gridshell/design/layout.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <set>
@@ -136,6 +138,7 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
     }
   }
   const MeshWithCorners cornered = insert_corners(mesh, points, "layout.corners", options.cut);
+  for (int v : cornered.corners) out.corners.push_back(cornered.mesh.vertices()[v]);
   const GeodesicSolver solver(cornered.mesh, options.geodesic);
   std::map<std::pair<int, int>, std::vector<SurfacePoint>> side_paths;  // from .first to .second
   std::map<std::pair<int, int>, Error> side_errors;
@@ -230,7 +233,10 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
         std::reverse(side.begin(), side.end());
       polylines.push_back(std::move(side));
     }
-    if (!polylines.empty() && !polylines[0].empty()) seam.length = polyline_length(polylines[0]);
+    if (!polylines.empty() && !polylines[0].empty()) {
+      seam.length = polyline_length(polylines[0]);
+      seam.points = polylines[0];
+    }
     if (polylines.size() == 2 && !polylines[0].empty() && !polylines[1].empty())
       seam.mismatch =
           std::max(one_sided(polylines[0], polylines[1]), one_sided(polylines[1], polylines[0]));
@@ -238,6 +244,110 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
   }
   progress.report("layout", 1.0);
   return out;
+}
+
+namespace {
+
+std::string svg_number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", value);
+  return buffer;
+}
+
+/// Eight colours that tell neighbours apart (Okabe-Ito), light enough for black text.
+const char* patch_colour(size_t k) {
+  static const char* colours[] = {"#e69f00", "#56b4e9", "#009e73", "#f0e442",
+                                  "#0072b2", "#d55e00", "#cc79a7", "#999999"};
+  return colours[k % 8];
+}
+
+}  // namespace
+
+std::string layout_svg(const TriangleMesh& mesh, const LayoutResult& layout) {
+  // The plan: the input's centroid and its two largest principal directions.
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : mesh.vertices()) centre += p;
+  centre /= std::max<size_t>(1, mesh.vertices().size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : mesh.vertices()) covariance += (p - centre) * (p - centre).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  // Signs fixed so that a direction's largest coordinate is positive (the plan of a surface over
+  // the xy plane keeps x to the right and y up).
+  const auto signed_axis = [](Vec3 axis) {
+    Eigen::Index largest = 0;
+    axis.cwiseAbs().maxCoeff(&largest);
+    return axis[largest] < 0 ? Vec3(-axis) : axis;
+  };
+  const Vec3 ex = signed_axis(eigen.eigenvectors().col(2)),
+             ey = signed_axis(eigen.eigenvectors().col(1));
+  const auto plan = [&](const Vec3& p) { return Vec2((p - centre).dot(ex), (p - centre).dot(ey)); };
+  Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& p : mesh.vertices()) lo = lo.cwiseMin(plan(p)), hi = hi.cwiseMax(plan(p));
+  if (mesh.vertices().empty()) lo = hi = Vec2::Zero();
+  const double margin = 0.05 * std::max(1e-9, (hi - lo).maxCoeff());
+  lo.array() -= margin;
+  hi.array() += margin;
+  const Vec2 size = hi - lo;
+  const double stroke = 0.003 * size.maxCoeff();
+  const auto point = [&](const Vec3& p) {
+    const Vec2 q = plan(p);
+    return svg_number(q.x() - lo.x()) + "," + svg_number(hi.y() - q.y());
+  };
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << svg_number(size.x()) << " "
+      << svg_number(size.y()) << "\">\n<title>gridshell layout: " << layout.patches.size()
+      << " patches, coverage " << svg_number(100 * layout.coverage())
+      << " %; plan on the input's two largest principal directions</title>\n"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  // The input's boundary loops, dashed.
+  for (const std::vector<int>& loop : mesh.topology().boundary_loops) {
+    svg << "<polygon fill=\"none\" stroke=\"#555\" stroke-dasharray=\"" << svg_number(4 * stroke)
+        << "\" stroke-width=\"" << svg_number(stroke) << "\" points=\"";
+    for (int v : loop) svg << point(mesh.vertices()[v]) << " ";
+    svg << "\"/>\n";
+  }
+  // Each cut patch: its boundary (the four sides in order), filled; its name at its centre.
+  for (size_t j = 0; j < layout.patches.size(); ++j) {
+    const LayoutPatch& p = layout.patches[j];
+    if (!p.target) continue;
+    const Patch& patch = p.target->patch;
+    svg << "<polygon fill=\"" << patch_colour(j) << "\" fill-opacity=\""
+        << (p.problem ? "0.2" : "0.55") << "\" stroke=\"black\" stroke-width=\""
+        << svg_number(stroke) << "\" points=\"";
+    Vec3 sum = Vec3::Zero();
+    int count = 0;
+    for (const std::vector<int>& side : patch.sides)
+      for (size_t k = 0; k + 1 < side.size(); ++k) {
+        svg << point(patch.mesh.vertices()[side[k]]) << " ";
+        sum += patch.mesh.vertices()[side[k]];
+        ++count;
+      }
+    svg << "\"/>\n";
+    const Vec3 middle = sum / std::max(1, count);
+    const std::string at = point(middle);
+    svg << "<text x=\"" << at.substr(0, at.find(',')) << "\" y=\"" << at.substr(at.find(',') + 1)
+        << "\" font-size=\"" << svg_number(0.035 * size.maxCoeff())
+        << "\" text-anchor=\"middle\" font-family=\"sans-serif\">" << p.name
+        << (p.problem ? " (fails)" : "") << "</text>\n";
+  }
+  // Shared seams thick; corners as dots with their layout index.
+  for (const LayoutSeam& seam : layout.seams) {
+    if (!seam.shared() || seam.points.size() < 2) continue;
+    svg << "<polyline fill=\"none\" stroke=\"black\" stroke-width=\"" << svg_number(3 * stroke)
+        << "\" points=\"";
+    for (const Vec3& p : seam.points) svg << point(p) << " ";
+    svg << "\"/>\n";
+  }
+  for (size_t i = 0; i < layout.corners.size(); ++i) {
+    const std::string at = point(layout.corners[i]);
+    const std::string x = at.substr(0, at.find(',')), y = at.substr(at.find(',') + 1);
+    svg << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"" << svg_number(2.5 * stroke)
+        << "\" fill=\"black\"/><text x=\"" << x << "\" y=\"" << y << "\" dx=\""
+        << svg_number(3 * stroke) << "\" font-size=\"" << svg_number(0.025 * size.maxCoeff())
+        << "\" font-family=\"sans-serif\">" << i << "</text>\n";
+  }
+  svg << "</svg>\n";
+  return svg.str();
 }
 
 }  // namespace gridshell

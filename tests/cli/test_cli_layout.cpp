@@ -69,6 +69,19 @@ TEST(CliLayout, ATwoByTwoLayoutCoversTheSphereAndItsFilesReadBack) {
   }
   EXPECT_EQ(objects, 4);
   EXPECT_EQ(v, vertices);
+  // layout.svg: the input's boundary dashed, the 4 patches filled, 4 seams, 9 corners.
+  const std::string svg = testing::read_text(dir + "/out/layout.svg");
+  const auto count = [&](const std::string& what) {
+    int n = 0;
+    for (size_t at = svg.find(what); at != std::string::npos; at = svg.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("<polygon fill=\"none\""), 1);
+  EXPECT_EQ(count("<polygon fill=\"#"), 4);
+  EXPECT_EQ(count("<polyline"), 4);
+  EXPECT_EQ(count("<circle"), 9);
+  EXPECT_NE(svg.find(">north-west</text>"), std::string::npos);
+  EXPECT_NE(svg.rfind("</svg>"), std::string::npos);
 }
 
 TEST(CliLayout, BadLayoutsAreRefusedNamingTheFieldAndAFailingPatchIsExitThree) {

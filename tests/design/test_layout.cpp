@@ -129,6 +129,60 @@ TEST(Layout, CornersGivenAsPointsInsideFacesAreInsertedOnceForAllPatches) {
   }
 }
 
+/// A flat annulus, radii 5 and 10, as a closed ring of quads (nu around, nv across).
+TriangleMesh annulus(int nu, int nv) {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double r = 5 + 5.0 * j / nv, phi = 2 * kPi * i / nu;
+      vertices.emplace_back(r * std::cos(phi), r * std::sin(phi), 0);
+    }
+  const auto at = [&](int i, int j) { return j * nu + (i % nu); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return TriangleMesh(std::move(vertices), std::move(faces));
+}
+
+// An annulus in four patches between radial seams: the outer sides are chords (a flat surface's
+// geodesics), the inner ones follow the hole's edge. The covered area is the ring's minus four
+// circular segments of the outer circle, R^2/2 (pi/2 - 1) each (as the polygons, closely).
+TEST(Layout, AnAnnulusInFourPatchesCoversTheRingButTheOuterSegments) {
+  const int nu = 96, nv = 8;
+  const TriangleMesh mesh = annulus(nu, nv);
+  PatchLayout layout;
+  for (int q = 0; q < 4; ++q) layout.corners.push_back({nv * nu + q * nu / 4, Vec3::Zero()});
+  for (int q = 0; q < 4; ++q) layout.corners.push_back({q * nu / 4, Vec3::Zero()});
+  // Outer corners 0..3, inner 4..7, counter-clockwise seen from +z: outer q -> outer q+1 ->
+  // inner q+1 -> inner q.
+  for (int q = 0; q < 4; ++q)
+    layout.patches.push_back({"", {q, (q + 1) % 4, 4 + (q + 1) % 4, 4 + q}});
+  const LayoutResult r = cut_layout(mesh, layout);
+  double covered = 0;
+  for (const LayoutPatch& p : r.patches) {
+    ASSERT_TRUE(p.target.has_value()) << p.name;
+    EXPECT_FALSE(p.problem.has_value()) << p.problem->what();
+    covered += p.target->area;
+  }
+  // The ring and the outer segments as the mesh's polygons: n-gon areas.
+  const double ring = nu / 2.0 * std::sin(2 * kPi / nu) * (100 - 25);
+  const double segments = 4 * (nu / 4 / 2.0 * std::sin(2 * kPi / nu) * 100 - 100 / 2.0);
+  EXPECT_NEAR(r.input_area, ring, 1e-9 * ring);
+  EXPECT_NEAR(covered, ring - segments, 1e-6 * ring);
+  EXPECT_NEAR(r.coverage(), (ring - segments) / ring, 1e-6);
+  int shared = 0;
+  for (const LayoutSeam& seam : r.seams)
+    if (seam.shared()) {
+      ++shared;
+      EXPECT_NEAR(seam.length, 5, 1e-9);  // radial: from r = 5 to 10
+      EXPECT_LE(seam.mismatch, 1e-9 * 20);
+    }
+  EXPECT_EQ(shared, 4);
+}
+
 TEST(Layout, MalformedAndOverlappingLayoutsAreRefusedNamingThePatch) {
   const int nu = 30, nv = 6;
   const TriangleMesh mesh = barrel(nu, nv);

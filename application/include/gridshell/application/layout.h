@@ -16,7 +16,8 @@ namespace gridshell {
 v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& progress = {},
                             const RunSettings& settings = {});
 
-/// layout.json (the report) and layout.obj (the cut patches, one object each, named).
+/// layout.json (the report), layout.obj (the cut patches, one object each, named) and
+/// layout.svg (the plan).
 FileBundle layout_files(const v1::LayoutResult& result);
 
 }  // namespace gridshell

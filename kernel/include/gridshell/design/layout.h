@@ -42,6 +42,7 @@ struct LayoutSeam {
   /// Largest distance between the two patches' boundary polylines along a shared seam (both cut
   /// patches), 0 for an outer edge or when a patch could not be cut.
   double mismatch = 0;
+  std::vector<Vec3> points;  ///< the side as cut (the first cut patch's), first corner first
   bool shared() const { return uses.size() == 2; }
 };
 
@@ -58,6 +59,7 @@ struct LayoutResult {
   PatchLayout layout;                ///< with names filled in
   std::vector<LayoutPatch> patches;  ///< in layout order
   std::vector<LayoutSeam> seams;     ///< every side, shared or not, ordered by corners
+  std::vector<Vec3> corners;         ///< where each layout corner is on the surface
   double input_area = 0;
   double covered_area = 0;  ///< sum of the areas of the patches that meet the checks
   double coverage() const { return input_area > 0 ? covered_area / input_area : 0; }
@@ -71,5 +73,11 @@ struct LayoutResult {
 /// that cannot be cut or misses a criterion is reported in its LayoutPatch, not thrown.
 LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
                         const TargetPatchOptions& options = {}, const Progress& progress = {});
+
+/// layout.svg: a plan of the layout on the plane of the input's two largest principal
+/// directions. Each cut patch is filled in its colour with its name, shared seams are drawn
+/// thick, corners are dots with their layout index, and the input's boundary loops are dashed
+/// (what no patch covers shows as white inside them). One unit = one mesh unit.
+std::string layout_svg(const TriangleMesh& mesh, const LayoutResult& layout);
 
 }  // namespace gridshell
