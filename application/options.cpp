@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -46,8 +47,6 @@ std::vector<std::string> material_choices() {
   return names;
 }
 
-constexpr double kPi = 3.141592653589793;
-
 std::vector<OptionSpec> build_table() {
   using T = OptionType;
   const CoverabilityOptions coverability;
@@ -56,31 +55,49 @@ std::vector<OptionSpec> build_table() {
   const AutoCornerOptions corners;
   const SimulationOptions simulation;
   const FabricationOptions fabrication;
-  const std::string angles_help =
-      "automatic corners: [min, max] inner corner angle of the patch (the CLI's --corner-angles "
-      "takes degrees)";
-  const std::string angles_default =
-      shortest(corners.min_corner_angle) + "," + shortest(corners.max_corner_angle);
   std::vector<OptionSpec> t;
+  // The patch-stage options a design request carries too: described once, listed in both groups.
+  const auto in_group = [](OptionSpec spec, const char* group) {
+    spec.group = group;
+    return spec;
+  };
+  const OptionSpec geodesic_method{.name = "geodesic_method",
+                                   .flag = "--method",
+                                   .type = T::Choice,
+                                   .default_value = "fast",
+                                   .choices = {"fast", "cgal"},
+                                   .label = "Geodesics",
+                                   .help = "geodesic engine (cgal: the reference)"};
+  const OptionSpec eta_max{
+      .name = "eta_max",
+      .flag = "--eta-max",
+      .type = T::Number,
+      .default_value = shortest(coverability.eta_max),
+      .minimum = 1,
+      .maximum = 10,
+      .label = "Gap factor threshold",
+      .help =
+          "gap factor threshold eta: the patch is smoothed until eta is below it "
+          "(a ratio of path lengths, 1 on a developable surface)"};
+  const OptionSpec corner_angles{.name = "auto_corner_angles",
+                                 .flag = "--corner-angles",
+                                 .type = T::Numbers,
+                                 .default_value = shortest(corners.min_corner_angle) + "," +
+                                                  shortest(corners.max_corner_angle),
+                                 .minimum = 0,
+                                 .maximum = std::numbers::pi,
+                                 .exclusive_minimum = true,
+                                 .exclusive_maximum = true,
+                                 .unit = "radians",
+                                 .label = "Corner angles",
+                                 .help =
+                                     "automatic corners: [min, max] inner corner angle of "
+                                     "the patch (the CLI's --corner-angles takes degrees)",
+                                 .count = 2,
+                                 .note = "min < max"};
   // Patch (PatchRequest.Options) ------------------------------------------------------------
-  t.push_back({.group = "patch",
-               .name = "geodesic_method",
-               .flag = "--method",
-               .type = T::Choice,
-               .default_value = "fast",
-               .choices = {"fast", "cgal"},
-               .label = "Geodesics",
-               .help = "geodesic engine (cgal: the reference)"});
-  t.push_back({.group = "patch",
-               .name = "eta_max",
-               .flag = "--eta-max",
-               .type = T::Number,
-               .default_value = shortest(coverability.eta_max),
-               .minimum = 1,
-               .maximum = 10,
-               .label = "Gap factor threshold",
-               .help = "gap factor threshold eta: the patch is smoothed until eta is below it "
-                       "(a ratio of path lengths, 1 on a developable surface)"});
+  t.push_back(in_group(geodesic_method, "patch"));
+  t.push_back(in_group(eta_max, "patch"));
   t.push_back({.group = "patch",
                .name = "max_smoothing_iterations",
                .flag = "--max-smoothing-iterations",
@@ -97,20 +114,7 @@ std::vector<OptionSpec> build_table() {
                .default_value = "false",
                .label = "No smoothing",
                .help = "report eta but do not smooth"});
-  t.push_back({.group = "patch",
-               .name = "auto_corner_angles",
-               .flag = "--corner-angles",
-               .type = T::Numbers,
-               .default_value = angles_default,
-               .minimum = 0,
-               .maximum = kPi,
-               .exclusive_minimum = true,
-               .exclusive_maximum = true,
-               .unit = "radians",
-               .label = "Corner angles",
-               .help = angles_help,
-               .count = 2,
-               .note = "min < max"});
+  t.push_back(in_group(corner_angles, "patch"));
   // Design (DesignRequest.Options) -----------------------------------------------------------
   t.push_back({.group = "design",
                .name = "alpha",
@@ -176,24 +180,8 @@ std::vector<OptionSpec> build_table() {
                .zero_means = "adaptive",
                .label = "Map resolution",
                .help = "distance map resolution R"});
-  t.push_back({.group = "design",
-               .name = "geodesic_method",
-               .flag = "--method",
-               .type = T::Choice,
-               .default_value = "fast",
-               .choices = {"fast", "cgal"},
-               .label = "Geodesics",
-               .help = "geodesic engine (cgal: the reference)"});
-  t.push_back({.group = "design",
-               .name = "eta_max",
-               .flag = "--eta-max",
-               .type = T::Number,
-               .default_value = shortest(coverability.eta_max),
-               .minimum = 1,
-               .maximum = 10,
-               .label = "Gap factor threshold",
-               .help = "gap factor threshold eta: the patch is smoothed until eta is below it "
-                       "(a ratio of path lengths, 1 on a developable surface)"});
+  t.push_back(in_group(geodesic_method, "design"));
+  t.push_back(in_group(eta_max, "design"));
   t.push_back({.group = "design",
                .name = "interior_anchors",
                .flag = "--interior-anchors",
@@ -204,20 +192,7 @@ std::vector<OptionSpec> build_table() {
                .label = "Inner anchors",
                .help = "also pin up to N inner crossings at the target's bumps and dips (0 = "
                        "boundary anchors only, as in the paper)"});
-  t.push_back({.group = "design",
-               .name = "auto_corner_angles",
-               .flag = "--corner-angles",
-               .type = T::Numbers,
-               .default_value = angles_default,
-               .minimum = 0,
-               .maximum = kPi,
-               .exclusive_minimum = true,
-               .exclusive_maximum = true,
-               .unit = "radians",
-               .label = "Corner angles",
-               .help = angles_help,
-               .count = 2,
-               .note = "min < max"});
+  t.push_back(in_group(corner_angles, "design"));
   t.push_back({.group = "design",
                .name = "suggest",
                .flag = "--suggest",
