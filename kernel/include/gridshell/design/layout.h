@@ -12,8 +12,10 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include "gridshell/design/family.h"
 #include "gridshell/design/target_patch.h"
 
 namespace gridshell {
@@ -79,5 +81,44 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
 /// thick, corners are dots with their layout index, and the input's boundary loops are dashed
 /// (what no patch covers shows as white inside them). One unit = one mesh unit.
 std::string layout_svg(const TriangleMesh& mesh, const LayoutResult& layout);
+
+// Seam joints (docs/multi-patch.md, "Members at seams") -------------------------------------------
+
+struct Design;
+
+/// A patch's boundary lamella along a seam.
+struct SeamLamella {
+  int patch = 0;              ///< index into LayoutResult::patches
+  Family family = Family::G;  ///< the boundary member's family ...
+  int member = 0;             ///< ... and index in it (0 or n+1)
+  bool forward = true;        ///< runs from the seam's first corner to its second
+  double length = 0;          ///< its surface length
+};
+
+/// One bolt through the two boundary lamellas of a seam: where a member of either patch ends on
+/// the seam (both lamellas are the same curve, so arc length s from the seam's first corner is
+/// the same point on both).
+struct SeamJoint {
+  double s = 0;               ///< arc length along the seam from its first corner
+  Vec3 point = Vec3::Zero();  ///< on the seam
+  /// The members that end here: (patch, family, member index), a corner's boundary members too.
+  std::vector<std::tuple<int, Family, int>> ends;
+};
+
+struct SeamJoints {
+  int seam = 0;                         ///< index into LayoutResult::seams
+  std::array<SeamLamella, 2> lamellas;  ///< the two patches' boundary lamellas along it
+  std::vector<SeamJoint> joints;        ///< by s, first corner first
+  /// |length of one lamella - length of the other|: both are the seam (0 up to rounding).
+  double length_difference = 0;
+};
+
+/// The joints of every shared seam whose two patches both have a design (`designs[j]` null for
+/// a patch without one). Joints closer than 1e-6 of the seam's length are one bolt: members of
+/// both patches that end there (at least the corners) share it. Throws Infeasible naming
+/// "layout.patches[j]" if a design's boundary does not run along its seam (a design not made on
+/// this layout's cut patch).
+std::vector<SeamJoints> seam_joints(const LayoutResult& layout,
+                                    const std::vector<const Design*>& designs);
 
 }  // namespace gridshell

@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// gridshell — the deployment of a layout's patches taken together (issue 35,
+// docs/multi-patch.md): each patch deploys on its own, then the whole is measured: its RMS over
+// every patch's rod vertices, and how far apart the two boundary lamellas of each seam are at its
+// joints (the gaps the seam bolts have to close).
+#pragma once
+
+#include <vector>
+
+#include "gridshell/design/layout.h"
+#include "gridshell/simulation/simulation.h"
+
+namespace gridshell {
+
+/// The gaps of one seam's joints between the two patches' deployed boundary lamellas.
+struct SeamGaps {
+  int seam = 0;              ///< index into LayoutResult::seams
+  std::vector<double> gaps;  ///< per joint, in SeamJoints::joints order
+  double max_gap = 0;
+  double rms_gap = 0;
+};
+
+/// For each seam of `joints`, the distance at each joint between the point at its arc length on
+/// one patch's deployed boundary lamella and on the other's. `runs[j]` is patch j's run (null
+/// when it has none; its seams are skipped). A lamella's arc length is taken along its deployed
+/// centerline, scaled by its rest length (the lamellas barely stretch).
+std::vector<SeamGaps> seam_gaps(const std::vector<SeamJoints>& joints,
+                                const std::vector<const DeploymentRun*>& runs);
+
+/// The runs of several patches as one: their lamellas in patch order, the RMS over all their
+/// rod vertices (each run's RMS weighted by its grid vertices), the largest deviation, the
+/// iterations and seconds added up; converged only if every run did. Null runs are skipped.
+DeploymentRun combine_runs(const std::vector<const DeploymentRun*>& runs);
+
+}  // namespace gridshell
