@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Layout requests -> kernel -> results (see gridshell/application/layout.h).
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 #include <utility>
@@ -12,9 +14,8 @@
 #include "gridshell/mesh/mesh_io.h"
 
 namespace gridshell {
-namespace {
 
-PatchLayout to_kernel(const v1::Layout& in, const LoadReport& load) {
+PatchLayout layout_from_proto(const v1::Layout& in, const LoadReport& load) {
   PatchLayout out;
   for (int i = 0; i < in.corners_size(); ++i) {
     const v1::Layout::Corner& c = in.corners(i);
@@ -44,13 +45,21 @@ PatchLayout to_kernel(const v1::Layout& in, const LoadReport& load) {
                          "expected 4 corner indices, got " + std::to_string(p.corners_size()));
     PatchLayout::Quad quad;
     quad.name = p.name();
+    // A name names a folder (patches/<name>/) and the parts ("P2-g7"): plain and short.
+    const bool plain =
+        quad.name.size() <= 64 && std::all_of(quad.name.begin(), quad.name.end(), [](char ch) {
+          return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_';
+        });
+    if (!plain)
+      throw InvalidInput("layout.patches[" + std::to_string(j) + "].name",
+                         "'" + quad.name +
+                             "': use up to 64 letters, digits, '-' and '_' (it names a folder "
+                             "and the parts)");
     for (int k = 0; k < 4; ++k) quad.corners[k] = p.corners(k);
     out.patches.push_back(quad);
   }
   return out;
 }
-
-}  // namespace
 
 v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& progress,
                             const RunSettings& settings) {
@@ -60,14 +69,21 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
   *patch_request.mutable_options() = request.options();
   PatchInputs in = prepare_patch(patch_request);
   in.options.coverability.threads = settings.threads;
-  const PatchLayout layout = to_kernel(request.layout(), in.load);
+  const PatchLayout layout = layout_from_proto(request.layout(), in.load);
   const LayoutResult cut = cut_layout(in.mesh, layout, in.options, progress);
+  return layout_result(cut, in.mesh, request.layout(), mesh_label(request.mesh()));
+}
 
+std::string mesh_label(const v1::Mesh& mesh) {
+  return mesh.name().empty() ? mesh.example() : mesh.name();
+}
+
+v1::LayoutResult layout_result(const LayoutResult& cut, const TriangleMesh& mesh,
+                               const v1::Layout& given, const std::string& input) {
   v1::LayoutResult out;
   v1::LayoutReport& report = *out.mutable_report();
-  report.set_input(request.mesh().name().empty() ? request.mesh().example()
-                                                 : request.mesh().name());
-  *report.mutable_layout() = request.layout();
+  report.set_input(input);
+  *report.mutable_layout() = given;
   for (size_t j = 0; j < cut.layout.patches.size(); ++j)
     report.mutable_layout()
         ->mutable_patches(static_cast<int>(j))
@@ -97,7 +113,7 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
   }
   v1::File& svg = *out.add_views();
   svg.set_name("layout.svg");
-  svg.set_content(layout_svg(in.mesh, cut));
+  svg.set_content(layout_svg(mesh, cut));
   for (const LayoutSeam& seam : cut.seams) {
     v1::LayoutReport::Seam& s = *report.add_seams();
     s.add_corners(seam.corners[0]);
@@ -109,26 +125,26 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
   return out;
 }
 
-FileBundle layout_files(const v1::LayoutResult& result) {
-  // One OBJ object per cut patch, vertices numbered on through the file.
+std::string merge_obj(const std::string& heading,
+                      const std::vector<std::pair<std::string, std::string>>& parts) {
   std::ostringstream obj;
-  obj << "# gridshell layout: " << result.report().input() << ", " << result.report().patches_size()
-      << " patches\n";
+  obj << "# " << heading << "\n";
   int offset = 0;
-  for (const v1::Mesh& mesh : result.patches()) {
-    if (mesh.indices().empty()) continue;
-    obj << "o " << mesh.name() << "\n";
-    std::vector<Vec3> vertices;
-    for (int k = 0; k + 2 < mesh.positions_size(); k += 3)
-      vertices.emplace_back(mesh.positions(k), mesh.positions(k + 1), mesh.positions(k + 2));
-    std::vector<Face> faces;
-    for (int k = 0; k + 2 < mesh.indices_size(); k += 3)
-      faces.push_back({mesh.indices(k), mesh.indices(k + 1), mesh.indices(k + 2)});
-    const std::string text = obj_text(vertices, faces);
+  for (const auto& [prefix, text] : parts) {
     std::istringstream lines(text);
+    int vertices = 0;
+    bool named = false;
     for (std::string line; std::getline(lines, line);) {
-      if (line.rfind("v ", 0) == 0) {
+      if (line.rfind("o ", 0) == 0) {
+        obj << "o " << prefix << "-" << line.substr(2) << "\n";
+        named = true;
+      } else if (line.rfind("v ", 0) == 0) {
+        if (!named) {
+          obj << "o " << prefix << "\n";
+          named = true;
+        }
         obj << line << "\n";
+        ++vertices;
       } else if (line.rfind("f ", 0) == 0) {
         std::istringstream f(line.substr(2));
         obj << "f";
@@ -136,9 +152,28 @@ FileBundle layout_files(const v1::LayoutResult& result) {
         obj << "\n";
       }
     }
-    offset += static_cast<int>(vertices.size());
+    offset += vertices;
   }
-  FileBundle files{{"layout.json", to_json(result.report()) + "\n"}, {"layout.obj", obj.str()}};
+  return obj.str();
+}
+
+FileBundle layout_files(const v1::LayoutResult& result) {
+  // One OBJ object per cut patch, vertices numbered on through the file.
+  std::vector<std::pair<std::string, std::string>> parts;
+  for (const v1::Mesh& mesh : result.patches()) {
+    if (mesh.indices().empty()) continue;
+    std::vector<Vec3> vertices;
+    for (int k = 0; k + 2 < mesh.positions_size(); k += 3)
+      vertices.emplace_back(mesh.positions(k), mesh.positions(k + 1), mesh.positions(k + 2));
+    std::vector<Face> faces;
+    for (int k = 0; k + 2 < mesh.indices_size(); k += 3)
+      faces.push_back({mesh.indices(k), mesh.indices(k + 1), mesh.indices(k + 2)});
+    parts.emplace_back(mesh.name(), obj_text(vertices, faces));
+  }
+  const std::string obj = merge_obj("gridshell layout: " + result.report().input() + ", " +
+                                        std::to_string(result.report().patches_size()) + " patches",
+                                    parts);
+  FileBundle files{{"layout.json", to_json(result.report()) + "\n"}, {"layout.obj", obj}};
   for (const v1::File& view : result.views()) files[view.name()] = view.content();
   return files;
 }

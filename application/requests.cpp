@@ -551,11 +551,35 @@ Design design_with_suggestions(const DesignInputs& in, const Progress& progress,
 
 }  // namespace
 
+v1::DesignResult design_result(const Design& design, v1::DesignOptions record,
+                               const std::string& name, int mesh_vertices, double seconds) {
+  record.set_lamella_width(design.lamella_width);
+  record.set_lamella_thickness(design.lamella_thickness);
+  record.set_map_resolution(design.maps.g.resolution());
+  v1::DesignResult out;
+  *out.mutable_design() = to_proto(design, record, name);
+  auto add_view = [&](const char* file, std::string content) {
+    v1::File* view = out.add_views();
+    view->set_name(file);
+    view->set_content(std::move(content));
+  };
+  add_view("planar.svg", planar_svg(design, design.lamella_width));
+  add_view("spatial.obj", spatial_obj(design));
+  add_view("maps.svg", maps_svg(design));
+  *out.mutable_report() = to_report(design, name, mesh_vertices, seconds);
+  return out;
+}
+
 DesignInputs prepare_design(const v1::DesignRequest& request) {
   DesignInputs in;
   in.mesh = to_mesh(request.mesh(), &in.load);
   in.corners = to_corner_spec(request.corners(), in.load);
-  const v1::DesignRequest::Options& o = request.options();
+  prepare_design_options(request.options(), in);
+  in.record.set_corners(corner_label(request.corners()));
+  return in;
+}
+
+void prepare_design_options(const v1::DesignRequest::Options& o, DesignInputs& in) {
   DesignOptions& options = in.options;
   // Each option against its description (options.cpp), named by its field.
   const auto check = [](const char* name, double value) {
@@ -591,7 +615,6 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
       o.map_vertices() != 0 ? o.map_vertices() : kDefaultMapVertices;
 
   v1::DesignOptions& record = in.record;
-  record.set_corners(corner_label(request.corners()));
   record.set_alpha(alpha);
   record.set_members_u(o.members_u());
   record.set_members_v(o.members_v());
@@ -606,7 +629,6 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
   record.set_length_tolerance(options.grid.length_tolerance);
   record.set_interior_anchors(options.anchors.interior);
   record.set_map_vertices(options.maps.max_vertices);
-  return in;
 }
 
 v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& progress,
@@ -619,22 +641,15 @@ v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& pr
     in.options.patch.coverability.threads = settings.threads;
     bool cached = false;
     const Design design = design_with_suggestions(in, progress, settings, &cached);
-    in.record.set_lamella_width(design.lamella_width);
-    in.record.set_lamella_thickness(design.lamella_thickness);
-    in.record.set_map_resolution(design.maps.g.resolution());
 
-    v1::DesignResult out;
     const std::string& name = request.mesh().name();
-    *out.mutable_design() = to_proto(design, in.record, name);
+    v1::DesignResult out =
+        design_result(design, in.record, name, in.mesh.vertex_count(), seconds_since(start));
     auto add_view = [&](const char* file, std::string content) {
       v1::File* view = out.add_views();
       view->set_name(file);
       view->set_content(std::move(content));
     };
-    add_view("planar.svg", planar_svg(design, design.lamella_width));
-    add_view("spatial.obj", spatial_obj(design));
-    add_view("maps.svg", maps_svg(design));
-    *out.mutable_report() = to_report(design, name, in.mesh.vertex_count(), seconds_since(start));
     out.mutable_report()->set_distance_maps_cached(cached);
     out.mutable_report()->set_cpu_seconds(process_cpu_seconds() - cpu_start);
     out.mutable_report()->set_peak_memory_bytes(peak_resident_bytes());

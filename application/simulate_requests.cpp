@@ -14,7 +14,19 @@ namespace {
 v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOptions& options,
                             const std::string& name, const Progress& progress, int threads,
                             bool files = false) {
-  DeploymentJob job = run_deployment_job(design, options, name, progress, threads);
+  v1::SimulateResult out =
+      simulate_result(run_deployment_job(design, options, name, progress, threads));
+  if (files) {
+    v1::File* view = out.add_views();
+    view->set_name("deployment.json");
+    view->set_content(simulate_files(out).at("deployment.json"));
+  }
+  return out;
+}
+
+}  // namespace
+
+v1::SimulateResult simulate_result(DeploymentJob job) {
   v1::SimulateResult out;
   *out.mutable_deployment() = std::move(job.deployment);
   auto add_view = [&](const char* file, std::string content) {
@@ -28,11 +40,8 @@ v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOption
   add_view("deployed_without_notches.obj", std::move(job.deployed_without_notches_obj));
   add_view("deviation_without_notches.ply", std::move(job.deviation_without_notches_ply));
   add_view("design-anchored.json", std::move(job.anchored_design));
-  if (files) add_view("deployment.json", simulate_files(out).at("deployment.json"));
   return out;
 }
-
-}  // namespace
 
 v1::SimulationOptions prepare_simulation_options(const v1::SimulationOptions& options,
                                                  const std::string& prefix) {

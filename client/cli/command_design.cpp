@@ -60,7 +60,12 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
   v1::DesignRequest request;
   *request.mutable_mesh() = request_mesh(input);
   *request.mutable_corners() = to_proto(spec, corners_used);
-  v1::DesignRequest::Options& options = *request.mutable_options();
+  *request.mutable_options() = design_options(flags);
+  return request;
+}
+
+v1::DesignRequest::Options design_options(const DesignFlags& flags) {
+  v1::DesignRequest::Options options;
   set_described(flags.options, options);
   // auto: the design places none; the simulation adds them (run, simulate).
   if (!automatic_interior_anchors(flags)) {
@@ -72,7 +77,7 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
     options.set_interior_anchors(static_cast<int>(n));
   }
   set_corner_angles(flags.corner_angles, options.mutable_auto_corner_angles());
-  return request;
+  return options;
 }
 
 void print_design_summary(const v1::DesignResult& result) {

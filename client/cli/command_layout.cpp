@@ -29,41 +29,38 @@ struct LayoutArguments {
   int threads = 0;
 };
 
-int run_layout_command(const LayoutArguments& args) {
-  const InputMesh input = load_input(args.mesh);
-  std::ifstream in(args.layout, std::ios::binary);
-  if (!in) throw InvalidInput("--layout", "cannot open '" + args.layout + "'");
+}  // namespace
+
+v1::Layout read_layout_file(const std::string& file, const InputMesh& input) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InvalidInput("--layout", "cannot open '" + file + "'");
   std::ostringstream text;
   text << in.rdbuf();
-  v1::LayoutRequest request;
+  v1::Layout layout;
   try {
-    from_json(text.str(), *request.mutable_layout());
+    from_json(text.str(), layout);
   } catch (const Error& e) {
     throw InvalidInput("--layout", (e.field().empty() ? "" : e.field() + ": ") + e.message() +
                                        " (a gridshell.v1.Layout in JSON)");
   }
   // Corner vertices are file-order indices, as --corners takes them: into the mesh as loaded.
-  for (int i = 0; i < request.layout().corners_size(); ++i) {
-    v1::Layout::Corner& c = *request.mutable_layout()->mutable_corners(i);
+  for (int i = 0; i < layout.corners_size(); ++i) {
+    v1::Layout::Corner& c = *layout.mutable_corners(i);
     if (c.has_vertex())
       c.set_vertex(mesh_vertex(input, c.vertex(), "layout.corners[" + std::to_string(i) + "]"));
   }
-  *request.mutable_mesh() = request_mesh(input);
-  set_described(args.options, *request.mutable_options());
-  prepare_output_folder(args.out);
-  const Progress progress = make_progress(args.quiet);
-  v1::LayoutResult result = run_layout(request, progress, {args.threads});
-  finish_progress();
-  // The layout as given (file-order vertices), names filled in.
-  v1::Layout& written = *result.mutable_report()->mutable_layout();
+  return layout;
+}
+
+void write_layout_as_given(v1::LayoutReport& report, const InputMesh& input) {
+  v1::Layout& written = *report.mutable_layout();
   for (int i = 0; i < written.corners_size(); ++i)
     if (written.corners(i).has_vertex())
       written.mutable_corners(i)->set_vertex(file_vertex(input, written.corners(i).vertex()));
-  write_files(layout_files(result), args.out);
+}
 
-  const v1::LayoutReport& r = result.report();
+const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport& r) {
   const double deg = 180 / std::numbers::pi;
-  std::printf("layout %s (%s) -> %s\n", args.mesh.c_str(), args.layout.c_str(), args.out.c_str());
   std::printf("  coverage        %.1f %% of the input's area (%.4g of %.4g), %d patches\n",
               100 * r.coverage(), r.covered_area(), r.input_area(), r.patches_size());
   const v1::LayoutReport::PatchSummary* failed = nullptr;
@@ -86,6 +83,25 @@ int run_layout_command(const LayoutArguments& args) {
     }
   std::printf("  seams           %d shared (largest mismatch %.1e), %d outer edges\n", seams,
               mismatch, r.seams_size() - seams);
+  return failed;
+}
+
+namespace {
+
+int run_layout_command(const LayoutArguments& args) {
+  const InputMesh input = load_input(args.mesh);
+  v1::LayoutRequest request;
+  *request.mutable_layout() = read_layout_file(args.layout, input);
+  *request.mutable_mesh() = request_mesh(input);
+  set_described(args.options, *request.mutable_options());
+  prepare_output_folder(args.out);
+  const Progress progress = make_progress(args.quiet);
+  v1::LayoutResult result = run_layout(request, progress, {args.threads});
+  finish_progress();
+  write_layout_as_given(*result.mutable_report(), input);  // file-order vertices, names filled
+  write_files(layout_files(result), args.out);
+  std::printf("layout %s (%s) -> %s\n", args.mesh.c_str(), args.layout.c_str(), args.out.c_str());
+  const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.report());
   const std::filesystem::path out(args.out);
   std::printf("  wrote           %s, %s, %s\n", (out / "layout.json").c_str(),
               (out / "layout.obj").c_str(), (out / "layout.svg").c_str());

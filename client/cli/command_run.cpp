@@ -9,6 +9,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "gridshell/application/files.h"
+#include "gridshell/application/layout.h"
 #include "gridshell/application/requests.h"
 #include "paper_table1.h"
 #include "remote.h"
@@ -17,6 +18,7 @@ namespace gridshell::cli {
 namespace {
 
 struct RunArguments {
+  std::string layout;  // a layout file: several patches (docs/multi-patch.md)
   DesignFlags design;
   SimulationFlags simulation;
   OutputFlags output;
@@ -80,7 +82,73 @@ void print_table(const v1::RunResult& result, const std::string& input) {
   row("converged", d.converged() ? "yes" : "NO", "");
 }
 
+/// `run MESH --layout FILE`: every patch of the layout designed and simulated, the whole measured.
+int run_layout(const RunArguments& args) {
+  if (!args.design.corners.empty())
+    throw InvalidInput("--corners", "give either --corners (one patch) or --layout (several)");
+  if (args.output.remote.remote())
+    throw InvalidInput("--layout",
+                       "a layout runs in process only for now (the daemon's Layout calls are not "
+                       "built yet: docs/multi-patch.md); drop --server");
+  const InputMesh input = load_input(args.design.mesh);
+  v1::LayoutRunRequest request;
+  *request.mutable_layout() = read_layout_file(args.layout, input);
+  *request.mutable_mesh() = request_mesh(input);
+  *request.mutable_design() = design_options(args.design);
+  SimulationFlags simulation = args.simulation;
+  if (automatic_interior_anchors(args.design)) simulation.interior_anchors = "auto";
+  *request.mutable_simulation() = simulation_options_from_flags(simulation);
+  prepare_output_folder(args.output.out);
+  const Progress progress = make_progress(args.output.quiet);
+  v1::LayoutRunResult result = run_layout_run(request, progress, {args.output.threads});
+  finish_progress();
+  write_layout_as_given(*result.mutable_layout()->mutable_report(), input);
+  write_layout_as_given(*result.mutable_design()->mutable_layout(), input);
+  const LayoutRunFiles files = layout_run_files(result);
+  write_files(files.whole, args.output.out);
+  const std::filesystem::path out(args.output.out);
+  for (const auto& [name, bundle] : files.patches)
+    write_files(bundle, (out / "patches" / name).string());
+
+  print_heading("run", args.design.mesh, args.output);
+  std::printf("  layout          %s\n", args.layout.c_str());
+  const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.design().layout());
+  const v1::LayoutDeployment& d = result.deployment();
+  const double percent = d.diagonal() > 0 ? 100 / d.diagonal() : 0;
+  for (const v1::LayoutDeployment::PatchDeployment& p : d.patches())
+    std::printf(
+        "  %-6s deployed %d grid vertices, RMS%s %.4g (%.3f %% of the diagonal)%s\n",
+        p.name().c_str(), p.grid_vertices(),
+        p.has_rms_with_notches() ? "2 (notches)" : "1 (no notches)",
+        p.has_rms_with_notches() ? p.rms_with_notches() : p.rms_without_notches(),
+        percent * (p.has_rms_with_notches() ? p.rms_with_notches() : p.rms_without_notches()),
+        p.converged() ? "" : ", NOT converged");
+  std::printf("  seam bolts      %d on %d seams\n", result.design().seam_bolts(),
+              result.design().seams_size());
+  std::printf(
+      "  seam gaps       largest %.4g (%.3f %% of the diagonal), before joining: each "
+      "patch deploys on its own\n",
+      d.max_seam_gap(), percent * d.max_seam_gap());
+  if (d.has_rms_without_notches())
+    std::printf("  whole RMS1      %.4g (%.3f %% of the diagonal %.4g), no notches\n",
+                d.rms_without_notches(), percent * d.rms_without_notches(), d.diagonal());
+  if (d.has_rms_with_notches())
+    std::printf("  whole RMS2      %.4g (%.3f %% of the diagonal %.4g), notches\n",
+                d.rms_with_notches(), percent * d.rms_with_notches(), d.diagonal());
+  std::printf("  converged       %s\n", d.converged() ? "yes" : "NO");
+  std::printf("  time            %.2f s\n", d.seconds());
+  std::printf(
+      "  wrote           layout.json layout.obj layout.svg design.json deployment.json "
+      "deployed.obj deviation.ply, patches/<name>/ for %zu patches\n",
+      files.patches.size());
+  if (failed)
+    throw Infeasible(failed->problem_field(), failed->problem() + " (patch " + failed->name() +
+                                                  "; every patch's checks: layout.json)");
+  return 0;
+}
+
 int run_run(const RunArguments& args) {
+  if (!args.layout.empty()) return run_layout(args);
   // Both requests are checked before any work; the design is written as soon as it exists, so
   // a simulation that is cancelled or fails leaves it in --out.
   const v1::DesignRequest design_request_message = design_request(args.design);
@@ -129,6 +197,9 @@ Command add_run_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "run", "Patch, design and simulate in one go, with a Table 1-like summary");
   add_design_flags(sub, args->design);
+  sub->add_option("--layout", args->layout,
+                  "several patches instead of one (--corners): a layout file, gridshell.v1.Layout "
+                  "in JSON as `gridshell layout` takes it; writes the whole and patches/<name>/");
   add_simulation_flags(sub, args->simulation);
   add_output_flags(sub, args->output);
   return [args] { return run_run(*args); };

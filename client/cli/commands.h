@@ -10,6 +10,7 @@
 
 #include "cli_support.h"
 #include "gridshell/v1/deployment.pb.h"
+#include "gridshell/v1/layout.pb.h"
 #include "gridshell/v1/requests.pb.h"
 #include "remote.h"
 
@@ -67,6 +68,16 @@ void add_design_flags(CLI::App* sub, DesignFlags& flags);
 v1::DesignRequest design_request(const DesignFlags& flags);
 /// The same with the mesh loaded already (`gridshell sweep` loads each mesh once for many rows).
 v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& input);
+/// A layout file (gridshell.v1.Layout in JSON; corner vertices in file order) with its corner
+/// vertices as mesh vertices of `input` as loaded; InvalidInput names --layout or the corner.
+v1::Layout read_layout_file(const std::string& file, const InputMesh& input);
+/// The report's layout as the user gave it: corner vertices back in file order.
+void write_layout_as_given(v1::LayoutReport& report, const InputMesh& input);
+/// Prints the coverage, each patch's checks and the seams; returns the first failing patch.
+const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport& report);
+
+/// The design options of the flags (no mesh, no corners): what a layout's patches share.
+v1::DesignRequest::Options design_options(const DesignFlags& flags);
 void print_design_summary(const v1::DesignResult& result);
 /// --interior-anchors asks for automatic inner anchors (found by simulating: `run`, `simulate`).
 bool automatic_interior_anchors(const DesignFlags& flags);

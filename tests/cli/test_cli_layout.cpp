@@ -4,6 +4,8 @@
 // refused naming the field, a failing patch with exit 3 after the files are written.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -120,6 +122,110 @@ TEST(CliLayout, BadLayoutsAreRefusedNamingTheFieldAndAFailingPatchIsExitThree) {
   EXPECT_FALSE(report["patches"][3]["ok"].get<bool>());
   EXPECT_EQ(report["patches"][3]["problem_code"], "infeasible");
   EXPECT_NEAR(report["coverage"].get<double>(), 0.75, 0.01);
+}
+
+/// Object names of an OBJ text, in order.
+std::vector<std::string> obj_objects(const std::string& text) {
+  std::vector<std::string> names;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("o ", 0) == 0) names.push_back(line.substr(2));
+  return names;
+}
+
+TEST(CliLayout, RunWithALayoutDesignsAndDeploysEveryPatchAndMeasuresTheSeams) {
+  const std::string dir = testing::temp_dir();
+  const std::string file = testing::write_text(dir, "layout.json", sphere_layout().dump());
+  const std::string out = dir + "/out";
+  const auto r = run_cli("run example:sphere --layout '" + file +
+                         "' --members-u 4 --members-v 4 --notches on --quiet --out '" + out + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("whole RMS2"), std::string::npos) << r.out;
+  const json design = json::parse(testing::read_text(out + "/design.json"));
+  const json deployment = json::parse(testing::read_text(out + "/deployment.json"));
+  const json layout = json::parse(testing::read_text(out + "/layout.json"));
+  EXPECT_NEAR(layout["coverage"].get<double>(), 1.0, 1e-9);
+  EXPECT_EQ(design["layout"]["coverage"], layout["coverage"]);
+  ASSERT_EQ(design["patch_designs"].size(), 4u);
+  EXPECT_EQ(design["patch_designs"][2], "patches/north-west/design.json");
+  // Each patch has today's single-patch files, and the whole reports what they say.
+  ASSERT_EQ(deployment["patches"].size(), 4u);
+  double squares = 0;
+  int vertices = 0;
+  for (const json& p : deployment["patches"]) {
+    const std::string folder = out + "/patches/" + p["name"].get<std::string>();
+    for (const char* f : {"design.json", "report.json", "planar.svg", "deployment.json",
+                          "deployed.obj", "deviation.ply"})
+      EXPECT_TRUE(std::filesystem::exists(folder + "/" + f)) << folder << "/" << f;
+    const json own = json::parse(testing::read_text(folder + "/deployment.json"));
+    EXPECT_EQ(own["rms_with_notches"], p["rms_with_notches"]);
+    EXPECT_EQ(own["grid_vertices"], p["grid_vertices"]);
+    EXPECT_TRUE(p["converged"].get<bool>());
+    const double rms = p["rms_with_notches"].get<double>();
+    squares += rms * rms * p["grid_vertices"].get<int>();
+    vertices += p["grid_vertices"].get<int>();
+  }
+  // The whole's RMS is over every patch's rod vertices.
+  EXPECT_EQ(deployment["grid_vertices"].get<int>(), vertices);
+  EXPECT_NEAR(deployment["rms_with_notches"].get<double>(), std::sqrt(squares / vertices), 1e-12);
+  EXPECT_FALSE(deployment.contains("rms_without_notches"));  // --notches on
+  EXPECT_FALSE(deployment.value("seams_joined", false));
+  // Four seams; each joins two patches' boundary lamellas of the same length, with a bolt at
+  // each corner that both patches' members end at, and the bolts' gaps reported one to one.
+  ASSERT_EQ(design["seams"].size(), 4u);
+  ASSERT_EQ(deployment["seams"].size(), 4u);
+  int bolts = 0;
+  double largest = 0;
+  for (size_t k = 0; k < 4; ++k) {
+    const json& seam = design["seams"][k];
+    EXPECT_LE(seam.value("length_difference", 0.0), 1e-9 * 144);
+    ASSERT_EQ(seam["lamellas"].size(), 2u);
+    const json& joints = seam["joints"];
+    ASSERT_GE(joints.size(), 2u);
+    EXPECT_EQ(joints.front()["members"].size(), 2u);
+    EXPECT_EQ(joints.back()["members"].size(), 2u);
+    EXPECT_NEAR(joints.back()["s"].get<double>(), seam["length"].get<double>(), 1e-9 * 144);
+    bolts += static_cast<int>(joints.size());
+    const json& gaps = deployment["seams"][k];
+    EXPECT_EQ(gaps["corners"], seam["corners"]);
+    ASSERT_EQ(gaps["gaps"].size(), joints.size());
+    for (const json& g : gaps["gaps"]) {
+      EXPECT_GE(g.get<double>(), 0);
+      EXPECT_LE(g.get<double>(), gaps["max_gap"].get<double>());
+    }
+    largest = std::max(largest, gaps["max_gap"].get<double>());
+  }
+  EXPECT_EQ(design["seam_bolts"].get<int>(), bolts);
+  EXPECT_EQ(deployment["max_seam_gap"].get<double>(), largest);
+  // The whole's deployed.obj holds every patch's lamellas, named by patch ("P1-g0").
+  const std::vector<std::string> objects = obj_objects(testing::read_text(out + "/deployed.obj"));
+  size_t expected = 0;
+  for (const char* name : {"P1", "P2", "north-west", "P4"}) {
+    const std::vector<std::string> own =
+        obj_objects(testing::read_text(out + "/patches/" + name + "/deployed.obj"));
+    expected += own.size();
+    for (const std::string& o : own)
+      EXPECT_NE(std::find(objects.begin(), objects.end(), std::string(name) + "-" + o),
+                objects.end())
+          << name << "-" << o;
+  }
+  EXPECT_EQ(objects.size(), expected);
+}
+
+TEST(CliLayout, RunWithALayoutRefusesCornersTooAndNamesABadPatchName) {
+  const std::string dir = testing::temp_dir();
+  json layout = sphere_layout();
+  std::string file = testing::write_text(dir, "layout.json", layout.dump());
+  auto r = run_cli("run example:sphere --layout '" + file + "' --corners 0,1,2,3 --quiet --out '" +
+                   dir + "/out'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--corners"), std::string::npos) << r.err;
+  layout["patches"][1]["name"] = "../up";
+  file = testing::write_text(dir, "layout.json", layout.dump());
+  r = run_cli("run example:sphere --layout '" + file + "' --quiet --out '" + dir + "/out'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("layout.patches[1].name"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/up"));
 }
 
 }  // namespace

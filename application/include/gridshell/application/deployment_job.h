@@ -11,6 +11,7 @@
 #include "gridshell/simulation/simulation.h"
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/design.pb.h"
+#include "gridshell/v1/requests.pb.h"
 
 namespace gridshell {
 
@@ -44,5 +45,9 @@ struct DeploymentJob {
 DeploymentJob run_deployment_job(const v1::Design& design, const v1::SimulationOptions& options,
                                  const std::string& design_name, const Progress& progress = {},
                                  int threads = 0);
+
+/// The job as a Simulate answer: deployment.json's message and the views that were made
+/// (deployed.obj, deviation.ply, their *_without_notches twins, design-anchored.json).
+v1::SimulateResult simulate_result(DeploymentJob job);
 
 }  // namespace gridshell

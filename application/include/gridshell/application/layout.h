@@ -5,6 +5,7 @@
 
 #include "gridshell/application/files.h"
 #include "gridshell/application/requests.h"
+#include "gridshell/design/layout.h"
 #include "gridshell/v1/layout.pb.h"
 
 namespace gridshell {
@@ -15,6 +16,42 @@ namespace gridshell {
 /// cannot be cut or misses a check is reported in its PatchSummary (ok false), not thrown.
 v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& progress = {},
                             const RunSettings& settings = {});
+
+/// The layout message as kernel input: corner vertices are mesh vertices as loaded (`load` maps
+/// the sent indices); InvalidInput names "layout.corners[i]" / "layout.patches[j].corners".
+PatchLayout layout_from_proto(const v1::Layout& layout, const LoadReport& load);
+
+/// A cut layout as the Layout answer: layout.json's report (with `given`, the layout as sent,
+/// names filled in), each cut patch's mesh and layout.svg.
+v1::LayoutResult layout_result(const LayoutResult& cut, const TriangleMesh& mesh,
+                               const v1::Layout& given, const std::string& input);
+
+/// A mesh message's name for reports: its name, else its example's.
+std::string mesh_label(const v1::Mesh& mesh);
+
+/// OBJ texts as one: each part's objects named "<prefix>-<object>" (a part without objects is
+/// one object named <prefix>), faces renumbered through the file.
+std::string merge_obj(const std::string& heading,
+                      const std::vector<std::pair<std::string, std::string>>& parts);
+
+/// Each patch of the layout designed and simulated as a single patch is (its cut patch, no
+/// smoothing yet; corners the layout's), then measured together: the seam joints, each seam's
+/// gaps between the two patches' deployed boundary lamellas, the whole's RMS. A patch whose cut,
+/// checks or design fail is reported in the layout report (ok false; coverage without it) and
+/// has no design; the run goes on with the others. Errors name "layout.…", "design.…" (the
+/// design options) or "simulation.…".
+v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request,
+                                   const Progress& progress = {}, const RunSettings& settings = {});
+
+/// What `gridshell run --layout` writes: in the folder, layout_files, design.json
+/// (LayoutDesign), deployment.json (LayoutDeployment) and the whole's deployed.obj (objects
+/// "P1-g0" ...) and deviation.ply; in patches/<name>/, each designed patch's run files
+/// (run_files).
+struct LayoutRunFiles {
+  FileBundle whole;
+  std::vector<std::pair<std::string, FileBundle>> patches;  ///< (patch name, its files)
+};
+LayoutRunFiles layout_run_files(const v1::LayoutRunResult& result);
 
 /// layout.json (the report), layout.obj (the cut patches, one object each, named) and
 /// layout.svg (the plan).

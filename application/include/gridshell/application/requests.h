@@ -117,6 +117,16 @@ struct DesignInputs {
 /// Checks every field; throws InvalidInput naming the first bad one.
 DesignInputs prepare_design(const v1::DesignRequest& request);
 
+/// The options part of prepare_design: checks `options` (fields "options.<name>") into
+/// in.options, in.record (all but its corners) and in.suggest.
+void prepare_design_options(const v1::DesignRequest::Options& options, DesignInputs& in);
+
+/// A designed grid as a DesignResult: design.json's message (`record` completed with the
+/// design's lamella size and map resolution), report.json's and the views planar.svg,
+/// spatial.obj and maps.svg. `mesh_vertices` is the input's vertex count.
+v1::DesignResult design_result(const Design& design, v1::DesignOptions record,
+                               const std::string& name, int mesh_vertices, double seconds);
+
 /// Patch stage and grid design (make_design) on a request: design.json, report.json and the
 /// SVG/OBJ views (planar.svg, spatial.obj, maps.svg).
 v1::DesignResult run_design(const v1::DesignRequest& request, const Progress& progress = {},
