@@ -121,4 +121,45 @@ struct SeamJoints {
 std::vector<SeamJoints> seam_joints(const LayoutResult& layout,
                                     const std::vector<const Design*>& designs);
 
+// Automatic layouts (docs/multi-patch.md, "Automatic layouts")
+// -------------------------------------
+
+struct AutoLayoutOptions {
+  /// Patches at most (columns x rows of the layout grid).
+  int max_patches = 16;
+  /// Stop at the first layout (fewest patches first) whose checked patches cover this fraction
+  /// of the input's area.
+  double coverage_goal = 0.95;
+};
+
+/// One layout tried: a columns x rows grid of patches.
+struct AutoLayoutTrial {
+  int columns = 0, rows = 0;
+  double coverage = 0;
+  int failing = 0;  ///< patches that could not be cut or missed a check
+  std::string first_problem;  ///< the first failing patch's name and problem, "" if none
+  double seconds = 0;
+};
+
+struct AutoLayout {
+  LayoutResult result;  ///< the layout chosen, cut and checked (result.layout is the layout)
+  int columns = 0, rows = 0;
+  /// The input's boundary vertices at the four corners of the parameter square, in order.
+  std::array<int, 4> boundary_corners{};
+  std::vector<AutoLayoutTrial> trials;  ///< in the order tried
+};
+
+/// A layout of columns x rows patches computed for a surface with one boundary loop and no
+/// holes (a disk). Four boundary vertices become the corners of a square: the sharpest turn of
+/// the boundary, then the sharpest turn (above 30 degrees) within an eighth of the perimeter of
+/// each quarter point along it, else the quarter point. The surface is mapped onto the square
+/// (CGAL's mean value coordinates with the boundary by arc length between the corners), and the
+/// layout's corners are the points of the surface at a columns x rows grid of the square: the
+/// outer ones on the boundary. Grids of 1, 2, ... patches whose shape follows the boundary's
+/// side lengths are tried (cut_layout) until one covers options.coverage_goal; else the one
+/// that covers most, the fewer patches on a tie. Throws Infeasible (field "layout") for a
+/// surface that is not a disk: closed, with holes or in several pieces.
+AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options = {},
+                       const AutoLayoutOptions& options = {}, const Progress& progress = {});
+
 }  // namespace gridshell
