@@ -2,6 +2,7 @@
 // Layout requests -> kernel -> results (see gridshell/application/layout.h).
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <utility>
@@ -9,6 +10,7 @@
 
 #include "gridshell/application/convert.h"
 #include "gridshell/application/layout.h"
+#include "gridshell/application/options.h"
 #include "gridshell/design/layout.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
@@ -69,21 +71,85 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
   *patch_request.mutable_options() = request.options();
   PatchInputs in = prepare_patch(patch_request);
   in.options.coverability.threads = settings.threads;
-  const PatchLayout layout = layout_from_proto(request.layout(), in.load);
-  const LayoutResult cut = cut_layout(in.mesh, layout, in.options, progress);
-  return layout_result(cut, in.mesh, request.layout(), mesh_label(request.mesh()));
+  const RequestedLayout layout = cut_requested_layout(
+      request.layout(), request.has_automatic() ? &request.automatic() : nullptr, in.mesh, in.load,
+      in.options, progress);
+  return layout_result(layout, in.mesh, mesh_label(request.mesh()));
+}
+
+AutoLayoutOptions prepare_auto_layout_options(const v1::AutoLayoutOptions& options,
+                                              const std::string& prefix) {
+  AutoLayoutOptions out;
+  const auto check = [&](const char* name, double value) {
+    return check_option(option_spec("layout", name), value, prefix + "." + name);
+  };
+  if (options.max_patches() != 0)
+    out.max_patches = static_cast<int>(check("max_patches", options.max_patches()));
+  if (options.coverage_goal() != 0)
+    out.coverage_goal = check("coverage_goal", options.coverage_goal());
+  return out;
+}
+
+RequestedLayout cut_requested_layout(const v1::Layout& layout,
+                                     const v1::AutoLayoutOptions* automatic,
+                                     const TriangleMesh& mesh, const LoadReport& load,
+                                     const TargetPatchOptions& options, const Progress& progress) {
+  RequestedLayout out;
+  if (!automatic) {
+    out.cut = cut_layout(mesh, layout_from_proto(layout, load), options, progress);
+    out.given = layout;
+    return out;
+  }
+  const AutoLayoutOptions auto_options = prepare_auto_layout_options(*automatic);
+  if (layout.corners_size() > 0 || layout.patches_size() > 0)
+    throw InvalidInput("layout", "give a layout or ask for an automatic one, not both");
+  const auto start = std::chrono::steady_clock::now();
+  AutoLayout found = auto_layout(mesh, options, auto_options, progress);
+  v1::LayoutReport::Automatic& report = out.automatic.emplace();
+  report.set_columns(found.columns);
+  report.set_rows(found.rows);
+  for (int v : found.boundary_corners) report.add_boundary_corners(sent_vertex(load, v));
+  for (const AutoLayoutTrial& t : found.trials) {
+    v1::LayoutReport::Automatic::Trial& m = *report.add_trials();
+    m.set_columns(t.columns);
+    m.set_rows(t.rows);
+    m.set_coverage(t.coverage);
+    m.set_failing(t.failing);
+    m.set_first_problem(t.first_problem);
+    m.set_seconds(t.seconds);
+  }
+  report.set_seconds(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  // The layout found, as a file would give it: boundary corners as vertices, the others as
+  // points on the surface.
+  for (const LayoutCorner& c : found.result.layout.corners) {
+    v1::Layout::Corner& m = *out.given.add_corners();
+    if (c.vertex >= 0) {
+      m.set_vertex(sent_vertex(load, c.vertex));
+    } else {
+      for (int k = 0; k < 3; ++k) m.add_point(c.point[k]);
+    }
+  }
+  for (const PatchLayout::Quad& quad : found.result.layout.patches) {
+    v1::Layout::Patch& m = *out.given.add_patches();
+    for (int c : quad.corners) m.add_corners(c);
+  }
+  out.cut = std::move(found.result);
+  return out;
 }
 
 std::string mesh_label(const v1::Mesh& mesh) {
   return mesh.name().empty() ? mesh.example() : mesh.name();
 }
 
-v1::LayoutResult layout_result(const LayoutResult& cut, const TriangleMesh& mesh,
-                               const v1::Layout& given, const std::string& input) {
+v1::LayoutResult layout_result(const RequestedLayout& requested, const TriangleMesh& mesh,
+                               const std::string& input) {
+  const LayoutResult& cut = requested.cut;
   v1::LayoutResult out;
   v1::LayoutReport& report = *out.mutable_report();
   report.set_input(input);
-  *report.mutable_layout() = given;
+  *report.mutable_layout() = requested.given;
+  if (requested.automatic) *report.mutable_automatic() = *requested.automatic;
   for (size_t j = 0; j < cut.layout.patches.size(); ++j)
     report.mutable_layout()
         ->mutable_patches(static_cast<int>(j))
@@ -110,6 +176,25 @@ v1::LayoutResult layout_result(const LayoutResult& cut, const TriangleMesh& mesh
     for (double l : t.boundary_lengths) s.add_side_lengths(l);
     s.set_eta(t.coverability.gap.eta);
     *mesh = to_proto(t.patch.mesh, p.name);
+  }
+  // What is not covered, and why.
+  double cut_area = 0;
+  for (const LayoutPatch& p : cut.patches) {
+    if (p.target) cut_area += p.target->area;
+    if (!p.problem) continue;
+    v1::LayoutReport::Uncovered& u = *report.add_uncovered();
+    u.set_where(p.name);
+    u.set_area(p.target ? p.target->area : 0);
+    u.set_reason(p.problem->message());
+  }
+  if (cut.input_area - cut_area > 1e-9 * cut.input_area) {
+    v1::LayoutReport::Uncovered& u = *report.add_uncovered();
+    u.set_where("outside the patches");
+    u.set_area(cut.input_area - cut_area);
+    u.set_reason(
+        "between the outer patch sides and the input's boundary: a side is an exact shortest "
+        "geodesic and cuts across where the boundary bends away; more corners along the boundary "
+        "cover more of it");
   }
   v1::File& svg = *out.add_views();
   svg.set_name("layout.svg");

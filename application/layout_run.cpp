@@ -53,12 +53,14 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
   in.options.maps.threads = in.options.grid.threads = settings.threads;
   in.options.patch.coverability.threads = settings.threads;
   in.record.set_corners("layout");
-  const PatchLayout layout = layout_from_proto(request.layout(), in.load);
   const std::string input = mesh_label(request.mesh());
-  const LayoutResult cut = cut_layout(in.mesh, layout, patch_options(in.options), progress);
+  const RequestedLayout requested = cut_requested_layout(
+      request.layout(), request.has_automatic() ? &request.automatic() : nullptr, in.mesh, in.load,
+      patch_options(in.options), progress);
+  const LayoutResult& cut = requested.cut;
 
   v1::LayoutRunResult out;
-  *out.mutable_layout() = layout_result(cut, in.mesh, request.layout(), input);
+  *out.mutable_layout() = layout_result(requested, in.mesh, input);
   v1::LayoutReport& report = *out.mutable_layout()->mutable_report();
   const size_t count = cut.patches.size();
   std::vector<std::optional<Design>> designs(count);
@@ -88,6 +90,10 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
       s.set_problem_code(to_string(e.code()));
       s.set_problem_field(join_field(field, e.field()));
       s.set_problem(e.message());
+      v1::LayoutReport::Uncovered& u = *report.add_uncovered();
+      u.set_where(patch.name);
+      u.set_area(patch.target->area);
+      u.set_reason("its design: " + e.message());
       report.set_covered_area(report.covered_area() - patch.target->area);
       report.set_coverage(report.input_area() > 0 ? report.covered_area() / report.input_area()
                                                   : 0);

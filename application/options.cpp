@@ -18,6 +18,7 @@
 #include "gridshell/design/coverability.h"
 #include "gridshell/design/distance_map.h"
 #include "gridshell/design/distance_map_copy.h"
+#include "gridshell/design/layout.h"
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/foundation/progress.h"
@@ -55,6 +56,7 @@ std::vector<OptionSpec> build_table() {
   const AutoCornerOptions corners;
   const SimulationOptions simulation;
   const FabricationOptions fabrication;
+  const AutoLayoutOptions layout;
   std::vector<OptionSpec> t;
   // The patch-stage options a design request carries too: described once, listed in both groups.
   const auto in_group = [](OptionSpec spec, const char* group) {
@@ -429,6 +431,32 @@ std::vector<OptionSpec> build_table() {
                  .label = name,
                  .help = "from the design (recorded in deployment.json)",
                  .output = true});
+  // Automatic layouts (AutoLayoutOptions) ------------------------------------------------------
+  t.push_back({.group = "layout",
+               .name = "max_patches",
+               .flag = "--max-patches",
+               .type = T::Integer,
+               .default_value = std::to_string(layout.max_patches),
+               .minimum = 1,
+               .maximum = 64,
+               .zero_allowed = true,
+               .zero_means = "default",
+               .label = "Patches at most",
+               .help = "an automatic layout's patches at most (fewest patches that reach the "
+                       "coverage goal are chosen)"});
+  t.push_back({.group = "layout",
+               .name = "coverage_goal",
+               .flag = "--coverage-goal",
+               .type = T::Number,
+               .default_value = shortest(layout.coverage_goal),
+               .minimum = 0,
+               .maximum = 1,
+               .exclusive_minimum = true,
+               .zero_allowed = true,
+               .zero_means = "default",
+               .label = "Coverage goal",
+               .help = "an automatic layout stops growing at this fraction of the input's area "
+                       "covered by checked patches"});
   // Fabrication (FabricationOptions) ---------------------------------------------------------
   t.push_back({.group = "fabrication",
                .name = "unit",

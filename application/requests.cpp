@@ -143,17 +143,12 @@ int loaded_vertex(const LoadReport& load, int v, const std::string& field) {
   return map[v];
 }
 
-namespace {
-
-/// Index of the sent vertex that became mesh vertex `v` (the first one, for welded duplicates).
 int sent_vertex(const LoadReport& load, int v) {
   if (v < 0) return -1;
   const auto& map = load.vertex_of_file_vertex;
   const auto it = std::find(map.begin(), map.end(), v);
   return it == map.end() ? -1 : static_cast<int>(it - map.begin());
 }
-
-}  // namespace
 
 namespace {
 

@@ -77,7 +77,7 @@ std::string cli_field(const std::string& field, const FieldContext& context) {
   if (field == "corners" || starts_with(field, "corners.") || starts_with(field, "corners["))
     return corners_field(field.substr(7));
   if (field == "mesh" || starts_with(field, "mesh.")) return mesh_field(field.substr(4), context);
-  for (const std::string prefix : {"options.", "simulation."})
+  for (const std::string prefix : {"options.", "simulation.", "automatic."})
     if (starts_with(field, prefix)) {
       const std::string option = field.substr(prefix.size());
       return option.find_first_of(".[") == std::string::npos ? flag_of(option) : field;

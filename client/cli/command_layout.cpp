@@ -15,6 +15,7 @@
 #include "commands.h"
 #include "gridshell/application/files.h"
 #include "gridshell/application/layout.h"
+#include "gridshell/application/options.h"
 #include "gridshell/foundation/errors.h"
 
 namespace gridshell::cli {
@@ -23,7 +24,8 @@ namespace {
 struct LayoutArguments {
   std::string mesh;
   std::string layout;
-  DescribedFlags options;  // the patch options of every patch (no --corner-angles)
+  DescribedFlags options;    // the patch options of every patch (no --corner-angles)
+  DescribedFlags automatic;  // --layout auto's options
   std::string out;
   bool quiet = false;
   int threads = 0;
@@ -40,8 +42,15 @@ v1::Layout read_layout_file(const std::string& file, const InputMesh& input) {
   try {
     from_json(text.str(), layout);
   } catch (const Error& e) {
-    throw InvalidInput("--layout", (e.field().empty() ? "" : e.field() + ": ") + e.message() +
-                                       " (a gridshell.v1.Layout in JSON)");
+    // The layout.json of a run (a LayoutReport) holds the layout it used: it is taken too.
+    v1::LayoutReport report;
+    try {
+      from_json(text.str(), report);
+    } catch (const Error&) {
+      throw InvalidInput("--layout", (e.field().empty() ? "" : e.field() + ": ") + e.message() +
+                                         " (a gridshell.v1.Layout in JSON)");
+    }
+    layout = report.layout();
   }
   // Corner vertices are file-order indices, as --corners takes them: into the mesh as loaded.
   for (int i = 0; i < layout.corners_size(); ++i) {
@@ -52,11 +61,38 @@ v1::Layout read_layout_file(const std::string& file, const InputMesh& input) {
   return layout;
 }
 
+LayoutChoice layout_choice(const std::string& layout, const DescribedFlags& automatic,
+                           const InputMesh& input) {
+  LayoutChoice out;
+  if (layout == "auto") {
+    set_described(automatic, out.automatic.emplace());
+    return out;
+  }
+  for (const auto& [name, value] : automatic.values)
+    if (value) throw InvalidInput(option_spec("layout", name).flag, "only with --layout auto");
+  out.layout = read_layout_file(layout, input);
+  return out;
+}
+
 void write_layout_as_given(v1::LayoutReport& report, const InputMesh& input) {
   v1::Layout& written = *report.mutable_layout();
   for (int i = 0; i < written.corners_size(); ++i)
     if (written.corners(i).has_vertex())
       written.mutable_corners(i)->set_vertex(file_vertex(input, written.corners(i).vertex()));
+}
+
+void print_automatic_layout(const v1::LayoutReport& report) {
+  if (!report.has_automatic()) return;
+  const v1::LayoutReport::Automatic& a = report.automatic();
+  std::string tried;
+  for (const auto& t : a.trials()) {
+    char buffer[96];
+    std::snprintf(buffer, sizeof buffer, "%s%d x %d %.1f %%", tried.empty() ? "" : ", ",
+                  t.columns(), t.rows(), 100 * t.coverage());
+    tried += buffer;
+  }
+  std::printf("  automatic       %d x %d patches in %.2f s; tried %s\n", a.columns(), a.rows(),
+              a.seconds(), tried.c_str());
 }
 
 const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport& r) {
@@ -83,6 +119,10 @@ const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport
     }
   std::printf("  seams           %d shared (largest mismatch %.1e), %d outer edges\n", seams,
               mismatch, r.seams_size() - seams);
+  for (const auto& u : r.uncovered())
+    std::printf("  uncovered       %.4g (%.1f %%) %s: %s\n", u.area(),
+                r.input_area() > 0 ? 100 * u.area() / r.input_area() : 0.0, u.where().c_str(),
+                u.reason().c_str());
   return failed;
 }
 
@@ -91,7 +131,9 @@ namespace {
 int run_layout_command(const LayoutArguments& args) {
   const InputMesh input = load_input(args.mesh);
   v1::LayoutRequest request;
-  *request.mutable_layout() = read_layout_file(args.layout, input);
+  LayoutChoice choice = layout_choice(args.layout, args.automatic, input);
+  *request.mutable_layout() = std::move(choice.layout);
+  if (choice.automatic) *request.mutable_automatic() = *choice.automatic;
   *request.mutable_mesh() = request_mesh(input);
   set_described(args.options, *request.mutable_options());
   prepare_output_folder(args.out);
@@ -101,6 +143,7 @@ int run_layout_command(const LayoutArguments& args) {
   write_layout_as_given(*result.mutable_report(), input);  // file-order vertices, names filled
   write_files(layout_files(result), args.out);
   std::printf("layout %s (%s) -> %s\n", args.mesh.c_str(), args.layout.c_str(), args.out.c_str());
+  print_automatic_layout(result.report());
   const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.report());
   const std::filesystem::path out(args.out);
   std::printf("  wrote           %s, %s, %s\n", (out / "layout.json").c_str(),
@@ -121,10 +164,8 @@ Command add_layout_command(CLI::App& app) {
       "each, report the coverage");
   sub->add_option("MESH", args->mesh, "input mesh (.obj .off .ply .stl) or example:NAME")
       ->required();
-  sub->add_option("--layout", args->layout,
-                  "layout file: gridshell.v1.Layout in JSON (corners by file-order vertex index "
-                  "or point; patches of four corners, all in the same turning sense)")
-      ->required();
+  sub->add_option("--layout", args->layout, kLayoutHelp)->required();
+  add_described_flags(sub, "layout", args->automatic);
   add_described_flags(sub, "patch", args->options, {"auto_corner_angles", "no_smoothing"});
   sub->add_option("--out", args->out, "output folder")->required();
   sub->add_option("--threads", args->threads, "worker threads (0 = all cores)")

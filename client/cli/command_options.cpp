@@ -25,7 +25,7 @@ Command add_options_command(CLI::App& app) {
       "options", "Describe every request option (type, default, range, unit) and the materials");
   sub->add_flag("--json", args->json, "print gridshell.v1.OptionsResult as JSON");
   sub->add_option("--group", args->group,
-                  "only this group: patch | design | simulation | fabrication");
+                  "only this group: patch | design | simulation | layout | fabrication");
   return [args]() -> int {
     v1::OptionsResult all = run_options({}, {}, {});
     if (!args->group.empty()) {
@@ -34,8 +34,9 @@ Command add_options_command(CLI::App& app) {
       for (const v1::OptionDescription& d : all.options())
         if (d.group() == args->group) *picked.add_options() = d;
       if (picked.options_size() == 0)
-        throw InvalidInput("--group", "expected patch, design, simulation or fabrication, got '" +
-                                          args->group + "'");
+        throw InvalidInput(
+            "--group",
+            "expected patch, design, simulation, layout or fabrication, got '" + args->group + "'");
       all = std::move(picked);
     }
     if (args->json) {

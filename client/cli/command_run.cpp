@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "gridshell/application/files.h"
 #include "gridshell/application/layout.h"
+#include "gridshell/application/options.h"
 #include "gridshell/application/requests.h"
 #include "paper_table1.h"
 #include "remote.h"
@@ -18,7 +19,8 @@ namespace gridshell::cli {
 namespace {
 
 struct RunArguments {
-  std::string layout;  // a layout file: several patches (docs/multi-patch.md)
+  std::string layout;        // auto or a layout file: several patches (docs/multi-patch.md)
+  DescribedFlags automatic;  // --layout auto's options
   DesignFlags design;
   SimulationFlags simulation;
   OutputFlags output;
@@ -92,7 +94,9 @@ int run_layout(const RunArguments& args) {
                        "built yet: docs/multi-patch.md); drop --server");
   const InputMesh input = load_input(args.design.mesh);
   v1::LayoutRunRequest request;
-  *request.mutable_layout() = read_layout_file(args.layout, input);
+  LayoutChoice choice = layout_choice(args.layout, args.automatic, input);
+  *request.mutable_layout() = std::move(choice.layout);
+  if (choice.automatic) *request.mutable_automatic() = *choice.automatic;
   *request.mutable_mesh() = request_mesh(input);
   *request.mutable_design() = design_options(args.design);
   SimulationFlags simulation = args.simulation;
@@ -112,6 +116,7 @@ int run_layout(const RunArguments& args) {
 
   print_heading("run", args.design.mesh, args.output);
   std::printf("  layout          %s\n", args.layout.c_str());
+  print_automatic_layout(result.design().layout());
   const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.design().layout());
   const v1::LayoutDeployment& d = result.deployment();
   const double percent = d.diagonal() > 0 ? 100 / d.diagonal() : 0;
@@ -149,6 +154,8 @@ int run_layout(const RunArguments& args) {
 
 int run_run(const RunArguments& args) {
   if (!args.layout.empty()) return run_layout(args);
+  for (const auto& [name, value] : args.automatic.values)
+    if (value) throw InvalidInput(option_spec("layout", name).flag, "only with --layout auto");
   // Both requests are checked before any work; the design is written as soon as it exists, so
   // a simulation that is cancelled or fails leaves it in --out.
   const v1::DesignRequest design_request_message = design_request(args.design);
@@ -198,8 +205,10 @@ Command add_run_command(CLI::App& app) {
       "run", "Patch, design and simulate in one go, with a Table 1-like summary");
   add_design_flags(sub, args->design);
   sub->add_option("--layout", args->layout,
-                  "several patches instead of one (--corners): a layout file, gridshell.v1.Layout "
-                  "in JSON as `gridshell layout` takes it; writes the whole and patches/<name>/");
+                  std::string("several patches instead of one (--corners), writing the whole and "
+                              "patches/<name>/: ") +
+                      kLayoutHelp);
+  add_described_flags(sub, "layout", args->automatic);
   add_simulation_flags(sub, args->simulation);
   add_output_flags(sub, args->output);
   return [args] { return run_run(*args); };

@@ -71,9 +71,24 @@ v1::DesignRequest design_request(const DesignFlags& flags, const InputMesh& inpu
 /// A layout file (gridshell.v1.Layout in JSON; corner vertices in file order) with its corner
 /// vertices as mesh vertices of `input` as loaded; InvalidInput names --layout or the corner.
 v1::Layout read_layout_file(const std::string& file, const InputMesh& input);
+/// --layout FILE or auto, with the automatic layout's flags (refused without auto).
+struct LayoutChoice {
+  v1::Layout layout;                               ///< from the file
+  std::optional<v1::AutoLayoutOptions> automatic;  ///< --layout auto
+};
+LayoutChoice layout_choice(const std::string& layout, const DescribedFlags& automatic,
+                           const InputMesh& input);
+/// --layout's help.
+inline constexpr const char* kLayoutHelp =
+    "auto (a layout computed for a surface with one boundary and no holes) or a layout file: "
+    "gridshell.v1.Layout in JSON (corners by file-order vertex index or point; patches of four "
+    "corners, all in the same turning sense), or the layout.json a run wrote";
 /// The report's layout as the user gave it: corner vertices back in file order.
 void write_layout_as_given(v1::LayoutReport& report, const InputMesh& input);
-/// Prints the coverage, each patch's checks and the seams; returns the first failing patch.
+/// Prints how an automatic layout was found (nothing for a layout from a file).
+void print_automatic_layout(const v1::LayoutReport& report);
+/// Prints the coverage, each patch's checks, the seams and what is not covered; returns the
+/// first failing patch.
 const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport& report);
 
 /// The design options of the flags (no mesh, no corners): what a layout's patches share.

@@ -9,6 +9,7 @@
 #include <CGAL/Surface_mesh_parameterization/Square_border_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/parameterize.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -53,28 +54,55 @@ void check_disk(const TriangleMesh& mesh) {
                                    "(docs/multi-patch.md)");
 }
 
-/// How much the boundary turns at each vertex of `loop`: pi minus the surface's angle there.
+/// How much the boundary turns at each vertex of `loop`, seen in plan: on the plane of the
+/// surface's two largest principal directions (where a roof's or a facade's corners are).
 std::vector<double> turning(const TriangleMesh& mesh, const std::vector<int>& loop) {
-  std::vector<double> angle(mesh.vertex_count(), 0.0);
-  for (const Face& f : mesh.faces())
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = mesh.vertices()[f[k]];
-      const Vec3 a = mesh.vertices()[f[(k + 1) % 3]] - p, b = mesh.vertices()[f[(k + 2) % 3]] - p;
-      angle[f[k]] += std::atan2(a.cross(b).norm(), a.dot(b));
-    }
-  std::vector<double> out;
-  for (int v : loop) out.push_back(kPi - angle[v]);
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : mesh.vertices()) centre += p;
+  centre /= std::max(1, mesh.vertex_count());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : mesh.vertices()) covariance += (p - centre) * (p - centre).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  const Vec3 ex = eigen.eigenvectors().col(2), ey = eigen.eigenvectors().col(1);
+  const int n = static_cast<int>(loop.size());
+  std::vector<Vec2> plan;
+  for (int v : loop) {
+    const Vec3 d = mesh.vertices()[v] - centre;
+    plan.emplace_back(d.dot(ex), d.dot(ey));
+  }
+  // Signed so that the loop turns by +2 pi in all (either orientation of the plan).
+  std::vector<double> out(n, 0.0);
+  double total = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 a = plan[i] - plan[(i + n - 1) % n], b = plan[(i + 1) % n] - plan[i];
+    out[i] = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    total += out[i];
+  }
+  if (total < 0)
+    for (double& t : out) t = -t;
   return out;
 }
 
 /// The four boundary corners: positions in `loop`.
 std::array<int, 4> square_corners(const TriangleMesh& mesh, const std::vector<int>& loop) {
-  const std::vector<double> turn = turning(mesh, loop);
+  const std::vector<double> vertex_turn = turning(mesh, loop);
   const int n = static_cast<int>(loop.size());
   std::vector<double> arc(n + 1, 0.0);  // arc length from loop[0]
   for (int i = 0; i < n; ++i)
     arc[i + 1] = arc[i] + (mesh.vertices()[loop[(i + 1) % n]] - mesh.vertices()[loop[i]]).norm();
   const double perimeter = arc[n];
+  // A rounded corner turns over several vertices: each vertex's turn is the boundary's turn
+  // within a 32nd of the perimeter either side of it.
+  const double reach = perimeter / 32;
+  std::vector<double> turn(n, 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      double along = std::abs(arc[j] - arc[i]);
+      along = std::min(along, perimeter - along);
+      if (along <= reach) turn[i] += vertex_turn[j];
+    }
+  // Within a window of equal turn (a sharp corner and its straight neighbours), the corner.
+  for (int i = 0; i < n; ++i) turn[i] += 1e-3 * vertex_turn[i];
   const int start = static_cast<int>(std::max_element(turn.begin(), turn.end()) - turn.begin());
   std::array<int, 4> corners{start, 0, 0, 0};
   for (int q = 1; q < 4; ++q) {

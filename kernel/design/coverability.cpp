@@ -273,7 +273,7 @@ std::string excess_text(const std::array<double, 4>& excess) {
 
 SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic,
                                        const CoverabilityOptions& options, const Progress& progress,
-                                       std::optional<double> eta) {
+                                       std::optional<double> eta, bool recut_sides) {
   SmoothingResult result;
   // Positions of the surface the patch was cut from, for the displacement: vertices of the
   // input keep their index map; vertices a cut made are measured from where they were made.
@@ -319,6 +319,10 @@ SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geod
     const std::array<double, 4> excess =
         boundary_geodesic_excess(patch, geodesic, progress, options.threads);
     if (*std::max_element(excess.begin(), excess.end()) <= kBoundaryGeodesicTolerance) break;
+    if (!recut_sides)
+      fail(
+          "a side shared with a neighbouring patch is no longer a shortest geodesic of the "
+          "smoothed patch, and a shared side is not re-cut");
     if (result.recuts >= kMaxRecuts) fail("the boundary is still not geodesic");
     progress.report("smoothing: re-cut along the boundary geodesics", 0.5);
     patch = recut(patch, geodesic, progress);

@@ -158,8 +158,10 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
   }
 
   // Each patch cut along its sides and checked as a single patch is, without smoothing.
+  // Smoothing moves a patch's interior only (its sides, shared with neighbours, stay fixed) and
+  // never re-cuts a side: a patch whose sides stop being shortest geodesics fails.
   TargetPatchOptions patch_options = options;
-  patch_options.smooth = false;
+  patch_options.fixed_sides = true;
   out.input_area = surface_area(mesh);
   for (size_t j = 0; j < out.layout.patches.size(); ++j) {
     const PatchLayout::Quad& quad = out.layout.patches[j];
@@ -184,13 +186,23 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
                                   options.cut, progress.checker());
       result.target =
           target_patch_from_cut(std::move(cut), input_corners, patch_options, progress.checker());
-      const CoverabilityReport& c = result.target->coverability;
-      if (c.gap.eta > patch_options.coverability.eta_max) {
+      const TargetPatch& t = *result.target;
+      // As for a single patch, an eta above eta_max is left where the injectivity bound holds
+      // (smooth_until_coverable runs otherwise): only without smoothing does it fail.
+      if (!patch_options.smooth && t.smoothing.eta_after > patch_options.coverability.eta_max) {
         std::ostringstream msg;
-        msg << "gap factor eta " << c.gap.eta << " is above eta_max "
-            << patch_options.coverability.eta_max
-            << " (smoothing next to seams is not done yet: docs/multi-patch.md)";
+        msg << "gap factor eta " << t.smoothing.eta_after << " is above eta_max "
+            << patch_options.coverability.eta_max << " and smoothing is off";
         result.problem = Infeasible(field, msg.str());
+      } else {
+        for (int k = 0; k < 4; ++k)
+          if (t.boundary_excess[k] > kBoundaryGeodesicTolerance) {
+            std::ostringstream msg;
+            msg << "side " << k << " is " << t.boundary_excess[k]
+                << " (relative) longer than the shortest geodesic between its corners";
+            result.problem = Infeasible(field, msg.str());
+            break;
+          }
       }
     } catch (const Cancelled&) {
       throw;

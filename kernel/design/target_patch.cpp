@@ -77,8 +77,9 @@ TargetPatch target_patch_from_cut(Patch patch, const std::array<SurfacePoint, 4>
   // is covered by shortest geodesics as it is; only otherwise is the gap measured by eta and
   // smoothed away (and the boundary re-cut on the smoothed surface, smooth_until_coverable).
   if (options.smooth && !result.coverability.injectivity_ok) {
-    result.smoothing = smooth_until_coverable(result.patch, options.geodesic, options.coverability,
-                                              progress, result.coverability.gap.eta);
+    result.smoothing =
+        smooth_until_coverable(result.patch, options.geodesic, options.coverability, progress,
+                               result.coverability.gap.eta, !options.fixed_sides);
   } else {
     result.smoothing.eta_before = result.smoothing.eta_after = result.coverability.gap.eta;
   }

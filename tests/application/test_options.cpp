@@ -14,6 +14,7 @@
 
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/fabricate.h"
+#include "gridshell/application/layout.h"
 #include "gridshell/application/options.h"
 #include "gridshell/application/requests.h"
 #include "gridshell/foundation/errors.h"
@@ -34,6 +35,7 @@ const std::map<std::string, const Descriptor*>& groups() {
       {"design", v1::DesignRequest::Options::descriptor()},
       {"simulation", v1::SimulationOptions::descriptor()},
       {"fabrication", v1::FabricationOptions::descriptor()},
+      {"layout", v1::AutoLayoutOptions::descriptor()},
   };
   return all;
 }
@@ -127,6 +129,10 @@ std::string check_in_request(const OptionSpec& spec, double value) {
       if (spec.name == "anchor_goal") options.set_interior_anchors("auto");
       set_number(options, spec.name, value);
       prepare_simulation_options(options, "options");
+    } else if (spec.group == "layout") {
+      v1::AutoLayoutOptions options;
+      set_number(options, spec.name, value);
+      prepare_auto_layout_options(options, "options");
     } else {
       v1::FabricationOptions options;
       options.set_unit("mm");

@@ -228,5 +228,75 @@ TEST(CliLayout, RunWithALayoutRefusesCornersTooAndNamesABadPatchName) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/up"));
 }
 
+TEST(CliLayout, AnAutomaticLayoutCoversASharedMeshAndItsLayoutJsonRunsAgain) {
+  const std::string dir = testing::temp_dir();
+  const std::string mesh = testing::test_mesh_path("knet1.obj");
+  auto r = run_cli("layout '" + mesh + "' --layout auto --quiet --out '" + dir + "/auto'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("automatic"), std::string::npos) << r.out;
+  const json report = json::parse(testing::read_text(dir + "/auto/layout.json"));
+  const double coverage = report["coverage"].get<double>();
+  EXPECT_GE(coverage, 0.95);
+  // Fewest patches first: every trial before the last missed the goal.
+  const json& trials = report["automatic"]["trials"];
+  ASSERT_GE(trials.size(), 1u);
+  for (size_t t = 0; t + 1 < trials.size(); ++t)
+    EXPECT_LT(trials[t]["coverage"].get<double>(), 0.95);
+  EXPECT_EQ(trials.back()["coverage"].get<double>(), coverage);
+  const int patches =
+      report["automatic"]["columns"].get<int>() * report["automatic"]["rows"].get<int>();
+  EXPECT_EQ(static_cast<int>(report["patches"].size()), patches);
+  EXPECT_LE(patches, 36);
+  // What is not covered is accounted for: the input's area less the patches'.
+  double cut = 0, uncovered = 0;
+  for (const json& p : report["patches"]) cut += p.value("area", 0.0);
+  for (const json& u : report["uncovered"]) uncovered += u["area"].get<double>();
+  const double input = report["input_area"].get<double>();
+  EXPECT_NEAR(uncovered, input - report["covered_area"].get<double>(), 1e-9 * input);
+  EXPECT_NEAR(cut, report["covered_area"].get<double>(), 1e-9 * input);  // every patch passed
+  // The layout it wrote is a layout file: run again from it, the same patches and coverage.
+  r = run_cli("layout '" + mesh + "' --layout '" + dir + "/auto/layout.json' --quiet --out '" +
+              dir + "/again'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json again = json::parse(testing::read_text(dir + "/again/layout.json"));
+  EXPECT_NEAR(again["coverage"].get<double>(), coverage, 1e-6);
+  EXPECT_FALSE(again.contains("automatic"));
+  // The automatic layout's flags only with --layout auto, in their range.
+  r = run_cli("layout '" + mesh + "' --layout '" + dir +
+              "/auto/layout.json' --max-patches 4 --quiet --out '" + dir + "/x'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--max-patches: only with --layout auto"), std::string::npos) << r.err;
+  r = run_cli("layout '" + mesh + "' --layout auto --max-patches 65 --quiet --out '" + dir + "/x'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--max-patches"), std::string::npos) << r.err;
+  r = run_cli("run '" + mesh + "' --coverage-goal 0.9 --quiet --out '" + dir + "/x'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--coverage-goal: only with --layout auto"), std::string::npos) << r.err;
+}
+
+TEST(CliLayout, RunWithAnAutomaticLayoutBuildsEveryPatchOfASharedMesh) {
+  const std::string dir = testing::temp_dir();
+  const auto r = run_cli(
+      "run '" + testing::test_mesh_path("pillow_1.obj") +
+      "' --layout auto --members-u 3 --members-v 3 --notches on --quiet --out '" + dir + "/out'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json design = json::parse(testing::read_text(dir + "/out/design.json"));
+  const json deployment = json::parse(testing::read_text(dir + "/out/deployment.json"));
+  EXPECT_GE(design["layout"]["coverage"].get<double>(), 0.95);
+  const size_t patches = design["patch_designs"].size();
+  EXPECT_GE(patches, 2u);
+  EXPECT_EQ(deployment["patches"].size(), patches);
+  EXPECT_TRUE(deployment["converged"].get<bool>());
+  for (const json& f : design["patch_designs"])
+    EXPECT_TRUE(std::filesystem::exists(dir + "/out/" + f.get<std::string>())) << f;
+  for (const json& seam : design["seams"])
+    EXPECT_LE(seam.value("length_difference", 0.0), 1e-9 * 30);
+  // Every seam of two built patches has its gaps, one per bolt.
+  ASSERT_EQ(deployment["seams"].size(), design["seams"].size());
+  for (size_t k = 0; k < design["seams"].size(); ++k)
+    EXPECT_EQ(deployment["seams"][k]["gaps"].size(), design["seams"][k]["joints"].size());
+  EXPECT_GT(deployment["rms_with_notches"].get<double>(), 0);
+}
+
 }  // namespace
 }  // namespace gridshell

@@ -30,12 +30,14 @@ TEST(CliOptions, JsonIsTheDescriptionAndEveryFlagIsInTheHelp) {
   const json d = json::parse(r.out);
   std::set<std::string> groups;
   for (const json& o : d["options"]) groups.insert(o["group"].get<std::string>());
-  EXPECT_EQ(groups, (std::set<std::string>{"patch", "design", "simulation", "fabrication"}));
+  EXPECT_EQ(groups,
+            (std::set<std::string>{"patch", "design", "simulation", "layout", "fabrication"}));
   ASSERT_GE(d["materials"].size(), 7u);
   EXPECT_EQ(d["materials"][0]["name"], "lime-wood");
   // Each command's help lists the flags of its groups, as described.
   const std::string run_help = run_cli("run --help").out, patch_help = run_cli("patch --help").out,
-                    fabricate_help = run_cli("fabricate --help").out;
+                    fabricate_help = run_cli("fabricate --help").out,
+                    layout_help = run_cli("layout --help").out;
   int flags = 0;
   for (const json& o : d["options"]) {
     const std::string flag = o["flag"], group = o["group"];
@@ -44,6 +46,9 @@ TEST(CliOptions, JsonIsTheDescriptionAndEveryFlagIsInTheHelp) {
                               : group == "fabrication" ? fabricate_help
                                                        : run_help;
     EXPECT_NE(help.find(flag), std::string::npos) << group << " " << flag;
+    if (group == "layout") {
+      EXPECT_NE(layout_help.find(flag), std::string::npos) << flag;
+    }
     if (o["type"] == "number" || o["type"] == "integer") {
       const std::string dflt = "default " + o["default_value"].get<std::string>();
       EXPECT_NE(help.find(dflt), std::string::npos) << flag << " " << dflt;

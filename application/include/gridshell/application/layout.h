@@ -3,6 +3,9 @@
 // docs/multi-patch.md): what `gridshell layout` runs.
 #pragma once
 
+#include <optional>
+#include <string>
+
 #include "gridshell/application/files.h"
 #include "gridshell/application/requests.h"
 #include "gridshell/design/layout.h"
@@ -21,10 +24,28 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
 /// the sent indices); InvalidInput names "layout.corners[i]" / "layout.patches[j].corners".
 PatchLayout layout_from_proto(const v1::Layout& layout, const LoadReport& load);
 
-/// A cut layout as the Layout answer: layout.json's report (with `given`, the layout as sent,
-/// names filled in), each cut patch's mesh and layout.svg.
-v1::LayoutResult layout_result(const LayoutResult& cut, const TriangleMesh& mesh,
-                               const v1::Layout& given, const std::string& input);
+/// The automatic layout's options checked (fields "<prefix>.max_patches" ...), defaults filled.
+AutoLayoutOptions prepare_auto_layout_options(const v1::AutoLayoutOptions& options,
+                                              const std::string& prefix = "automatic");
+
+/// A layout as requested, cut: the given one, or with `automatic` set (and `layout` empty) one
+/// computed by auto_layout. `given` is the layout as the answer reports it (sent vertex indices;
+/// an automatic one's inner corners as points).
+struct RequestedLayout {
+  LayoutResult cut;
+  v1::Layout given;
+  std::optional<v1::LayoutReport::Automatic> automatic;
+};
+RequestedLayout cut_requested_layout(const v1::Layout& layout,
+                                     const v1::AutoLayoutOptions* automatic,
+                                     const TriangleMesh& mesh, const LoadReport& load,
+                                     const TargetPatchOptions& options, const Progress& progress);
+
+/// A cut layout as the Layout answer: layout.json's report (the layout with names filled in,
+/// coverage, each patch's checks, the seams, what is not covered and why, how an automatic
+/// layout was found), each cut patch's mesh and layout.svg.
+v1::LayoutResult layout_result(const RequestedLayout& layout, const TriangleMesh& mesh,
+                               const std::string& input);
 
 /// A mesh message's name for reports: its name, else its example's.
 std::string mesh_label(const v1::Mesh& mesh);

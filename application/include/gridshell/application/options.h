@@ -22,7 +22,7 @@ enum class OptionType { Number, Integer, Boolean, Choice, Text, Numbers };
 const char* to_string(OptionType type);
 
 struct OptionSpec {
-  std::string group;  ///< "patch" | "design" | "simulation" | "fabrication"
+  std::string group;  ///< "patch" | "design" | "simulation" | "layout" | "fabrication"
   std::string name;   ///< proto field name in the group's options message
   std::string flag;   ///< CLI flag ("--lamella-width"), "" = request only
   OptionType type = OptionType::Number;

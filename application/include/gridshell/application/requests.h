@@ -58,6 +58,10 @@ v1::ExamplesResult run_examples(const v1::ExamplesRequest& request, const Progre
 /// InvalidInput naming `field` if it is out of range or was removed.
 int loaded_vertex(const LoadReport& load, int v, const std::string& field);
 
+/// Index of the sent vertex that became mesh vertex `v` (the first one, for welded
+/// duplicates); -1 for none.
+int sent_vertex(const LoadReport& load, int v);
+
 /// Mesh -> packed arrays.
 v1::Mesh to_proto(const TriangleMesh& mesh, const std::string& name);
 

@@ -101,11 +101,13 @@ constexpr double kBoundaryGeodesicTolerance = 1e-9;
 /// hold. Throws Infeasible (field "corners") with eta and the boundary excess when the
 /// iteration cap (CoverabilityOptions::max_smoothing_iterations, over all rounds) or
 /// kMaxRecuts re-cuts are reached first. `eta`: the gap factor of `patch` as given, if the caller
-/// has measured it already (else it is measured here).
+/// has measured it already (else it is measured here). `recut` false (a layout's shared
+/// sides): a side that is no longer a shortest geodesic after smoothing is Infeasible instead
+/// of re-cut.
 SmoothingResult smooth_until_coverable(Patch& patch, const GeodesicOptions& geodesic = {},
                                        const CoverabilityOptions& options = {},
                                        const Progress& progress = {},
-                                       std::optional<double> eta = std::nullopt);
+                                       std::optional<double> eta = std::nullopt, bool recut = true);
 
 /// Re-cuts in one smoothing run, at most.
 constexpr int kMaxRecuts = 12;

@@ -3,10 +3,10 @@
 // four-sided patches that share corners. A side that two patches share is a seam; both patches
 // are cut along the same exact shortest geodesic there, which the result checks (seam mismatch).
 //
-// This is the first step of multi-patch gridshells: a layout given by the user is cut, each patch
-// is checked as a single patch is (corners, convexity, coverability), and the coverage of the
-// input is reported, with the reason of every patch that fails. Smoothing is not run on a layout
-// yet (it would move a seam once per patch): eta is reported against eta_max.
+// A layout (given, or computed for a disk by auto_layout) is cut, each patch is checked and
+// smoothed as a single patch is (corners, convexity, coverability), but smoothing keeps the
+// shared sides; the coverage of the input is reported, with the reason of every patch that fails.
+// Designed patches meet at seam joints (seam_joints).
 #pragma once
 
 #include <array>
@@ -51,7 +51,7 @@ struct LayoutSeam {
 /// A layout patch as cut and checked, or why it could not be.
 struct LayoutPatch {
   std::string name;
-  std::optional<TargetPatch> target;  ///< the cut patch (no smoothing), when it could be cut
+  std::optional<TargetPatch> target;  ///< the cut (and smoothed) patch, when it could be cut
   /// Its first problem: an error from the patch stage (the field within the patch: "corners[1]")
   /// or eta above eta_max. Empty when the patch meets the checks.
   std::optional<Error> problem;
@@ -67,7 +67,8 @@ struct LayoutResult {
   double coverage() const { return input_area > 0 ? covered_area / input_area : 0; }
 };
 
-/// Cuts every patch of `layout` from `mesh` (as make_target_patch with options.smooth off) and
+/// Cuts every patch of `layout` from `mesh` (as make_target_patch does, but smoothing keeps the
+/// sides, which neighbours share: TargetPatchOptions::fixed_sides) and
 /// checks the layout as a whole. Throws InvalidInput for a malformed layout (field
 /// "layout.corners[i]", "layout.patches[j].corners[k]", ...: indices out of range, a patch with
 /// a corner twice, a name taken twice, a side used by three patches) and Infeasible
@@ -126,7 +127,7 @@ std::vector<SeamJoints> seam_joints(const LayoutResult& layout,
 
 struct AutoLayoutOptions {
   /// Patches at most (columns x rows of the layout grid).
-  int max_patches = 16;
+  int max_patches = 36;
   /// Stop at the first layout (fewest patches first) whose checked patches cover this fraction
   /// of the input's area.
   double coverage_goal = 0.95;
@@ -136,7 +137,7 @@ struct AutoLayoutOptions {
 struct AutoLayoutTrial {
   int columns = 0, rows = 0;
   double coverage = 0;
-  int failing = 0;  ///< patches that could not be cut or missed a check
+  int failing = 0;            ///< patches that could not be cut or missed a check
   std::string first_problem;  ///< the first failing patch's name and problem, "" if none
   double seconds = 0;
 };
@@ -150,15 +151,19 @@ struct AutoLayout {
 };
 
 /// A layout of columns x rows patches computed for a surface with one boundary loop and no
-/// holes (a disk). Four boundary vertices become the corners of a square: the sharpest turn of
-/// the boundary, then the sharpest turn (above 30 degrees) within an eighth of the perimeter of
-/// each quarter point along it, else the quarter point. The surface is mapped onto the square
-/// (CGAL's mean value coordinates with the boundary by arc length between the corners), and the
-/// layout's corners are the points of the surface at a columns x rows grid of the square: the
-/// outer ones on the boundary. Grids of 1, 2, ... patches whose shape follows the boundary's
-/// side lengths are tried (cut_layout) until one covers options.coverage_goal; else the one
-/// that covers most, the fewer patches on a tie. Throws Infeasible (field "layout") for a
-/// surface that is not a disk: closed, with holes or in several pieces.
+/// holes (a disk). Four boundary vertices become the corners of a square. Where the boundary
+/// turns is measured in plan (on the plane of the surface's two largest principal directions,
+/// where a roof's or a facade's corners are), summed over a 32nd of the perimeter either side of
+/// each vertex so that rounded corners count: the corners are the most turning vertex, then
+/// the most turning one (above 30 degrees) within an eighth of the perimeter of each quarter
+/// point along the boundary from it, else the quarter point. The surface is mapped onto the
+/// square (CGAL's mean value coordinates, the boundary by arc length between the corners), and
+/// the layout's corners are the surface's points at a columns x rows grid of the square: the
+/// outer ones on the boundary. Grids of 1, 2, ... patches, each patch at most twice as long as
+/// wide by the boundary's side lengths, are cut (cut_layout) until one covers
+/// options.coverage_goal; else the one that covers most, the fewer patches on a tie. Throws
+/// Infeasible (field "layout") for a surface that is not a disk: closed, with holes or in
+/// several pieces.
 AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options = {},
                        const AutoLayoutOptions& options = {}, const Progress& progress = {});
 

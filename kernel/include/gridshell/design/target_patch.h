@@ -23,7 +23,10 @@ struct TargetPatchOptions {
   PatchCutOptions cut;               // boundary geodesics and cutting
   CoverabilityOptions coverability;  // eta_max, smoothing cap and step
   bool smooth = true;                // run smoothing when eta > eta_max
-  AutoCornerOptions auto_corners;    // the search behind CornerSpec::Kind::Auto
+  /// Smoothing never re-cuts a side (a layout's sides are shared with a neighbour): a patch
+  /// whose sides are no longer shortest geodesics after smoothing is Infeasible instead.
+  bool fixed_sides = false;
+  AutoCornerOptions auto_corners;  // the search behind CornerSpec::Kind::Auto
 };
 
 struct TargetPatch {
