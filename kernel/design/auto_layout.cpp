@@ -101,9 +101,19 @@ std::array<int, 4> square_corners(const TriangleMesh& mesh, const std::vector<in
       along = std::min(along, perimeter - along);
       if (along <= reach) turn[i] += vertex_turn[j];
     }
-  // Within a window of equal turn (a sharp corner and its straight neighbours), the corner.
-  for (int i = 0; i < n; ++i) turn[i] += 1e-3 * vertex_turn[i];
-  const int start = static_cast<int>(std::max_element(turn.begin(), turn.end()) - turn.begin());
+  // A corner found by its window is then the vertex that turns most within that window: the
+  // sharp corner where there is one.
+  const auto sharpest_near = [&](int c) {
+    int best = c;
+    for (int j = 0; j < n; ++j) {
+      double along = std::abs(arc[j] - arc[c]);
+      along = std::min(along, perimeter - along);
+      if (along <= reach && vertex_turn[j] > vertex_turn[best]) best = j;
+    }
+    return best;
+  };
+  const int start =
+      sharpest_near(static_cast<int>(std::max_element(turn.begin(), turn.end()) - turn.begin()));
   std::array<int, 4> corners{start, 0, 0, 0};
   for (int q = 1; q < 4; ++q) {
     const double ideal = q * perimeter / 4;
@@ -118,7 +128,7 @@ std::array<int, 4> square_corners(const TriangleMesh& mesh, const std::vector<in
       if (offset < nearest_offset) nearest_offset = offset, nearest = at;
       if (turn[at] > kPi / 6 && (sharpest < 0 || turn[at] > turn[sharpest])) sharpest = at;
     }
-    corners[q] = sharpest >= 0 ? sharpest : nearest;
+    corners[q] = sharpest >= 0 ? sharpest_near(sharpest) : nearest;
   }
   return corners;
 }

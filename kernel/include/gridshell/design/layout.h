@@ -156,7 +156,8 @@ struct AutoLayout {
 /// where a roof's or a facade's corners are), summed over a 32nd of the perimeter either side of
 /// each vertex so that rounded corners count: the corners are the most turning vertex, then
 /// the most turning one (above 30 degrees) within an eighth of the perimeter of each quarter
-/// point along the boundary from it, else the quarter point. The surface is mapped onto the
+/// point along the boundary from it, else the quarter point; each then moves to the vertex
+/// whose own turn is largest within its 32nd of the perimeter (a sharp corner). The surface is mapped onto the
 /// square (CGAL's mean value coordinates, the boundary by arc length between the corners), and
 /// the layout's corners are the surface's points at a columns x rows grid of the square: the
 /// outer ones on the boundary. Grids of 1, 2, ... patches, each patch at most twice as long as
