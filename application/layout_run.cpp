@@ -11,6 +11,7 @@
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/layout.h"
 #include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/simulation/deployment_export.h"
 #include "gridshell/simulation/layout_deployment.h"
 
@@ -65,40 +66,62 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
   const size_t count = cut.patches.size();
   std::vector<std::optional<Design>> designs(count);
   std::vector<std::optional<DeploymentJob>> jobs(count);
+  std::vector<v1::DesignResult> design_results(count);
+  std::vector<std::optional<Error>> failures(count);
+  // The patches are independent: built side by side, each on a share of the threads (a patch's
+  // own stages, and its two simulations, use fewer threads than there are cores for most of their
+  // time). Results do not depend on the thread count.
+  std::vector<size_t> built;
+  for (size_t j = 0; j < count; ++j)
+    if (cut.patches[j].target && !cut.patches[j].problem) built.push_back(j);
+  const int threads = resolve_threads(settings.threads);
+  ParallelOptions parallel;
+  parallel.threads = std::max(1, std::min(threads, static_cast<int>(built.size())));
+  parallel.stage = "layout: patches designed and simulated";
+  const int inner_threads = std::max(1, threads / parallel.threads);
+  DesignOptions options = in.options;
+  options.maps.threads = options.grid.threads = options.patch.coverability.threads = inner_threads;
+  parallel_for(
+      built.size(),
+      [&](std::size_t k, const Progress& inner) {
+        const size_t j = built[k];
+        const LayoutPatch& patch = cut.patches[j];
+        // One patch alone reports its own stages; side by side, parallel_for reports patches.
+        const Progress step = parallel.threads == 1 ? patch_progress(progress, patch.name) : inner;
+        try {
+          const auto design_start = std::chrono::steady_clock::now();
+          designs[j] = design_grid(*patch.target, options, step);
+          design_results[j] = design_result(*designs[j], in.record, input + " " + patch.name,
+                                            in.mesh.vertex_count(), seconds_since(design_start));
+          jobs[j] = run_deployment_job(design_results[j].design(), simulation, "design.json", step,
+                                       inner_threads);
+        } catch (const Cancelled&) {
+          throw;
+        } catch (const Error& e) {
+          designs[j].reset();
+          jobs[j].reset();
+          failures[j] = e;
+        }
+      },
+      progress, parallel);
   for (size_t j = 0; j < count; ++j) {
     v1::RunResult& run = *out.add_patches();
+    if (designs[j]) *run.mutable_design() = std::move(design_results[j]);
+    if (!failures[j]) continue;
+    // The patch is not built: it says why, and the coverage does without it.
+    const Error& e = *failures[j];
     const LayoutPatch& patch = cut.patches[j];
-    if (!patch.target || patch.problem) continue;
-    const Progress step = patch_progress(progress, patch.name);
-    const std::string field = "layout.patches[" + std::to_string(j) + "]";
-    try {
-      const auto design_start = std::chrono::steady_clock::now();
-      designs[j] = design_grid(*patch.target, in.options, step);
-      *run.mutable_design() = design_result(*designs[j], in.record, input + " " + patch.name,
-                                            in.mesh.vertex_count(), seconds_since(design_start));
-      jobs[j] = run_deployment_job(run.design().design(), simulation, "design.json", step,
-                                   settings.threads);
-    } catch (const Cancelled&) {
-      throw;
-    } catch (const Error& e) {
-      // The patch is not built: it says why, and the coverage does without it.
-      designs[j].reset();
-      jobs[j].reset();
-      run.Clear();
-      v1::LayoutReport::PatchSummary& s = *report.mutable_patches(static_cast<int>(j));
-      s.set_ok(false);
-      s.set_problem_code(to_string(e.code()));
-      s.set_problem_field(join_field(field, e.field()));
-      s.set_problem(e.message());
-      v1::LayoutReport::Uncovered& u = *report.add_uncovered();
-      u.set_where(patch.name);
-      u.set_area(patch.target->area);
-      u.set_reason("its design: " + e.message());
-      report.set_covered_area(report.covered_area() - patch.target->area);
-      report.set_coverage(report.input_area() > 0 ? report.covered_area() / report.input_area()
-                                                  : 0);
-      continue;
-    }
+    v1::LayoutReport::PatchSummary& s = *report.mutable_patches(static_cast<int>(j));
+    s.set_ok(false);
+    s.set_problem_code(to_string(e.code()));
+    s.set_problem_field(join_field("layout.patches[" + std::to_string(j) + "]", e.field()));
+    s.set_problem(e.message());
+    v1::LayoutReport::Uncovered& u = *report.add_uncovered();
+    u.set_where(patch.name);
+    u.set_area(patch.target->area);
+    u.set_reason("its design: " + e.message());
+    report.set_covered_area(report.covered_area() - patch.target->area);
+    report.set_coverage(report.input_area() > 0 ? report.covered_area() / report.input_area() : 0);
   }
 
   // The seams: joints on the designs, gaps on the main runs.
