@@ -268,6 +268,8 @@ GRIDSHELL_RPC(Load, load)
 GRIDSHELL_RPC(Examples, examples)
 GRIDSHELL_RPC(Fabricate, fabricate)
 GRIDSHELL_RPC(Options, options)
+GRIDSHELL_RPC(Layout, layout)
+GRIDSHELL_RPC(RunLayout, run_layout)
 #undef GRIDSHELL_RPC
 
 std::shared_ptr<grpc::AuthMetadataProcessor> make_token_processor(

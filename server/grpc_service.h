@@ -25,7 +25,10 @@ using RawService = v1::Gridshell::WithRawCallbackMethod_Patch<
         v1::Gridshell::WithRawCallbackMethod_Run<v1::Gridshell::WithRawCallbackMethod_Geodesic<
             v1::Gridshell::WithRawCallbackMethod_Load<v1::Gridshell::WithRawCallbackMethod_Examples<
                 v1::Gridshell::WithRawCallbackMethod_Fabricate<
-                    v1::Gridshell::WithRawCallbackMethod_Options<v1::Gridshell::Service>>>>>>>>>;
+                    v1::Gridshell::WithRawCallbackMethod_Options<
+                        v1::Gridshell::WithRawCallbackMethod_Layout<
+                            v1::Gridshell::WithRawCallbackMethod_RunLayout<
+                                v1::Gridshell::Service>>>>>>>>>>>;
 
 class GridshellService final : public RawService {
  public:
@@ -42,6 +45,8 @@ class GridshellService final : public RawService {
   Reactor* Load(Context* context, const grpc::ByteBuffer* request) override;
   Reactor* Examples(Context* context, const grpc::ByteBuffer* request) override;
   Reactor* Options(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* Layout(Context* context, const grpc::ByteBuffer* request) override;
+  Reactor* RunLayout(Context* context, const grpc::ByteBuffer* request) override;
   Reactor* Fabricate(Context* context, const grpc::ByteBuffer* request) override;
 
  private:

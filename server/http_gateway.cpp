@@ -186,6 +186,8 @@ struct HttpGateway::Impl {
     routes["/v1/examples"] = route(methods.examples);
     routes["/v1/fabricate"] = route(methods.fabricate);
     routes["/v1/options"] = route(methods.options);
+    routes["/v1/layout"] = route(methods.layout);
+    routes["/v1/runlayout"] = route(methods.run_layout);
   }
 
   template <class Stream>

@@ -55,6 +55,16 @@ Methods make_methods(const RunSettings& settings) {
                      },
                      {},
                      true};
+  methods.layout = {"Layout",
+                    [settings](const v1::LayoutRequest& request, const Progress& progress) {
+                      return run_layout(request, progress, settings);
+                    },
+                    {}};
+  methods.run_layout = {"RunLayout",
+                        [settings](const v1::LayoutRunRequest& request, const Progress& progress) {
+                          return run_layout_run(request, progress, settings);
+                        },
+                        {}};
   return methods;
 }
 

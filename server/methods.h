@@ -15,10 +15,12 @@
 
 #include "gridshell/application/fabricate.h"
 #include "gridshell/application/files.h"
+#include "gridshell/application/layout.h"
 #include "gridshell/application/options.h"
 #include "gridshell/application/requests.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/foundation/progress.h"
+#include "gridshell/v1/layout.pb.h"
 #include "gridshell/v1/requests.pb.h"
 #include "job_queue.h"
 
@@ -48,6 +50,8 @@ struct Methods {
   Method<v1::ExamplesRequest, v1::ExamplesResult> examples;
   Method<v1::FabricateRequest, v1::FabricateResult> fabricate;
   Method<v1::OptionsRequest, v1::OptionsResult> options;
+  Method<v1::LayoutRequest, v1::LayoutResult> layout;
+  Method<v1::LayoutRunRequest, v1::LayoutRunResult> run_layout;
 };
 
 /// The table; `settings` (kernel threads per request) applies to every method.

@@ -26,9 +26,7 @@ struct LayoutArguments {
   std::string layout;
   DescribedFlags options;    // the patch options of every patch (no --corner-angles)
   DescribedFlags automatic;  // --layout auto's options
-  std::string out;
-  bool quiet = false;
-  int threads = 0;
+  OutputFlags output;
 };
 
 }  // namespace
@@ -136,16 +134,19 @@ int run_layout_command(const LayoutArguments& args) {
   if (choice.automatic) *request.mutable_automatic() = *choice.automatic;
   *request.mutable_mesh() = request_mesh(input);
   set_described(args.options, *request.mutable_options());
-  prepare_output_folder(args.out);
-  const Progress progress = make_progress(args.quiet);
-  v1::LayoutResult result = run_layout(request, progress, {args.threads});
+  prepare_output_folder(args.output.out);
+  const Progress progress = make_progress(args.output.quiet);
+  v1::LayoutResult result = args.output.remote.remote()
+                                ? RemoteClient(args.output.remote).layout(request, progress)
+                                : run_layout(request, progress, {args.output.threads});
   finish_progress();
   write_layout_as_given(*result.mutable_report(), input);  // file-order vertices, names filled
-  write_files(layout_files(result), args.out);
-  std::printf("layout %s (%s) -> %s\n", args.mesh.c_str(), args.layout.c_str(), args.out.c_str());
+  write_files(layout_files(result), args.output.out);
+  std::printf("layout %s (%s) -> %s\n", args.mesh.c_str(), args.layout.c_str(),
+              args.output.out.c_str());
   print_automatic_layout(result.report());
   const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.report());
-  const std::filesystem::path out(args.out);
+  const std::filesystem::path out(args.output.out);
   std::printf("  wrote           %s, %s, %s\n", (out / "layout.json").c_str(),
               (out / "layout.obj").c_str(), (out / "layout.svg").c_str());
   if (failed)
@@ -167,11 +168,7 @@ Command add_layout_command(CLI::App& app) {
   sub->add_option("--layout", args->layout, kLayoutHelp)->required();
   add_described_flags(sub, "layout", args->automatic);
   add_described_flags(sub, "patch", args->options, {"auto_corner_angles", "no_smoothing"});
-  sub->add_option("--out", args->out, "output folder")->required();
-  sub->add_option("--threads", args->threads, "worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 4096))
-      ->capture_default_str();
-  sub->add_flag("--quiet", args->quiet, "no progress line");
+  add_output_flags(sub, args->output);
   return [args] { return run_layout_command(*args); };
 }
 

@@ -88,10 +88,6 @@ void print_table(const v1::RunResult& result, const std::string& input) {
 int run_layout(const RunArguments& args) {
   if (!args.design.corners.empty())
     throw InvalidInput("--corners", "give either --corners (one patch) or --layout (several)");
-  if (args.output.remote.remote())
-    throw InvalidInput("--layout",
-                       "a layout runs in process only for now (the daemon's Layout calls are not "
-                       "built yet: docs/multi-patch.md); drop --server");
   const InputMesh input = load_input(args.design.mesh);
   v1::LayoutRunRequest request;
   LayoutChoice choice = layout_choice(args.layout, args.automatic, input);
@@ -104,7 +100,9 @@ int run_layout(const RunArguments& args) {
   *request.mutable_simulation() = simulation_options_from_flags(simulation);
   prepare_output_folder(args.output.out);
   const Progress progress = make_progress(args.output.quiet);
-  v1::LayoutRunResult result = run_layout_run(request, progress, {args.output.threads});
+  v1::LayoutRunResult result = args.output.remote.remote()
+                                   ? RemoteClient(args.output.remote).run_layout(request, progress)
+                                   : run_layout_run(request, progress, {args.output.threads});
   finish_progress();
   write_layout_as_given(*result.mutable_layout()->mutable_report(), input);
   write_layout_as_given(*result.mutable_design()->mutable_layout(), input);

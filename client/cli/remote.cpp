@@ -288,6 +288,15 @@ v1::FabricateResult RemoteClient::fabricate(const v1::FabricateRequest& request,
   return impl_->call(&v1::Gridshell::Stub::Fabricate, request, progress);
 }
 
+v1::LayoutResult RemoteClient::layout(const v1::LayoutRequest& request, const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::Layout, request, progress);
+}
+
+v1::LayoutRunResult RemoteClient::run_layout(const v1::LayoutRunRequest& request,
+                                             const Progress& progress) {
+  return impl_->call(&v1::Gridshell::Stub::RunLayout, request, progress);
+}
+
 std::string RemoteClient::health(const std::string& service) {
   auto stub = grpc::health::v1::Health::NewStub(impl_->channel);
   grpc::health::v1::HealthCheckRequest request;
@@ -319,6 +328,10 @@ v1::GeodesicResult RemoteClient::geodesic(const v1::GeodesicRequest&, const Prog
   return {};
 }
 v1::FabricateResult RemoteClient::fabricate(const v1::FabricateRequest&, const Progress&) {
+  return {};
+}
+v1::LayoutResult RemoteClient::layout(const v1::LayoutRequest&, const Progress&) { return {}; }
+v1::LayoutRunResult RemoteClient::run_layout(const v1::LayoutRunRequest&, const Progress&) {
   return {};
 }
 std::string RemoteClient::health(const std::string&) { return {}; }

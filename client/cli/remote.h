@@ -11,6 +11,7 @@
 #include "gridshell/batch/remote_options.h"
 #include "gridshell/foundation/progress.h"
 #include "gridshell/v1/fabrication.pb.h"
+#include "gridshell/v1/layout.pb.h"
 #include "gridshell/v1/requests.pb.h"
 
 // CLI11 is heavy (4 s of compile time per file that includes it): declared here, included only
@@ -47,6 +48,9 @@ class RemoteClient {
   v1::SimulateResult simulate(const v1::SimulateRequest& request, const Progress& progress = {});
   v1::GeodesicResult geodesic(const v1::GeodesicRequest& request, const Progress& progress = {});
   v1::FabricateResult fabricate(const v1::FabricateRequest& request, const Progress& progress = {});
+  v1::LayoutResult layout(const v1::LayoutRequest& request, const Progress& progress = {});
+  v1::LayoutRunResult run_layout(const v1::LayoutRunRequest& request,
+                                 const Progress& progress = {});
   /// grpc.health.v1 Check of `service` ("" = the whole daemon): "SERVING", "NOT_SERVING", ...
   std::string health(const std::string& service = "");
 

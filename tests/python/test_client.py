@@ -152,6 +152,31 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(run["design"]["design"], alone["design"])
         self.assertGreater(run["simulation"]["deployment"]["rms_with_notches"], 0)
 
+    def test_layouts_automatic_and_run(self):
+        knet = gs.mesh_file(os.path.join(T.MESHES, "knet1.obj"))
+        cut = self.client.layout(knet, automatic={})
+        self.assertGreaterEqual(cut["report"]["coverage"], 0.95)
+        self.assertGreaterEqual(len(cut["report"]["automatic"]["trials"]), 1)
+        # The layout it found, given back as a layout, is cut the same.
+        again = self.client.layout(knet, layout=cut["report"]["layout"])
+        self.assertAlmostEqual(again["report"]["coverage"], cut["report"]["coverage"], places=6)
+        stages = []
+        run = self.client.run_layout(
+            knet,
+            layout=cut["report"]["layout"],
+            design_options={"members_u": 3, "members_v": 3},
+            simulation={"notches": "on"},
+            progress=lambda p: stages.append(p.stage),
+        )
+        self.assertIn("layout: patches designed and simulated", stages)
+        whole = run["deployment"]
+        self.assertEqual(len(whole["patches"]), len(cut["report"]["patches"]))
+        self.assertTrue(whole["converged"])
+        self.assertGreater(run["design"]["seam_bolts"], 0)
+        with self.assertRaises(gs.InvalidInput) as caught:
+            self.client.layout(knet, automatic={"coverage_goal": 2})
+        self.assertEqual(caught.exception.field, "automatic.coverage_goal")
+
     def test_invalid_input_names_the_field(self):
         positions, indices, corners = square_grid()
         positions[7] = float("nan")

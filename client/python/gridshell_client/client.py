@@ -399,6 +399,24 @@ class Client:
             design["files"] = True
         return self.call("run", _with(design=design, simulation=simulation), **call)
 
+    def layout(self, mesh, layout=None, automatic=None, options=None, **call):
+        """Several patches that share corners and seams (``LayoutResult``: report, patches,
+        views). ``layout`` a ``Layout`` dict (corners, patches), or ``automatic`` an
+        ``AutoLayoutOptions`` dict (``{}`` for the defaults) to compute one for a disk."""
+        request = _with(mesh=mesh, layout=layout, options=options)
+        if automatic is not None:
+            request["automatic"] = automatic
+        return self.call("layout", request, **call)
+
+    def run_layout(self, mesh, layout=None, automatic=None, design_options=None, simulation=None,
+                   **call):
+        """Every patch of a layout designed and simulated, the whole measured
+        (``LayoutRunResult``: layout, patches, design, deployment, views)."""
+        request = _with(mesh=mesh, layout=layout, design=design_options, simulation=simulation)
+        if automatic is not None:
+            request["automatic"] = automatic
+        return self.call("runlayout", request, **call)
+
     def geodesic(self, mesh, source, method="", compare="", repeat=0, distances=False, **call):
         """One exact single-source geodesic distance field (``GeodesicResult``)."""
         request = {"mesh": mesh, "source": source}

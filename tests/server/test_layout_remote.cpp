@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Layouts through the daemon (issue 35): `gridshell run --layout --server` and `gridshell layout
+// --server` write what the in-process runs write; POST /v1/layout computes an automatic layout
+// and names a bad option's field; a RunLayout call streams progress and stops when cancelled,
+// the daemon serving on.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <regex>
+
+#include "gridshell/application/files.h"
+#include "gridshell/v1/layout.pb.h"
+#include "server_support.h"
+#include "support.h"
+
+namespace gridshell {
+namespace {
+
+using json = nlohmann::json;
+using testing::read_text;
+using testing::run_cli;
+using testing::TestDaemon;
+
+/// The sphere example's grid in 2 x 2 patches (file-order vertex indices).
+std::string sphere_layout_file(const std::string& dir) {
+  json corners = json::array();
+  for (int j : {0, 16, 32})
+    for (int i : {0, 16, 32}) corners.push_back({{"vertex", j * 33 + i}});
+  const json layout = {{"corners", corners},
+                       {"patches",
+                        {{{"corners", {0, 1, 4, 3}}},
+                         {{"corners", {1, 2, 5, 4}}},
+                         {{"corners", {3, 4, 7, 6}}},
+                         {{"corners", {4, 5, 8, 7}}}}}};
+  return testing::write_text(dir, "layout.json", layout.dump());
+}
+
+/// A file's text without its timings ("seconds" members).
+std::string without_seconds(const std::string& text) {
+  return std::regex_replace(text, std::regex("\"seconds[a-z_]*\": [-0-9.e+]+,?"), "");
+}
+
+TEST(LayoutRemote, CliServerWritesWhatTheInProcessRunWrites) {
+  TestDaemon daemon;
+  const std::string dir = testing::temp_dir(), file = sphere_layout_file(dir);
+  const std::string args = "run example:sphere --layout '" + file +
+                           "' --members-u 4 --members-v 4 --notches on --quiet ";
+  auto r = run_cli(args + "--out '" + dir + "/local'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli(args + "--server " + daemon.grpc_address() + " --out '" + dir + "/remote'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"layout.json", "layout.svg", "layout.obj", "design.json", "deployment.json",
+                        "deployed.obj", "deviation.ply", "patches/P1/design.json",
+                        "patches/P4/deployment.json", "patches/P3/deployed.obj"})
+    EXPECT_EQ(without_seconds(read_text(dir + "/remote/" + f)),
+              without_seconds(read_text(dir + "/local/" + f)))
+        << f;
+  // gridshell layout --server too.
+  r = run_cli("layout example:sphere --layout '" + file + "' --quiet --server " +
+              daemon.grpc_address() + " --out '" + dir + "/cut'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(dir + "/cut/layout.json"), read_text(dir + "/local/layout.json"));
+}
+
+TEST(LayoutRemote, HttpComputesAnAutomaticLayoutAndNamesABadOption) {
+  TestDaemon daemon;
+  v1::LayoutRequest request;
+  request.mutable_mesh()->set_name("knet1.obj");
+  request.mutable_mesh()->set_format("obj");
+  request.mutable_mesh()->set_file(read_text(testing::test_mesh_path("knet1.obj")));
+  request.mutable_automatic()->set_max_patches(30);
+  const std::map<std::string, std::string> headers = {{"Content-Type", "application/json"}};
+  auto reply = testing::http_request(daemon.http_port(), "POST", "/v1/layout",
+                                     to_json(request, false), headers);
+  ASSERT_EQ(reply.status, 200) << reply.body;
+  const json result = json::parse(reply.body);
+  EXPECT_GE(result["report"]["coverage"].get<double>(), 0.95);
+  EXPECT_GE(result["report"]["automatic"]["trials"].size(), 1u);
+  EXPECT_EQ(result["report"]["patches"].size(), result["patches"].size());
+  request.mutable_automatic()->set_max_patches(100);
+  reply = testing::http_request(daemon.http_port(), "POST", "/v1/layout", to_json(request, false),
+                                headers);
+  EXPECT_EQ(reply.status, 400) << reply.body;
+  EXPECT_EQ(json::parse(reply.body)["error"]["field"], "automatic.max_patches");
+}
+
+TEST(LayoutRemote, ACancelledRunLayoutStopsAndTheDaemonServesOn) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  v1::LayoutRunRequest request;
+  request.mutable_mesh()->set_name("pillow_1.obj");
+  request.mutable_mesh()->set_format("obj");
+  request.mutable_mesh()->set_file(read_text(testing::test_mesh_path("pillow_1.obj")));
+  request.mutable_automatic();  // 16 patches, each designed and simulated: seconds of work
+  grpc::ClientContext context;
+  auto reader = stub->RunLayout(&context, request);
+  v1::RunLayoutEvent event;
+  bool working = false, result = false;
+  // Cancel as soon as the patches are being built.
+  while (reader->Read(&event)) {
+    if (event.has_result()) result = true;
+    if (event.has_progress() &&
+        event.progress().stage().find("patches designed") != std::string::npos && !working) {
+      working = true;
+      context.TryCancel();
+    }
+  }
+  EXPECT_TRUE(working);
+  EXPECT_FALSE(result);
+  EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  ASSERT_TRUE(daemon.wait_for([](const auto& s) { return s.cancelled == 1 && s.running == 0; }));
+  EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
+}
+
+}  // namespace
+}  // namespace gridshell
