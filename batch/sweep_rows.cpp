@@ -23,6 +23,7 @@
 
 #include "gridshell/application/files.h"
 #include "gridshell/batch/sweep.h"
+#include "gridshell/v1/layout.pb.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/v1/deployment.pb.h"
@@ -89,6 +90,22 @@ bool parse_json_file(const fs::path& path, Message* message, std::string* error)
 /// The summary numbers of a finished run, from its design.json, report.json, deployment.json.
 bool read_results(const fs::path& folder, std::map<std::string, double>* results,
                   std::string* error) {
+  auto& r = *results;
+  std::error_code ec;
+  if (fs::is_directory(folder / "patches", ec)) {
+    // A layout run (--layout): the whole's design.json and deployment.json.
+    v1::LayoutDesign layout;
+    v1::LayoutDeployment whole;
+    if (!parse_json_file(folder / "design.json", &layout, error) ||
+        !parse_json_file(folder / "deployment.json", &whole, error))
+      return false;
+    r["coverage"] = layout.layout().coverage();
+    r["patches"] = whole.patches_size();
+    if (whole.has_rms_without_notches()) r["rms_without_notches"] = whole.rms_without_notches();
+    if (whole.has_rms_with_notches()) r["rms_with_notches"] = whole.rms_with_notches();
+    r["max_seam_gap"] = whole.max_seam_gap();
+    return true;
+  }
   v1::Design design;
   v1::DesignReport report;
   v1::Deployment deployment;
@@ -96,7 +113,6 @@ bool read_results(const fs::path& folder, std::map<std::string, double>* results
       !parse_json_file(folder / "report.json", &report, error) ||
       !parse_json_file(folder / "deployment.json", &deployment, error))
     return false;
-  auto& r = *results;
   r["alpha_bar"] = design.alpha_bar();
   r["members"] = report.members_g() + report.members_h();
   r["crossings"] = report.crossings();

@@ -30,7 +30,10 @@ const char* const kResultColumns[] = {"alpha_bar",
                                       "max_bending_stress",
                                       "t_grid",
                                       "t1",
-                                      "t2"};
+                                      "t2",
+                                      "coverage",
+                                      "patches",
+                                      "max_seam_gap"};
 
 std::string number(double value) {
   char buffer[32];

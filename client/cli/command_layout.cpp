@@ -66,8 +66,7 @@ LayoutChoice layout_choice(const std::string& layout, const DescribedFlags& auto
     set_described(automatic, out.automatic.emplace());
     return out;
   }
-  for (const auto& [name, value] : automatic.values)
-    if (value) throw InvalidInput(option_spec("layout", name).flag, "only with --layout auto");
+  check_no_layout_flags({"", automatic});
   out.layout = read_layout_file(layout, input);
   return out;
 }

@@ -19,8 +19,7 @@ namespace gridshell::cli {
 namespace {
 
 struct RunArguments {
-  std::string layout;        // auto or a layout file: several patches (docs/multi-patch.md)
-  DescribedFlags automatic;  // --layout auto's options
+  LayoutFlags layout;  // auto or a layout file: several patches (docs/multi-patch.md)
   DesignFlags design;
   SimulationFlags simulation;
   OutputFlags output;
@@ -86,18 +85,9 @@ void print_table(const v1::RunResult& result, const std::string& input) {
 
 /// `run MESH --layout FILE`: every patch of the layout designed and simulated, the whole measured.
 int run_layout(const RunArguments& args) {
-  if (!args.design.corners.empty())
-    throw InvalidInput("--corners", "give either --corners (one patch) or --layout (several)");
   const InputMesh input = load_input(args.design.mesh);
-  v1::LayoutRunRequest request;
-  LayoutChoice choice = layout_choice(args.layout, args.automatic, input);
-  *request.mutable_layout() = std::move(choice.layout);
-  if (choice.automatic) *request.mutable_automatic() = *choice.automatic;
-  *request.mutable_mesh() = request_mesh(input);
-  *request.mutable_design() = design_options(args.design);
-  SimulationFlags simulation = args.simulation;
-  if (automatic_interior_anchors(args.design)) simulation.interior_anchors = "auto";
-  *request.mutable_simulation() = simulation_options_from_flags(simulation);
+  const v1::LayoutRunRequest request =
+      layout_run_request(args.layout, args.design, args.simulation, input);
   prepare_output_folder(args.output.out);
   const Progress progress = make_progress(args.output.quiet);
   v1::LayoutRunResult result = args.output.remote.remote()
@@ -113,7 +103,7 @@ int run_layout(const RunArguments& args) {
     write_files(bundle, (out / "patches" / name).string());
 
   print_heading("run", args.design.mesh, args.output);
-  std::printf("  layout          %s\n", args.layout.c_str());
+  std::printf("  layout          %s\n", args.layout.layout.c_str());
   print_automatic_layout(result.design().layout());
   const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.design().layout());
   const v1::LayoutDeployment& d = result.deployment();
@@ -151,9 +141,8 @@ int run_layout(const RunArguments& args) {
 }
 
 int run_run(const RunArguments& args) {
-  if (!args.layout.empty()) return run_layout(args);
-  for (const auto& [name, value] : args.automatic.values)
-    if (value) throw InvalidInput(option_spec("layout", name).flag, "only with --layout auto");
+  if (!args.layout.layout.empty()) return run_layout(args);
+  check_no_layout_flags(args.layout);
   // Both requests are checked before any work; the design is written as soon as it exists, so
   // a simulation that is cancelled or fails leaves it in --out.
   const v1::DesignRequest design_request_message = design_request(args.design);
@@ -197,16 +186,46 @@ int run_run(const RunArguments& args) {
 
 }  // namespace
 
+v1::LayoutRunRequest layout_run_request(const LayoutFlags& layout, const DesignFlags& design,
+                                        SimulationFlags simulation, const InputMesh& input) {
+  if (!design.corners.empty())
+    throw InvalidInput("--corners", "give either --corners (one patch) or --layout (several)");
+  v1::LayoutRunRequest request;
+  LayoutChoice choice = layout_choice(layout.layout, layout.automatic, input);
+  *request.mutable_layout() = std::move(choice.layout);
+  if (choice.automatic) {
+    *request.mutable_automatic() = *choice.automatic;
+    prepare_auto_layout_options(*choice.automatic);
+  }
+  *request.mutable_mesh() = request_mesh(input);
+  *request.mutable_design() = design_options(design);
+  DesignInputs checked;
+  prepare_design_options(request.design(), checked);
+  if (automatic_interior_anchors(design)) simulation.interior_anchors = "auto";
+  *request.mutable_simulation() = simulation_options_from_flags(simulation);
+  prepare_simulation_options(request.simulation());
+  return request;
+}
+
+void check_no_layout_flags(const LayoutFlags& layout) {
+  for (const auto& [name, value] : layout.automatic.values)
+    if (value) throw InvalidInput(option_spec("layout", name).flag, "only with --layout auto");
+}
+
+void add_layout_flags(CLI::App* sub, LayoutFlags& flags) {
+  sub->add_option("--layout", flags.layout,
+                  std::string("several patches instead of one (--corners), writing the whole and "
+                              "patches/<name>/: ") +
+                      kLayoutHelp);
+  add_described_flags(sub, "layout", flags.automatic);
+}
+
 Command add_run_command(CLI::App& app) {
   auto args = std::make_shared<RunArguments>();
   CLI::App* sub = app.add_subcommand(
       "run", "Patch, design and simulate in one go, with a Table 1-like summary");
   add_design_flags(sub, args->design);
-  sub->add_option("--layout", args->layout,
-                  std::string("several patches instead of one (--corners), writing the whole and "
-                              "patches/<name>/: ") +
-                      kLayoutHelp);
-  add_described_flags(sub, "layout", args->automatic);
+  add_layout_flags(sub, args->layout);
   add_simulation_flags(sub, args->simulation);
   add_output_flags(sub, args->output);
   return [args] { return run_run(*args); };

@@ -78,6 +78,19 @@ struct LayoutChoice {
 };
 LayoutChoice layout_choice(const std::string& layout, const DescribedFlags& automatic,
                            const InputMesh& input);
+/// `run`'s --layout and the automatic layout's flags (also the sweep's columns).
+struct SimulationFlags;
+struct LayoutFlags {
+  std::string layout;        ///< auto or a layout file; "" = one patch (--corners)
+  DescribedFlags automatic;  ///< --layout auto's options
+};
+void add_layout_flags(CLI::App* sub, LayoutFlags& flags);
+/// A one-patch run (no --layout): refuses the automatic layout's flags, naming the first given.
+void check_no_layout_flags(const LayoutFlags& layout);
+/// A layout run's request from `run`'s flags, checked as far as it is before any work (the
+/// layout file read, every option against the description); InvalidInput names the flag.
+v1::LayoutRunRequest layout_run_request(const LayoutFlags& layout, const DesignFlags& design,
+                                        SimulationFlags simulation, const InputMesh& input);
 /// --layout's help.
 inline constexpr const char* kLayoutHelp =
     "auto (a layout computed for a surface with one boundary and no holes) or a layout file: "

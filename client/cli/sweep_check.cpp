@@ -19,10 +19,12 @@ namespace {
 /// The flags of `gridshell run` that describe a design (not where or how it runs).
 struct RunFlags {
   DesignFlags design;
+  LayoutFlags layout;
   SimulationFlags simulation;
   CLI::App app{"row"};
   RunFlags() {
     add_design_flags(&app, design);
+    add_layout_flags(&app, layout);
     add_simulation_flags(&app, simulation);
   }
   /// Parses `gridshell run` arguments (without the command name).
@@ -75,10 +77,15 @@ class RunRowChecker final : public sweep::RowChecker {
           throw;
         }
       }
-      SimulationFlags simulation = flags.simulation;
-      if (automatic_interior_anchors(flags.design)) simulation.interior_anchors = "auto";
-      prepare_design(design_request(flags.design, *input));
-      prepare_simulation_options(simulation_options_from_flags(simulation));
+      if (!flags.layout.layout.empty()) {
+        layout_run_request(flags.layout, flags.design, flags.simulation, *input);
+      } else {
+        check_no_layout_flags(flags.layout);
+        SimulationFlags simulation = flags.simulation;
+        if (automatic_interior_anchors(flags.design)) simulation.interior_anchors = "auto";
+        prepare_design(design_request(flags.design, *input));
+        prepare_simulation_options(simulation_options_from_flags(simulation));
+      }
     } catch (const CLI::ParseError& e) {
       problems.emplace_back("", e.what());
     } catch (const Error& e) {

@@ -394,5 +394,73 @@ TEST(SweepCollect, SyntheticRowsSummariseWithoutTheRunFiles) {
   EXPECT_EQ(svg.find(">r1</text>"), std::string::npos);
 }
 
+// A `layout` column: rows of several patches (a layout file, auto) next to a one-patch row; their
+// status and the summary carry the whole's coverage, patch count, RMS and largest seam gap.
+TEST(SweepLocal, ALayoutColumnRunsSeveralPatchesPerRow) {
+  const std::string dir = testing::temp_dir();
+  json corners = json::array();
+  for (int j : {0, 16, 32})
+    for (int i : {0, 16, 32}) corners.push_back({{"vertex", j * 33 + i}});
+  const json layout = {{"corners", corners},
+                       {"patches",
+                        {{{"corners", {0, 1, 4, 3}}},
+                         {{"corners", {1, 2, 5, 4}}},
+                         {{"corners", {3, 4, 7, 6}}},
+                         {{"corners", {4, 5, 8, 7}}}}}};
+  const std::string file = testing::write_text(dir, "sphere-layout.json", layout.dump());
+  const std::string knet = testing::test_mesh_path("knet1.obj");
+  const std::string manifest =
+      testing::write_text(dir, "rows.csv",
+                          "id,mesh,layout,max-patches,members-u,members-v,notches\n"
+                          "one,example:sphere,,,3,3,on\n"
+                          "four,example:sphere," +
+                              file +
+                              ",,3,3,on\n"
+                              "auto," +
+                              knet + ",auto,30,3,3,on\n");
+  auto r = run_cli("sweep check '" + manifest + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  r = run_cli("sweep '" + manifest + "' --out '" + dir + "/out' --workers 2 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  for (const char* id : {"four", "auto"}) {
+    const std::string row = dir + "/out/rows/" + id;
+    const json status = json::parse(testing::read_text(row + "/status.json"));
+    EXPECT_EQ(status["status"], "ok") << status;
+    const json deployment = json::parse(testing::read_text(row + "/deployment.json"));
+    const json design = json::parse(testing::read_text(row + "/design.json"));
+    EXPECT_EQ(status["results"]["rms_with_notches"].get<double>(),
+              deployment["rms_with_notches"].get<double>());
+    EXPECT_EQ(status["results"]["max_seam_gap"].get<double>(),
+              deployment["max_seam_gap"].get<double>());
+    EXPECT_EQ(status["results"]["coverage"].get<double>(),
+              design["layout"]["coverage"].get<double>());
+    EXPECT_EQ(status["results"]["patches"].get<int>(),
+              static_cast<int>(deployment["patches"].size()));
+    EXPECT_TRUE(fs::exists(row + "/patches/P1/design.json"));
+  }
+  const json four = json::parse(testing::read_text(dir + "/out/rows/four/status.json"));
+  EXPECT_EQ(four["results"]["patches"].get<int>(), 4);
+  EXPECT_NEAR(four["results"]["coverage"].get<double>(), 1.0, 1e-9);
+  const auto csv = read_csv_lines(dir + "/out/summary.csv");
+  ASSERT_EQ(csv.size(), 4u);
+  const auto& header = csv[0];
+  std::map<std::string, std::vector<std::string>> by_id;
+  for (size_t i = 1; i < csv.size(); ++i) by_id[csv[i][0]] = csv[i];
+  EXPECT_EQ(by_id["one"][column(header, "coverage")], "");
+  EXPECT_EQ(by_id["four"][column(header, "patches")], "4");
+  EXPECT_NE(by_id["auto"][column(header, "max_seam_gap")], "");
+  // The layout's flags are checked before anything runs, naming the row and the column.
+  const std::string bad = testing::write_text(dir, "bad.csv",
+                                              "id,mesh,layout,max-patches\n"
+                                              "nolayout,example:sphere,,4\n"
+                                              "missing,example:sphere,/nonexistent/layout.json,\n");
+  r = run_cli("sweep check '" + bad + "'");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  const std::string text = r.out + r.err;
+  EXPECT_NE(text.find("max-patches"), std::string::npos) << text;
+  EXPECT_NE(text.find("only with --layout auto"), std::string::npos) << text;
+  EXPECT_NE(text.find("missing"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace gridshell
