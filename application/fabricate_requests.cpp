@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "gridshell/application/convert_deployment.h"
@@ -11,6 +12,7 @@
 #include "gridshell/application/options.h"
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/fabrication/kit_export.h"
+#include "gridshell/fabrication/layout_kit.h"
 #include "gridshell/foundation/errors.h"
 
 namespace gridshell {
@@ -23,6 +25,12 @@ std::string two_digits(int n) {
 }
 
 std::string family_name(Family f) { return f == Family::G ? "g" : "h"; }
+
+void add_file(v1::FabricateResult& out, const std::string& name, std::string content) {
+  v1::File* file = out.add_files();
+  file->set_name(name);
+  file->set_content(std::move(content));
+}
 
 /// What design_from_proto does not check but a kit relies on: one crossing per pair of members,
 /// notch lengths equal to s - s̄ (zero on the boundary), arc lengths on their lamella.
@@ -130,28 +138,10 @@ v1::FabricationOptions prepare_fabrication_options(const v1::FabricationOptions&
   return o;
 }
 
-v1::FabricateResult run_fabricate(const v1::FabricateRequest& request, const Progress& progress,
-                                  const RunSettings&) {
-  v1::FabricationOptions options = prepare_fabrication_options(request.options());
-  check_notches(request.design());
-  Design design;
-  try {
-    design = design_from_proto(request.design());
-  } catch (const Error& e) {
-    rethrow_within(e, "design");
-  }
-  check_design(design);
-  const Kit kit = make_kit(design, kernel_options(options), progress);
-  const FabricationOptions& k = kit.options;
-  options.set_end_allowance(k.end_allowance);
-  options.set_thickness(k.thickness);
-  options.set_text_height(k.text_height);
-  const double mm = k.millimetres_per_unit;
+namespace {
 
-  v1::FabricateResult out;
-  v1::Kit& kj = *out.mutable_kit();
-  kj.set_design(request.design_name().empty() ? "design.json" : request.design_name());
-  *kj.mutable_options() = options;
+/// A kit's parts, sheets and figures into kit.json's message, and its sheet files into `out`.
+void add_kit(const Kit& kit, v1::Kit& kj, v1::FabricateResult& out, const Progress& progress) {
   for (const Part& p : kit.parts) {
     v1::KitPart* part = kj.add_parts();
     part->set_name(p.name);
@@ -170,7 +160,7 @@ v1::FabricateResult run_fabricate(const v1::FabricateRequest& request, const Pro
       v1::KitFeature* feature = part->add_features();
       feature->set_kind(f.kind == FeatureKind::Hole ? "hole" : "slot");
       feature->set_crossing(f.crossing);
-      feature->set_partner(family_name(f.partner_family) + std::to_string(f.partner));
+      feature->set_partner(f.partner_name);
       feature->set_s_bar(f.s_bar);
       feature->set_s(f.s);
       feature->add_x(f.x0);
@@ -179,11 +169,6 @@ v1::FabricateResult run_fabricate(const v1::FabricateRequest& request, const Pro
       feature->set_length(f.length());
     }
   }
-  auto add_file = [&](const std::string& name, std::string content) {
-    v1::File* file = out.add_files();
-    file->set_name(name);
-    file->set_content(std::move(content));
-  };
   for (size_t s = 0; s < kit.sheets.size(); ++s) {
     progress.report("fabricate: sheets", static_cast<double>(s) / kit.sheets.size());
     const std::string base = "sheets/sheet-" + two_digits(static_cast<int>(s) + 1);
@@ -195,31 +180,159 @@ v1::FabricateResult run_fabricate(const v1::FabricateRequest& request, const Pro
     sheet->set_rows(kit.sheets[s].rows);
     sheet->set_utilisation(kit.sheets[s].utilisation);
     const SheetDrawing drawing = sheet_drawing(kit, static_cast<int>(s));
-    add_file(base + ".dxf", sheet_dxf(drawing));
-    add_file(base + ".svg", sheet_svg(drawing));
+    add_file(out, base + ".dxf", sheet_dxf(drawing));
+    add_file(out, base + ".svg", sheet_svg(drawing));
   }
   kj.set_utilisation(kit.utilisation);
   kj.set_rows(kit.rows);
   kj.set_rows_per_sheet(kit.rows_per_sheet);
   kj.set_baseline_sheets(kit.baseline_sheets);
   kj.set_baseline_utilisation(kit.baseline_utilisation);
-  kj.set_crossings(static_cast<int>(design.grid.crossings.size()));
   kj.set_holes(kit.holes);
   kj.set_slots(kit.slots);
   kj.set_top_family(family_name(kit.top_family));
+  kj.set_thickness(kit.options.thickness);
+}
+
+/// The effective lamella end allowance, thickness and text height in the options recorded.
+void record_resolved(const FabricationOptions& k, v1::FabricationOptions& options) {
+  options.set_end_allowance(k.end_allowance);
+  options.set_thickness(k.thickness);
+  options.set_text_height(k.text_height);
+}
+
+/// Supports in the design's unit when it has a name, else in mm: (scale, unit).
+std::pair<double, std::string> support_unit(const v1::FabricationOptions& options, double mm) {
+  const bool named = options.unit() == "mm" || options.unit() == "cm" || options.unit() == "m" ||
+                     options.unit() == "in" || options.unit() == "ft";
+  return named ? std::pair{1.0, options.unit()} : std::pair{mm, std::string("mm")};
+}
+
+/// A design message of a kit request checked and converted; errors name `field`.
+Design checked_design(const v1::Design& message, const std::string& field) {
+  try {
+    check_notches(message);
+    Design design = design_from_proto(message);
+    check_design(design);
+    return design;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const Error& e) {
+    // The checks name "design.<...>" (or "<...>"): the same place under `field`.
+    const std::string inner = e.field().rfind("design", 0) == 0 ? e.field().substr(6) : e.field();
+    throw Error(e.code(),
+                field + (inner.empty() || inner[0] == '.' || inner[0] == '[' ? "" : ".") + inner,
+                e.message(), e.reason());
+  }
+}
+
+/// The kit of a layout run (FabricateRequest.layout and .patches).
+v1::FabricateResult layout_fabricate(const v1::FabricateRequest& request,
+                                     v1::FabricationOptions options, const Progress& progress) {
+  const v1::LayoutDesign& layout = request.layout();
+  const auto& quads = layout.layout().layout().patches();
+  std::vector<std::string> names;
+  for (int j = 0; j < layout.patch_designs_size(); ++j)
+    if (!layout.patch_designs(j).empty())
+      names.push_back(j < quads.size() && !quads[j].name().empty() ? quads[j].name()
+                                                                   : "P" + std::to_string(j + 1));
+  if (static_cast<int>(names.size()) != request.patches_size())
+    throw InvalidInput("patches", "expected " + std::to_string(names.size()) +
+                                      " designs (one per designed patch of the layout), got " +
+                                      std::to_string(request.patches_size()));
+  if (names.empty()) throw InvalidInput("layout", "the layout has no designed patch");
+  std::vector<Design> designs;
+  for (int k = 0; k < request.patches_size(); ++k)
+    designs.push_back(checked_design(request.patches(k), "patches[" + std::to_string(k) + "]"));
+  std::vector<LayoutKitPatch> patches;
+  for (size_t k = 0; k < designs.size(); ++k) patches.push_back({names[k], &designs[k]});
+  std::vector<KitSeam> seams;
+  for (int i = 0; i < layout.seams_size(); ++i) {
+    const v1::SeamDesign& m = layout.seams(i);
+    const std::string field = "layout.seams[" + std::to_string(i) + "]";
+    if (m.patches_size() != 2 || m.lamellas_size() != 2 || m.corners_size() != 2)
+      throw InvalidInput(field, "a seam has two patches, two lamellas and two corners");
+    KitSeam seam;
+    seam.patches = {m.patches(0), m.patches(1)};
+    seam.corners = {m.corners(0), m.corners(1)};
+    for (int k = 0; k < m.joints_size(); ++k) {
+      const v1::SeamJoint& j = m.joints(k);
+      if (j.lamella_s_size() != 2 || j.point_size() != 3)
+        throw InvalidInput(field + ".joints[" + std::to_string(k) + "]",
+                           "a seam bolt has an arc length on each lamella and a point");
+      SeamBolt bolt;
+      bolt.lamellas = {m.lamellas(0), m.lamellas(1)};
+      bolt.along = {j.lamella_s(0), j.lamella_s(1)};
+      bolt.members.assign(j.members().begin(), j.members().end());
+      bolt.point = Vec3(j.point(0), j.point(1), j.point(2));
+      seam.bolts.push_back(std::move(bolt));
+    }
+    seams.push_back(std::move(seam));
+  }
+  const LayoutKit kit = make_layout_kit(patches, seams, kernel_options(options), progress);
+  record_resolved(kit.kit.options, options);
+  v1::FabricateResult out;
+  v1::Kit& kj = *out.mutable_kit();
+  kj.set_design(request.design_name().empty() ? "design.json" : request.design_name());
+  *kj.mutable_options() = options;
+  add_kit(kit.kit, kj, out, progress);
+  int crossings = 0;
+  for (const Design& d : designs) crossings += static_cast<int>(d.grid.crossings.size());
+  kj.set_crossings(crossings);
+  const double mm = kit.kit.options.millimetres_per_unit;
+  kj.set_lamella_width(designs.front().lamella_width * mm);
+  const auto [scale, unit] = support_unit(options, mm);
+  std::string supports;
+  for (size_t k = 0; k < designs.size(); ++k) {
+    // Each patch's table, its anchors named by patch ("P2-A3"), under one header.
+    std::istringstream lines(supports_csv(designs[k], scale, unit));
+    std::string line;
+    std::getline(lines, line);
+    if (k == 0) supports += line + "\n";
+    while (std::getline(lines, line)) supports += names[k] + "-" + line + "\n";
+    add_file(out, "assembly-" + names[k] + ".svg",
+             assembly_svg(designs[k], kit.patch_kits[k], options.unit(), names[k]));
+  }
+  add_file(out, "supports.csv", supports);
+  add_file(out, "bom.csv", layout_bom_csv(patches, kit, options.material()));
+  add_file(out, "joining.svg", joining_svg(patches, seams));
+  add_file(out, "kit.json", to_json(out.kit()) + "\n");
+  progress.report("fabricate: sheets", 1);
+  return out;
+}
+
+}  // namespace
+
+v1::FabricateResult run_fabricate(const v1::FabricateRequest& request, const Progress& progress,
+                                  const RunSettings&) {
+  v1::FabricationOptions options = prepare_fabrication_options(request.options());
+  if (request.has_layout()) {
+    if (request.has_design())
+      throw InvalidInput("design", "give a design or a layout's (layout and patches), not both");
+    return layout_fabricate(request, options, progress);
+  }
+  if (request.patches_size() > 0)
+    throw InvalidInput("patches", "patch designs belong to a layout: give the layout too");
+  const Design design = checked_design(request.design(), "design");
+  const Kit kit = make_kit(design, kernel_options(options), progress);
+  record_resolved(kit.options, options);
+  const double mm = kit.options.millimetres_per_unit;
+
+  v1::FabricateResult out;
+  v1::Kit& kj = *out.mutable_kit();
+  kj.set_design(request.design_name().empty() ? "design.json" : request.design_name());
+  *kj.mutable_options() = options;
+  add_kit(kit, kj, out, progress);
+  kj.set_crossings(static_cast<int>(design.grid.crossings.size()));
   kj.set_lamella_width(design.lamella_width * mm);
-  kj.set_thickness(k.thickness);
   const CornerAngles angles = corner_angles(design);
   for (double a : angles.planar) kj.add_planar_corner_angles(a);
   for (double a : angles.target) kj.add_target_corner_angles(a);
-
-  // Supports in the design's unit when it has a name, else in mm.
-  const bool named = options.unit() == "mm" || options.unit() == "cm" || options.unit() == "m" ||
-                     options.unit() == "in" || options.unit() == "ft";
-  add_file("supports.csv", supports_csv(design, named ? 1 : mm, named ? options.unit() : "mm"));
-  add_file("bom.csv", bom_csv(design, kit, options.material()));
-  add_file("assembly.svg", assembly_svg(design, kit, options.unit()));
-  add_file("kit.json", to_json(out.kit()) + "\n");
+  const auto [scale, unit] = support_unit(options, mm);
+  add_file(out, "supports.csv", supports_csv(design, scale, unit));
+  add_file(out, "bom.csv", bom_csv(design, kit, options.material()));
+  add_file(out, "assembly.svg", assembly_svg(design, kit, options.unit()));
+  add_file(out, "kit.json", to_json(out.kit()) + "\n");
   progress.report("fabricate: sheets", 1);
   return out;
 }

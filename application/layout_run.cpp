@@ -151,6 +151,8 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
       v1::SeamJoint& b = *m.add_joints();
       b.set_s(joint.s);
       for (int k = 0; k < 3; ++k) b.add_point(joint.point[k]);
+      for (const SeamLamella& l : seam.lamellas)
+        b.add_lamella_s(l.forward ? joint.s : l.length - joint.s);
       for (const auto& [patch, family, member] : joint.ends)
         b.add_members(part_name(cut.patches[patch].name, family, member));
       ++bolts;

@@ -304,20 +304,43 @@ void prepare_output_folder(const std::string& out) {
   fs::remove(probe, ec);
 }
 
-v1::Design read_design_file(const std::string& path) {
+namespace {
+
+std::string read_json_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InvalidInput(path, "cannot open the design file");
   std::stringstream text;
   text << in.rdbuf();
-  v1::Design design;
   std::string json = text.str();
   if (json.rfind("\xEF\xBB\xBF", 0) == 0) json.erase(0, 3);  // a UTF-8 byte order mark
+  return json;
+}
+
+}  // namespace
+
+v1::Design read_design_file(const std::string& path) {
+  v1::Design design;
   try {
-    from_json(json, design);  // strict: unknown fields, "yes" for a bool, ... are refused
+    from_json(read_json_file(path), design);  // strict: unknown fields, "yes" for a bool, ...
   } catch (const InvalidInput& e) {
     throw InvalidInput(path, "not a gridshell design file: " + std::string(e.what()));
   }
   return design;
+}
+
+std::optional<LayoutDesignFiles> read_layout_design_file(const std::string& path) {
+  const std::string json = read_json_file(path);
+  LayoutDesignFiles out;
+  try {
+    from_json(json, out.layout);
+  } catch (const InvalidInput&) {
+    return std::nullopt;  // not a layout run's design.json
+  }
+  if (out.layout.patch_designs_size() == 0) return std::nullopt;
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  for (const std::string& file : out.layout.patch_designs())
+    if (!file.empty()) out.patches.push_back(read_design_file((folder / file).string()));
+  return out;
 }
 
 }  // namespace gridshell::cli

@@ -19,6 +19,7 @@
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/v1/design.pb.h"
+#include "gridshell/v1/layout.pb.h"
 #include "gridshell/v1/requests.pb.h"
 
 // CLI11 is heavy (4 s of compile time per file that includes it): declared here, included only
@@ -120,6 +121,14 @@ void print_auto_corners(const v1::AutoCornerSearch& search);
 /// A design.json (gridshell.v1.Design in JSON; unknown fields rejected). Throws InvalidInput
 /// naming the file.
 v1::Design read_design_file(const std::string& path);
+
+/// A layout run's design.json (gridshell.v1.LayoutDesign) and each designed patch's design,
+/// read from the files it names (relative to it); nullopt for a file that is not one.
+struct LayoutDesignFiles {
+  v1::LayoutDesign layout;
+  std::vector<v1::Design> patches;
+};
+std::optional<LayoutDesignFiles> read_layout_design_file(const std::string& path);
 
 /// Median of a list of numbers.
 double median(std::vector<double> values);

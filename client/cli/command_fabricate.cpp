@@ -41,7 +41,13 @@ std::pair<double, double> parse_sheet(const std::string& text) {
 
 int run_fabricate(const FabricateArguments& args) {
   v1::FabricateRequest request;
-  *request.mutable_design() = read_design_file(args.design);
+  // A layout run's design.json: one kit for all its patches (docs/multi-patch.md).
+  if (std::optional<LayoutDesignFiles> layout = read_layout_design_file(args.design)) {
+    *request.mutable_layout() = std::move(layout->layout);
+    for (v1::Design& design : layout->patches) *request.add_patches() = std::move(design);
+  } else {
+    *request.mutable_design() = read_design_file(args.design);
+  }
   request.set_design_name(std::filesystem::path(args.design).filename().string());
   v1::FabricationOptions& o = *request.mutable_options();
   o.set_unit(args.unit);
@@ -72,6 +78,15 @@ int run_fabricate(const FabricateArguments& args) {
       "per row: %d sheets, %.1f %%)\n",
       kit.sheets_size(), kit.options().sheet_width(), kit.options().sheet_height(), kit.rows(),
       100 * kit.utilisation(), kit.baseline_sheets(), 100 * kit.baseline_utilisation());
+  if (request.has_layout()) {
+    std::printf("  patches         %d, parts named by patch (P2-g7); seam bolts in bom.csv\n",
+                request.patches_size());
+    std::printf(
+        "  wrote           kit.json assembly-<patch>.svg joining.svg supports.csv bom.csv "
+        "sheets/ (%d x .dxf .svg)\n",
+        kit.sheets_size());
+    return 0;
+  }
   std::printf("  on top          %s lamellas (as drawn in assembly.svg)\n",
               kit.top_family().c_str());
   std::printf(
@@ -87,7 +102,10 @@ Command add_fabricate_command(CLI::App& app) {
   auto args = std::make_shared<FabricateArguments>();
   CLI::App* sub = app.add_subcommand(
       "fabricate", "Fabrication kit of a design: nested DXF/SVG cut sheets, assembly, supports");
-  sub->add_option("DESIGN", args->design, "design.json written by 'gridshell design'")->required();
+  sub->add_option("DESIGN", args->design,
+                  "design.json written by 'gridshell design' or 'gridshell run' (of a layout: one "
+                  "kit for all its patches)")
+      ->required();
   sub->add_option("--unit", args->unit, described_help("fabrication", "unit"));
   sub->add_option("--sheet", args->sheet,
                   "sheet size WIDTHxHEIGHT in mm; default " +

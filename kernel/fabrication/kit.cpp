@@ -132,6 +132,7 @@ Kit make_kit(const Design& design, const FabricationOptions& requested, const Pr
       feature.crossing = static_cast<int>(i);
       feature.partner_family = f == 0 ? Family::H : Family::G;
       feature.partner = f == 0 ? c.h : c.g;
+      feature.partner_name = member_name(feature.partner_family, feature.partner);
       feature.s_bar = f == 0 ? c.s_bar_g : c.s_bar_h;
       const double notch = f == 0 ? c.notch_g() : c.notch_h();
       feature.s = feature.s_bar + notch;
@@ -169,10 +170,41 @@ Kit make_kit(const Design& design, const FabricationOptions& requested, const Pr
     }
   }
 
+  progress.report("fabricate: nesting", 0.3);
+  nest_kit(kit);
+
+  // Which family lies on top in the flat grid as drawn (seen from +z of the plane): h lies on
+  // the side of the surface normal (the simulation's convention), so it is on top where the
+  // planar grid keeps the patch's orientation, i.e. where a planar grid cell and its surface
+  // cell turn the same way about the target's normal (measured at the anchors, which carry it).
+  double votes = 0;
+  for (const Anchor& a : design.anchors) {
+    const int g1 = a.g + 1 < ng ? a.g + 1 : a.g - 1;
+    const int h1 = a.h + 1 < static_cast<int>(grid.h.size()) ? a.h + 1 : a.h - 1;
+    const Crossing* c00 = find_crossing(grid, a.g, a.h);
+    const Crossing* c10 = find_crossing(grid, g1, a.h);
+    const Crossing* c01 = find_crossing(grid, a.g, h1);
+    if (!c00 || !c10 || !c01) continue;
+    const Vec2 p1 = c10->planar_point - c00->planar_point,
+               p2 = c01->planar_point - c00->planar_point;
+    const double planar_turn = p1.x() * p2.y() - p1.y() * p2.x();
+    const double surface_turn = (c10->surface_point - c00->surface_point)
+                                    .cross(c01->surface_point - c00->surface_point)
+                                    .dot(a.normal);
+    votes += (planar_turn > 0) == (surface_turn > 0) ? 1 : -1;
+  }
+  kit.top_family = votes >= 0 ? Family::H : Family::G;
+  progress.report("fabricate: nesting", 1);
+  return kit;
+}
+
+void nest_kit(Kit& kit) {
+  const FabricationOptions& o = kit.options;
+  double width = 0;
+  for (const Part& part : kit.parts) width = std::max(width, part.width);
   // Nesting: rows of lamellas along the sheet's long side, first-fit decreasing (a part goes
   // into the first row, on any sheet, where it fits; a new row otherwise). Every footprint is
   // the kerf-compensated outline; footprints keep `spacing` from each other and the edges.
-  progress.report("fabricate: nesting", 0.3);
   const double long_side = std::max(o.sheet_width, o.sheet_height);
   const double short_side = std::min(o.sheet_width, o.sheet_height);
   const double row_length = long_side - 2 * o.spacing;
@@ -256,30 +288,6 @@ Kit make_kit(const Design& design, const FabricationOptions& requested, const Pr
   kit.baseline_sheets = (n + kit.rows_per_sheet - 1) / kit.rows_per_sheet;
   kit.baseline_utilisation =
       kit.baseline_sheets ? part_area / (kit.baseline_sheets * sheet_area) : 0;
-
-  // Which family lies on top in the flat grid as drawn (seen from +z of the plane): h lies on
-  // the side of the surface normal (the simulation's convention), so it is on top where the
-  // planar grid keeps the patch's orientation, i.e. where a planar grid cell and its surface
-  // cell turn the same way about the target's normal (measured at the anchors, which carry it).
-  double votes = 0;
-  for (const Anchor& a : design.anchors) {
-    const int g1 = a.g + 1 < ng ? a.g + 1 : a.g - 1;
-    const int h1 = a.h + 1 < static_cast<int>(grid.h.size()) ? a.h + 1 : a.h - 1;
-    const Crossing* c00 = find_crossing(grid, a.g, a.h);
-    const Crossing* c10 = find_crossing(grid, g1, a.h);
-    const Crossing* c01 = find_crossing(grid, a.g, h1);
-    if (!c00 || !c10 || !c01) continue;
-    const Vec2 p1 = c10->planar_point - c00->planar_point,
-               p2 = c01->planar_point - c00->planar_point;
-    const double planar_turn = p1.x() * p2.y() - p1.y() * p2.x();
-    const double surface_turn = (c10->surface_point - c00->surface_point)
-                                    .cross(c01->surface_point - c00->surface_point)
-                                    .dot(a.normal);
-    votes += (planar_turn > 0) == (surface_turn > 0) ? 1 : -1;
-  }
-  kit.top_family = votes >= 0 ? Family::H : Family::G;
-  progress.report("fabricate: nesting", 1);
-  return kit;
 }
 
 CornerAngles corner_angles(const Design& design) {

@@ -85,7 +85,7 @@ SheetDrawing sheet_drawing(const Kit& kit, int sheet) {
       }
       // The partner's name beside the hole or slot: after it where it fits before the next
       // feature (or the part's end), else before it where there is more room.
-      const std::string label = member_name(f.partner_family, f.partner);
+      const std::string& label = f.partner_name;
       const double length = text_length(label, th_partner), gap = 0.4 * th_partner;
       const double half_d = 0.5 * f.diameter;
       const double room_after =
@@ -201,7 +201,13 @@ std::string sheet_svg(const SheetDrawing& d) {
   return out;
 }
 
-std::string assembly_svg(const Design& design, const Kit& kit, const std::string& unit) {
+std::string assembly_svg(const Design& design, const Kit& kit, const std::string& unit,
+                         const std::string& patch) {
+  // A layout's patch names its lamellas as its kit does: "P2-g3".
+  const std::string prefix = patch.empty() ? "" : patch + "-";
+  const auto lamella_name = [&](Family family, int index) {
+    return prefix + member_name(family, index);
+  };
   const double mm = kit.options.millimetres_per_unit;
   const Grid& grid = design.grid;
   const double w = design.lamella_width * mm;
@@ -231,11 +237,12 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
   out += format("<rect width=\"%.6g\" height=\"%.6g\" fill=\"white\"/>\n", width, height);
   const Family top = kit.top_family, bottom = top == Family::H ? Family::G : Family::H;
   out += format(
-      "<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.6g\">Assembly, 1:1 in mm (%zu lamellas, %zu "
+      "<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.6g\">%sAssembly, 1:1 in mm (%zu lamellas, %zu "
       "crossings). %s lamellas lie on top of %s lamellas at every crossing; engraved faces "
       "up.</text>\n",
-      margin, 1.5 * font, font, grid.g.size() + grid.h.size(), grid.crossings.size(),
-      top == Family::H ? "h" : "g", bottom == Family::H ? "h" : "g");
+      margin, 1.5 * font, font, patch.empty() ? "" : ("Patch " + patch + ". ").c_str(),
+      grid.g.size() + grid.h.size(), grid.crossings.size(), top == Family::H ? "h" : "g",
+      bottom == Family::H ? "h" : "g");
   // Lamellas: the bottom family first, the top family over it.
   for (Family family : {bottom, top}) {
     const bool is_top = family == top;
@@ -248,7 +255,7 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
       const Vec2 p[4] = {a - n * half, b - n * half, b + n * half, a + n * half};
       out += format(
           "<polygon data-lamella=\"%s\" points=\"%.6g,%.6g %.6g,%.6g %.6g,%.6g %.6g,%.6g\"/>\n",
-          member_name(family, m.index).c_str(), X(p[0]), Y(p[0]), X(p[1]), Y(p[1]), X(p[2]),
+          lamella_name(family, m.index).c_str(), X(p[0]), Y(p[0]), X(p[1]), Y(p[1]), X(p[2]),
           Y(p[2]), X(p[3]), Y(p[3]));
     }
     out += "</g>\n";
@@ -262,7 +269,7 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
           "<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.6g\" text-anchor=\"middle\" "
           "fill=\"%s\">%s</text>\n",
           X(at), Y(at) + 0.35 * font, font, family == Family::G ? "#003399" : "#993300",
-          member_name(family, m.index).c_str());
+          lamella_name(family, m.index).c_str());
     }
   // Crossings: the bolt (a dot) and both names, as engraved on the parts.
   const double small = std::max(0.35 * font, 0.9 * w);
@@ -273,8 +280,8 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
     out += format("<circle cx=\"%.6g\" cy=\"%.6g\" r=\"%.4g\" fill=\"%s\"/>\n", X(p), Y(p),
                   0.5 * kit.options.hole_diameter, slides ? "#cc0000" : "#000000");
     out +=
-        format("<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.4g\" fill=\"#222222\">g%d·h%d</text>\n",
-               X(p) + 0.6 * w, Y(p) - 0.6 * w, small, c.g, c.h);
+        format("<text x=\"%.6g\" y=\"%.6g\" font-size=\"%.4g\" fill=\"#222222\">%sg%d·h%d</text>\n",
+               X(p) + 0.6 * w, Y(p) - 0.6 * w, small, prefix.c_str(), c.g, c.h);
   }
   out += "</g>\n";
   // Anchors, numbered as in supports.csv.

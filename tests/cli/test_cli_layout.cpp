@@ -212,6 +212,55 @@ TEST(CliLayout, RunWithALayoutDesignsAndDeploysEveryPatchAndMeasuresTheSeams) {
   EXPECT_EQ(objects.size(), expected);
 }
 
+TEST(CliLayout, FabricateARunOfALayoutGivesOneKitForAllItsPatches) {
+  const std::string dir = testing::temp_dir();
+  const std::string file = testing::write_text(dir, "layout.json", sphere_layout().dump());
+  auto r = run_cli("run example:sphere --layout '" + file +
+                   "' --members-u 4 --members-v 4 --notches on --quiet --out '" + dir + "/run'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("fabricate '" + dir + "/run/design.json' --unit cm --quiet --out '" + dir + "/kit'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json kit = json::parse(testing::read_text(dir + "/kit/kit.json"));
+  // Every patch's lamellas, named by patch; the partners of seam bolts are the neighbour's.
+  int parts = 0;
+  for (const char* name : {"P1", "P2", "north-west", "P4"}) {
+    const json design =
+        json::parse(testing::read_text(dir + "/run/patches/" + name + "/design.json"));
+    parts += static_cast<int>(design["members"].size());
+    EXPECT_TRUE(std::filesystem::exists(dir + "/kit/assembly-" + name + ".svg")) << name;
+  }
+  EXPECT_EQ(static_cast<int>(kit["parts"].size()), parts);
+  int seam_holes = 0;
+  for (const json& part : kit["parts"]) {
+    const std::string name = part["name"];
+    const std::string patch = name.substr(0, name.rfind('-'));
+    for (const json& f : part["features"])
+      if (f.value("crossing", 0) == -1) {
+        ++seam_holes;
+        EXPECT_NE(f["partner"].get<std::string>().rfind(patch + "-", 0), 0u) << name;
+      }
+  }
+  EXPECT_GT(seam_holes, 0);
+  const std::string bom = testing::read_text(dir + "/kit/bom.csv");
+  EXPECT_NE(bom.find("seam bolts,"), std::string::npos) << bom;
+  EXPECT_NE(bom.find(std::to_string(seam_holes) + " holes added"), std::string::npos) << bom;
+  EXPECT_NE(testing::read_text(dir + "/kit/joining.svg").find("4. Deploy"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/kit/sheets/sheet-01.dxf"));
+  // supports.csv: every patch's anchors under one header, named by patch.
+  std::istringstream supports(testing::read_text(dir + "/kit/supports.csv"));
+  std::string line;
+  std::getline(supports, line);
+  EXPECT_EQ(line.rfind("id,", 0), 0u);
+  int anchors = 0;
+  while (std::getline(supports, line)) {
+    ++anchors;
+    EXPECT_TRUE(line.rfind("P1-A", 0) == 0 || line.rfind("P2-A", 0) == 0 ||
+                line.rfind("north-west-A", 0) == 0 || line.rfind("P4-A", 0) == 0)
+        << line;
+  }
+  EXPECT_GE(anchors, 16);
+}
+
 TEST(CliLayout, RunWithALayoutRefusesCornersTooAndNamesABadPatchName) {
   const std::string dir = testing::temp_dir();
   json layout = sphere_layout();

@@ -56,6 +56,16 @@ TEST(LayoutRemote, CliServerWritesWhatTheInProcessRunWrites) {
     EXPECT_EQ(without_seconds(read_text(dir + "/remote/" + f)),
               without_seconds(read_text(dir + "/local/" + f)))
         << f;
+  // The kit of the whole through the daemon: the same files.
+  r = run_cli("fabricate '" + dir + "/local/design.json' --unit cm --quiet --out '" + dir +
+              "/kit-local'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("fabricate '" + dir + "/local/design.json' --unit cm --quiet --server " +
+              daemon.grpc_address() + " --out '" + dir + "/kit-remote'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"kit.json", "bom.csv", "supports.csv", "joining.svg", "assembly-P2.svg",
+                        "sheets/sheet-01.dxf"})
+    EXPECT_EQ(read_text(dir + "/kit-remote/" + f), read_text(dir + "/kit-local/" + f)) << f;
   // gridshell layout --server too.
   r = run_cli("layout example:sphere --layout '" + file + "' --quiet --server " +
               daemon.grpc_address() + " --out '" + dir + "/cut'");

@@ -47,10 +47,11 @@ struct PartFeature {
   FeatureKind kind = FeatureKind::Hole;
   int crossing = 0;  ///< index into Design::grid.crossings
   Family partner_family = Family::H;
-  int partner = 0;        ///< the other lamella's index in its family
-  double s_bar = 0;       ///< arc length of the crossing in the plane (design units)
-  double s = 0;           ///< ... on the surface; the slot spans [s̄, s]; a hole sits at s̄
-  double x0 = 0, x1 = 0;  ///< centres along the part (mm): hole x0 = x1, slot x0 < x1
+  int partner = 0;           ///< the other lamella's index in its family
+  std::string partner_name;  ///< as engraved beside it: "h3", or "P2-h3" in a layout's kit
+  double s_bar = 0;          ///< arc length of the crossing in the plane (design units)
+  double s = 0;              ///< ... on the surface; the slot spans [s̄, s]; a hole sits at s̄
+  double x0 = 0, x1 = 0;     ///< centres along the part (mm): hole x0 = x1, slot x0 < x1
   /// Nominal size (mm) before kerf compensation: diameter d; a slot is |s - s̄| + d long.
   double diameter = 0;
   double length() const { return x1 - x0 + diameter; }
@@ -101,6 +102,10 @@ struct Kit {
 /// naming the lamella, its length and the sheet size.
 Kit make_kit(const Design& design, const FabricationOptions& options,
              const Progress& progress = {});
+
+/// The nesting step of make_kit on kit.parts (rows as wide as the widest part): sets each part's
+/// sheet, row and placement, the sheets and the utilisation figures. Errors as make_kit's.
+void nest_kit(Kit& kit);
 
 /// Corner angles of the flat grid (planar corners) and of the target (between the boundary
 /// geodesics), c0..c3, radians.

@@ -62,8 +62,9 @@ std::string sheet_svg(const SheetDrawing& drawing);
 /// The assembly sheet: the flat grid to scale with every lamella and crossing labelled as on the
 /// parts, the lamella on top drawn over the other, anchors numbered as in supports.csv; below,
 /// the deployment: the corners, their planar and target angles, which corners move and the
-/// target diagonals.
-std::string assembly_svg(const Design& design, const Kit& kit, const std::string& unit);
+/// target diagonals. `patch`: a layout's patch, whose name prefixes its lamellas' ("P2-g3").
+std::string assembly_svg(const Design& design, const Kit& kit, const std::string& unit,
+                         const std::string& patch = "");
 
 /// One row per anchor (corners included): id, kind, crossing, target position, normal, tilt of
 /// the normal from vertical and height above the lowest boundary point (the ground plane, z up),
