@@ -114,6 +114,8 @@ RequestedLayout cut_requested_layout(const v1::Layout& layout,
     m.set_columns(t.columns);
     m.set_rows(t.rows);
     m.set_coverage(t.coverage);
+    m.set_cut_coverage(t.cut_coverage);
+    m.set_checked(t.checked);
     m.set_failing(t.failing);
     m.set_first_problem(t.first_problem);
     m.set_seconds(t.seconds);

@@ -84,8 +84,12 @@ void print_automatic_layout(const v1::LayoutReport& report) {
   std::string tried;
   for (const auto& t : a.trials()) {
     char buffer[96];
-    std::snprintf(buffer, sizeof buffer, "%s%d x %d %.1f %%", tried.empty() ? "" : ", ",
-                  t.columns(), t.rows(), 100 * t.coverage());
+    if (t.checked())
+      std::snprintf(buffer, sizeof buffer, "%s%d x %d %.1f %%", tried.empty() ? "" : ", ",
+                    t.columns(), t.rows(), 100 * t.coverage());
+    else  // cut only: its bound missed the goal
+      std::snprintf(buffer, sizeof buffer, "%s%d x %d <= %.1f %%", tried.empty() ? "" : ", ",
+                    t.columns(), t.rows(), 100 * t.cut_coverage());
     tried += buffer;
   }
   std::printf("  automatic       %d x %d patches in %.2f s; tried %s\n", a.columns(), a.rows(),

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <stdexcept>
 
 #include "gridshell/design/layout.h"
@@ -241,10 +242,44 @@ AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch
     if (best_error <= std::log(2.0) + 1e-12) grids.push_back(best);
   }
   if (grids.empty()) grids.push_back({1, 1});
+  std::vector<PatchLayout> layouts;
   bool chosen = false;
-  for (size_t t = 0; t < grids.size(); ++t) {
+  size_t checked = 0;
+  const auto check = [&](size_t t) {
+    AutoLayoutTrial& trial = out.trials[t];
+    progress.report(
+        "layout: check " + std::to_string(trial.columns) + " x " + std::to_string(trial.rows),
+        0.5 + 0.5 * static_cast<double>(++checked) / out.trials.size());
+    const auto start = std::chrono::steady_clock::now();
+    LayoutResult result = cut_layout(mesh, layouts[t], patch_options, progress.checker());
+    trial.checked = true;
+    trial.coverage = result.coverage();
+    for (const LayoutPatch& p : result.patches) {
+      if (!p.problem && p.target) continue;
+      if (trial.failing++ == 0)
+        trial.first_problem = p.name + ": " + (p.problem ? p.problem->what() : "not cut");
+    }
+    trial.seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int patches = trial.columns * trial.rows;
+    const bool better =
+        !chosen || trial.coverage > out.result.coverage() + 1e-12 ||
+        (trial.coverage > out.result.coverage() - 1e-12 && patches < out.columns * out.rows);
+    if (better) {
+      out.result = std::move(result);
+      out.columns = trial.columns, out.rows = trial.rows;
+      chosen = true;
+    }
+    return trial.coverage >= options.coverage_goal;
+  };
+  // Fewest patches first, each grid cut with its patches' corners checked only: an upper bound
+  // of its coverage at a fraction of the full checks' cost (coverability and smoothing of every
+  // patch). A grid whose bound reaches the goal is checked in full; the first that covers the
+  // goal is kept.
+  bool reached = false;
+  for (size_t t = 0; t < grids.size() && !reached; ++t) {
     const auto [columns, rows] = grids[t];
-    progress.report("layout: " + std::to_string(columns) + " x " + std::to_string(rows),
+    progress.report("layout: cut " + std::to_string(columns) + " x " + std::to_string(rows),
                     static_cast<double>(t) / grids.size());
     const auto start = std::chrono::steady_clock::now();
     PatchLayout layout;
@@ -266,24 +301,29 @@ AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch
         const int a = j * (columns + 1) + i;
         layout.patches.push_back({"", {a, a + 1, a + columns + 2, a + columns + 1}});
       }
-    LayoutResult result = cut_layout(mesh, layout, patch_options, progress.checker());
+    const LayoutResult cut =
+        cut_layout(mesh, layout, patch_options, progress.checker(), LayoutChecks::CutOnly);
     AutoLayoutTrial trial;
     trial.columns = columns, trial.rows = rows;
-    trial.coverage = result.coverage();
-    for (const LayoutPatch& p : result.patches) {
-      if (!p.problem && p.target) continue;
-      if (trial.failing++ == 0)
-        trial.first_problem = p.name + ": " + (p.problem ? p.problem->what() : "not cut");
-    }
+    trial.cut_coverage = cut.coverage();
     trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     out.trials.push_back(trial);
-    const bool better = !chosen || trial.coverage > out.result.coverage() + 1e-12;
-    if (better) {
-      out.result = std::move(result);
-      out.columns = columns, out.rows = rows;
-      chosen = true;
+    layouts.push_back(std::move(layout));
+    if (trial.cut_coverage >= options.coverage_goal) reached = check(t);
+  }
+  // No grid reached the goal: the largest bounds checked until none left is above the best
+  // coverage found.
+  if (!reached) {
+    std::vector<size_t> order(out.trials.size());
+    std::iota(order.begin(), order.end(), size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+      return out.trials[x].cut_coverage > out.trials[y].cut_coverage;
+    });
+    for (size_t t : order) {
+      if (out.trials[t].checked) continue;
+      if (chosen && out.trials[t].cut_coverage <= out.result.coverage() + 1e-12) break;
+      check(t);
     }
-    if (trial.coverage >= options.coverage_goal) break;
   }
   progress.report("layout", 1.0);
   return out;

@@ -69,7 +69,8 @@ double polyline_length(const std::vector<Vec3>& points) {
 }  // namespace
 
 LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
-                        const TargetPatchOptions& options, const Progress& progress) {
+                        const TargetPatchOptions& options, const Progress& progress,
+                        LayoutChecks checks) {
   LayoutResult out;
   out.layout = layout;
   const int corner_count = static_cast<int>(layout.corners.size());
@@ -184,6 +185,18 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
       }
       Patch cut = cut_patch_along(cornered.mesh, corners, patch_sides, mesh.vertex_count(),
                                   options.cut, progress.checker());
+      if (checks == LayoutChecks::CutOnly) {
+        check_convex_corners(cut);
+        TargetPatch& t = result.target.emplace();
+        t.input_corners = input_corners;
+        t.corner_angles = corner_angles(cut);
+        t.boundary_lengths = side_lengths(cut);
+        t.area = surface_area(cut.mesh);
+        t.patch = std::move(cut);
+        out.covered_area += t.area;
+        out.patches.push_back(std::move(result));
+        continue;
+      }
       result.target =
           target_patch_from_cut(std::move(cut), input_corners, patch_options, progress.checker());
       const TargetPatch& t = *result.target;

@@ -74,8 +74,12 @@ struct LayoutResult {
 /// a corner twice, a name taken twice, a side used by three patches) and Infeasible
 /// ("layout.patches[j]") when two patches lie on the same side of a seam (they overlap). A patch
 /// that cannot be cut or misses a criterion is reported in its LayoutPatch, not thrown.
+/// `checks` CutOnly: each patch is cut and its corners checked for convexity only (no
+/// coverability, smoothing or side check): its coverage is an upper bound of the full checks'.
+enum class LayoutChecks { Full, CutOnly };
 LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
-                        const TargetPatchOptions& options = {}, const Progress& progress = {});
+                        const TargetPatchOptions& options = {}, const Progress& progress = {},
+                        LayoutChecks checks = LayoutChecks::Full);
 
 /// layout.svg: a plan of the layout on the plane of the input's two largest principal
 /// directions. Each cut patch is filled in its colour with its name, shared seams are drawn
@@ -136,6 +140,9 @@ struct AutoLayoutOptions {
 /// One layout tried: a columns x rows grid of patches.
 struct AutoLayoutTrial {
   int columns = 0, rows = 0;
+  /// Of the patches cut alone (LayoutChecks::CutOnly): an upper bound of `coverage`.
+  double cut_coverage = 0;
+  bool checked = false;  ///< its patches were checked in full (coverage below is theirs)
   double coverage = 0;
   int failing = 0;            ///< patches that could not be cut or missed a check
   std::string first_problem;  ///< the first failing patch's name and problem, "" if none
@@ -157,12 +164,15 @@ struct AutoLayout {
 /// each vertex so that rounded corners count: the corners are the most turning vertex, then
 /// the most turning one (above 30 degrees) within an eighth of the perimeter of each quarter
 /// point along the boundary from it, else the quarter point; each then moves to the vertex
-/// whose own turn is largest within its 32nd of the perimeter (a sharp corner). The surface is mapped onto the
-/// square (CGAL's mean value coordinates, the boundary by arc length between the corners), and
-/// the layout's corners are the surface's points at a columns x rows grid of the square: the
-/// outer ones on the boundary. Grids of 1, 2, ... patches, each patch at most twice as long as
-/// wide by the boundary's side lengths, are cut (cut_layout) until one covers
-/// options.coverage_goal; else the one that covers most, the fewer patches on a tie. Throws
+/// whose own turn is largest within its 32nd of the perimeter (a sharp corner). The surface is
+/// mapped onto the square (CGAL's mean value coordinates, the boundary by arc length between the
+/// corners), and the layout's corners are the surface's points at a columns x rows grid of the
+/// square: the outer ones on the boundary. Grids of 1, 2, ... patches, each patch at most twice as
+/// long as wide by the boundary's side lengths, are cut in that order (LayoutChecks::CutOnly: an
+/// upper bound of their coverage), and one whose bound reaches options.coverage_goal is checked
+/// in full; the first that covers the goal is chosen. If none does, those with the largest bounds
+/// are checked until no bound left is above the best coverage found, which is chosen (the fewer
+/// patches on a tie). Throws
 /// Infeasible (field "layout") for a surface that is not a disk: closed, with holes or in
 /// several pieces.
 AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options = {},
