@@ -17,9 +17,11 @@ v1::SimulateResult simulate(const v1::Design& design, const v1::SimulationOption
   v1::SimulateResult out =
       simulate_result(run_deployment_job(design, options, name, progress, threads));
   if (files) {
+    // Made before it is added: the bundle would take the new, empty view for the file.
+    std::string json = simulate_files(out).at("deployment.json");
     v1::File* view = out.add_views();
     view->set_name("deployment.json");
-    view->set_content(simulate_files(out).at("deployment.json"));
+    view->set_content(std::move(json));
   }
   return out;
 }
