@@ -26,7 +26,7 @@ import threading
 __all__ = ["Description", "describe", "cached", "forget", "GROUPS", "TYPES"]
 
 # The option groups of the description, in the order of a request's life (options.proto).
-GROUPS = ("patch", "design", "simulation", "fabrication")
+GROUPS = ("patch", "design", "simulation", "layout", "fabrication")
 # The option types of the description.
 TYPES = ("number", "integer", "boolean", "choice", "text", "numbers")
 
