@@ -74,7 +74,7 @@ async function describedOptions(url = base) {
   assert.equal(r.status, 200);
   return r.json();
 }
-const FORM_GROUPS = ['design', 'simulation'];
+const FORM_GROUPS = ['design', 'simulation', 'layout'];
 const formOptions = (d) => d.options.filter((o) => !o.output && FORM_GROUPS.includes(o.group));
 
 before(async () => {
@@ -884,6 +884,256 @@ test('a site\'s material library (GRIDSHELL_MATERIALS): its material is listed, 
     await stopDaemon(other.proc);
     rmSync(dir, { recursive: true, force: true });
   }
+});
+
+// ---- several patches (the layout section, issue 35) -----------------------------------------------
+// In a tab of its own, so that the main page's state (the mesh the last tests expect) stays.
+
+let lt;           // the layout tab
+let knetLayout;   // the daemon's LayoutResult for the page's automatic-layout request
+const ltId = (id) => lt.getByTestId(id);
+const ltText = (id) => ltId(id).textContent();
+/** The legend's number format (colormap.ts formatNumber): 3 significant digits, exponent when far from 1. */
+const fmt = (v) => (v === 0 ? '0' : Math.abs(v) >= 1e4 || Math.abs(v) < 1e-2 ? v.toExponential(2) : String(Number(v.toPrecision(3))));
+
+async function postJson(method, body) {
+  const r = await fetch(base + 'v1/' + method, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body,
+                                                 signal: AbortSignal.timeout(60000) });
+  return { status: r.status, json: await r.json() };
+}
+
+/** The request bodies the tab sends to /v1/METHOD while `action` runs. */
+async function requestsDuring(method, action) {
+  const seen = [];
+  const onRequest = (r) => { if (r.url().endsWith(`/v1/${method}`)) seen.push(r.postData()); };
+  lt.on('request', onRequest);
+  try {
+    await action();
+  } finally {
+    lt.off('request', onRequest);
+  }
+  return seen;
+}
+
+async function ltDownload(testid) {
+  const [download] = await Promise.all([lt.waitForEvent('download', { timeout: 10000 }), ltId(testid).click()]);
+  return { name: download.suggestedFilename(), bytes: readFileSync(await download.path()) };
+}
+
+const tableRows = (testid) => ltId(testid).locator('tbody tr').evaluateAll((trs) => trs.map((tr) => [...tr.cells].map((td) => td.textContent)));
+const canvasData = (key) => ltId('viewer').evaluate((c, k) => c.dataset[k], key);
+/** Waits for the canvas's hook (published after the next frame) to be `value`. */
+const canvasIs = (key, value) => until(async () => (await canvasData(key)) === value, 5000, `canvas data-${key} = ${value}`);
+/** A result without its timings (a second computation takes other seconds). */
+const untimed = (x) => JSON.parse(JSON.stringify(x, (k, v) => (k === 'seconds' ? undefined : v)));
+
+test('layout: knet1.obj uploaded in a tab of its own; an out-of-range "patches at most" shows the daemon\'s error next to it', async () => {
+  lt = await page.context().newPage();
+  lt.setDefaultTimeout(20000);
+  lt.on('console', (m) => {
+    if (m.type() !== 'error') return;
+    if (allowHttpErrors && /Failed to load resource: the server responded with a status of 4\d\d/.test(m.text())) return;
+    consoleErrors.push(`layout tab: ${m.text()}`);
+  });
+  lt.on('pageerror', (e) => consoleErrors.push(`layout tab: pageerror: ${e.message}`));
+  await lt.goto(base);
+  await until(() => lt.evaluate(() => document.body.dataset.ready === '1'), 15000, 'the layout tab');
+  // The two layout controls come from the description (group "layout"), with its range and default.
+  const described = (await describedOptions()).options.filter((o) => o.group === 'layout' && !o.output);
+  assert.deepEqual(described.map((o) => o.name).sort(), ['coverage_goal', 'max_patches']);
+  const max = described.find((o) => o.name === 'max_patches');
+  assert.ok(await ltId('layout-options').locator('[data-option="layout.max_patches"]').count() === 1, 'in the layout section');
+  assert.equal(await ltId('max-patches').inputValue(), max.default_value);
+  assert.equal(await ltId('max-patches').getAttribute('max'), String(max.maximum));
+  await ltId('mesh-input').setInputFiles(path.join(testMeshes, 'knet1.obj'));
+  await until(async () => /knet1\.obj: 441 vertices/.test(await ltText('mesh-info')), 15000, 'knet1 in the layout tab');
+  assert.ok(await ltId('layout-auto').isEnabled());
+  assert.ok(await ltId('layout-build').isDisabled(), 'nothing to build before a layout');
+  const slot = lt.locator('.field-error[data-for="layout.max_patches"]');
+  allowHttpErrors = true;
+  try {
+    await ltId('max-patches').fill(String(max.maximum + 36));
+    // At once, from the description: the input is invalid and says why, naming the request's field.
+    assert.equal(await ltId('max-patches').evaluate((i) => i.validity.valid), false);
+    assert.match(await slot.textContent(), /^automatic\.max_patches: must be in \[1, 64\]/);
+    await ltId('layout-auto').click();
+    await until(() => ltId('error').isVisible(), 15000, 'the error of the bad max_patches');
+  } finally {
+    allowHttpErrors = false;
+  }
+  const shown = await ltText('error');
+  assert.match(shown, /^layout failed \(INVALID_ARGUMENT\): automatic\.max_patches: .*got 100$/);
+  assert.equal(await slot.textContent(), shown.replace(/^layout failed \(INVALID_ARGUMENT\): /, ''));
+  assert.equal(await ltText('layout-info'), '');
+  await canvasIs('layoutPatches', '0');
+  assert.ok(await ltId('layout-build').isDisabled());
+  assert.match(await lt.evaluate(() => location.hash), /layout\.max_patches=100/); // kept with the other options
+  await ltId('max-patches').fill(max.default_value); // the default again: not sent, not in the URL
+  assert.doesNotMatch(await lt.evaluate(() => location.hash), /max_patches/);
+});
+
+test('layout: Automatic layout (knet1.obj) draws the daemon\'s patches in colours, the seams, the table, coverage, uncovered regions and trials', async () => {
+  const sent = await requestsDuring('layout', async () => {
+    await ltId('layout-auto').click();
+    await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-info]').dataset.ready === '1'), 30000, 'the layout');
+  });
+  assert.equal(sent.length, 1);
+  const body = JSON.parse(sent[0]);
+  assert.deepEqual(body.automatic, {}); // the defaults: nothing off them
+  assert.equal(body.layout, undefined);
+  assert.equal(body.mesh.name, 'knet1.obj');
+  const direct = await postJson('layout', sent[0]); // the same request, answered without an event stream
+  assert.equal(direct.status, 200);
+  knetLayout = direct.json;
+  const r = knetLayout.report;
+  assert.equal(r.patches.length, 20); // docs/multi-patch.md: 5 × 4, 95.4 %
+  // Drawn: one coloured surface per cut patch, the seams, over the faded mesh; the table one row per patch.
+  await canvasIs('layoutPatches', String(knetLayout.patches.filter((p) => (p.indices ?? []).length).length));
+  await canvasIs('layers', 'mesh,layout');
+  const rows = await tableRows('layout-patches');
+  assert.deepEqual(rows.map((row) => row[0]), r.patches.map((p) => p.name));
+  assert.deepEqual(rows.map((row) => row[1]), r.patches.map((p) => (p.ok ? 'ok' : p.problem ? `${p.problem_field}: ${p.problem}`.replace(/^: /, '') : 'failed')));
+  assert.deepEqual(rows.map((row) => row[2]), r.patches.map((p) => fmt(p.area)));
+  assert.deepEqual(rows.map((row) => row[3]), r.patches.map((p) => p.eta.toFixed(5)));
+  const info = await ltText('layout-info');
+  assert.ok(info.startsWith(`coverage ${(100 * r.coverage).toFixed(1)} %: `), info);
+  assert.match(info, /^coverage 95\.4 %/);
+  assert.match(info, new RegExp(`20 patches \\(20 ok\\), ${r.seams.filter((x) => x.patches.length === 2).length} seams`));
+  assert.match(info, new RegExp(`automatic: ${r.automatic.columns} × ${r.automatic.rows} grid, ${r.automatic.trials.length} trials`));
+  const uncovered = await ltText('layout-uncovered');
+  assert.ok(r.uncovered.length > 0);
+  for (const u of r.uncovered) assert.ok(uncovered.includes(`${u.where}: ${fmt(u.area)} `) && uncovered.includes(u.reason), uncovered);
+  const trials = await tableRows('layout-trials');
+  assert.deepEqual(trials.map((t) => [t[0], t[2]]), r.automatic.trials.map((t) => [`${t.columns} × ${t.rows}`, `${(100 * t.coverage).toFixed(1)} %`]));
+  assert.ok(await ltId('layout-build').isEnabled());
+  // layout.json is the report, and `gridshell layout` takes it back: the same patches, the same coverage.
+  const { name, bytes } = await ltDownload('layout-download-layout-json');
+  assert.equal(name, 'layout.json');
+  const report = JSON.parse(bytes.toString('utf8'));
+  assert.deepEqual(untimed(report), untimed(r));
+  const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-layout-'));
+  try {
+    writeFileSync(path.join(dir, 'layout.json'), bytes);
+    const cli = spawnSync(cliPath, ['layout', path.join(testMeshes, 'knet1.obj'), '--layout', path.join(dir, 'layout.json'),
+                                    '--out', path.join(dir, 'out'), '--quiet'], { encoding: 'utf8', timeout: 60000 });
+    assert.equal(cli.status, 0, cli.stderr);
+    const again = JSON.parse(readFileSync(path.join(dir, 'out/layout.json'), 'utf8'));
+    assert.deepEqual(again.layout, report.layout);
+    assert.ok(Math.abs(again.coverage - report.coverage) < 1e-12, `${again.coverage} vs ${report.coverage}`);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('layout: Cancel stops "Build all patches": the daemon cancels, the page is idle, nothing is drawn', async () => {
+  const before = (daemonLog().match(/CANCELLED/g) ?? []).length;
+  await ltId('layout-build').click(); // the default member counts: seconds of work on 20 patches
+  await until(() => ltId('cancel').isEnabled(), 5000, 'Cancel enabled');
+  await until(async () => /^build: .+ \(\d+%\)$/.test(await ltText('status')), 15000, 'progress of the build');
+  await ltId('cancel').click();
+  await until(async () => /^build: cancelled$/.test(await ltText('status')), 5000, 'the cancelled status');
+  assert.ok(await ltId('cancel').isDisabled());
+  await until(() => (daemonLog().match(/CANCELLED/g) ?? []).length > before, 10000, 'the daemon to log the cancellation');
+  assert.equal(await ltText('layout-summary'), '');
+  assert.ok(await ltId('layout-run').isHidden());
+  assert.ok(await ltId('error').isHidden());
+  await canvasIs('layers', 'mesh,layout'); // the layout still drawn, no lamellas
+  await canvasIs('layoutLamellas', '0');
+  assert.equal(await ltId('layout-downloads').locator('[data-testid=layout-download-deployment-json]').count(), 0);
+  assert.ok(await ltId('layout-build').isEnabled(), 'the page stays usable');
+});
+
+test('layout: "Build all patches" (knet1, 3 × 3 members): the deployed whole, one row per patch, its RMS and seams as deployment.json says, downloads', async () => {
+  await ltId('members-u').fill('3');
+  await ltId('members-v').fill('3');
+  const sent = await requestsDuring('runlayout', async () => {
+    await ltId('layout-build').click();
+    await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-summary]').dataset.ready === '1'), 90000, 'the build');
+  });
+  assert.equal(sent.length, 1);
+  const body = JSON.parse(sent[0]);
+  assert.deepEqual(body.layout, knetLayout.report.layout); // the layout found, sent as it is
+  assert.deepEqual(body.design, { members_u: 3, members_v: 3 });
+  assert.deepEqual(body.simulation, {});
+  const dep = JSON.parse((await ltDownload('layout-download-deployment-json')).bytes.toString('utf8'));
+  const design = JSON.parse((await ltDownload('layout-download-design-json')).bytes.toString('utf8'));
+  assert.equal(dep.patches.length, 20);
+  const summary = await ltText('layout-summary');
+  const pct = (x) => `${(100 * (x / dep.diagonal)).toFixed(3)} % of the diagonal`;
+  assert.ok(summary.includes(`whole RMS with notches ${fmt(dep.rms_with_notches)} (${pct(dep.rms_with_notches)})`), summary);
+  assert.ok(summary.includes(`whole RMS without notches ${fmt(dep.rms_without_notches)} (${pct(dep.rms_without_notches)})`), summary);
+  assert.ok(summary.includes(`seam bolts ${design.seam_bolts} on ${design.seams.length} seams`), summary);
+  assert.ok(design.seam_bolts > 0);
+  assert.equal(dep.seams_joined, false);
+  assert.ok(summary.includes(`largest seam gap ${fmt(dep.max_seam_gap)} (${pct(dep.max_seam_gap)}) — before joining: the seams are not joined yet`), summary);
+  assert.equal(await ltId('layout-nonconverged').isVisible(), dep.converged === false);
+  assert.match(summary, dep.converged ? /every run of every patch converged/ : /NOT converged/);
+  const rows = await tableRows('layout-run');
+  assert.deepEqual(rows, dep.patches.map((p) => [p.name, String(p.grid_vertices), fmt(p.rms_with_notches), fmt(p.rms_without_notches),
+                                                 p.converged ? 'yes' : 'NO']));
+  // Drawn: every patch's deployed lamellas on one deviation scale, over the layout.
+  await canvasIs('layers', 'mesh,layout,layout-deployment');
+  assert.ok(Number(await canvasData('layoutLamellas')) >= 20 * 4, await canvasData('layoutLamellas'));
+  assert.ok(await ltId('deviation-legend').isVisible());
+  // The whole's files: deployed.obj and deviation.ply as the daemon wrote them, run.zip with every patch's folder.
+  const obj = (await ltDownload('layout-download-deployed-obj')).bytes.toString('utf8');
+  assert.match(obj, /^o P1-/m);
+  assert.match(obj, /^o P20-/m);
+  assert.match((await ltDownload('layout-download-deviation-ply')).bytes.toString('latin1'), /^ply\n/);
+  const { unzipSync } = createRequire(path.join(web, 'package.json'))('fflate');
+  const zip = unzipSync(new Uint8Array((await ltDownload('layout-download-run-zip')).bytes));
+  assert.deepEqual(JSON.parse(Buffer.from(zip['run/deployment.json']).toString('utf8')), dep);
+  const folders = new Set(Object.keys(zip).filter((k) => k.startsWith('run/patches/')).map((k) => k.split('/')[2]));
+  assert.equal(folders.size, 20);
+  assert.ok(zip['run/patches/P7/design.json'] && zip['run/patches/P7/deployment.json'], Object.keys(zip).join(' '));
+  mkdirSync(outDir, { recursive: true });
+  await lt.screenshot({ path: path.join(outDir, 'layout-deployment.png') }); // for a person to look at; nothing asserted on it
+});
+
+test('layout: a layout file (the sphere example in 2 × 2 patches) is cut as given; a bad one names its field', async () => {
+  await ltId('example-select').selectOption('sphere');
+  await until(async () => /^sphere: \d+ vertices/.test(await ltText('mesh-info')), 15000, 'the sphere');
+  await canvasIs('layers', 'mesh'); // a new surface: the layout is gone
+  assert.equal(await ltText('layout-summary'), '');
+  const corners = [];
+  for (const j of [0, 16, 32]) for (const i of [0, 16, 32]) corners.push({ vertex: j * 33 + i });
+  const layout = { corners, patches: [{ corners: [0, 1, 4, 3] }, { corners: [1, 2, 5, 4] }, { name: 'north-west', corners: [3, 4, 7, 6] },
+                                      { corners: [4, 5, 8, 7] }] };
+  await ltId('layout-input').setInputFiles({ name: 'sphere-2x2.json', mimeType: 'application/json', buffer: Buffer.from(JSON.stringify(layout)) });
+  await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-info]').dataset.ready === '1'), 30000, 'the layout from the file');
+  await canvasIs('layoutPatches', '4');
+  assert.deepEqual((await tableRows('layout-patches')).map((r) => [r[0], r[1]]), [['P1', 'ok'], ['P2', 'ok'], ['north-west', 'ok'], ['P4', 'ok']]);
+  assert.match(await ltText('layout-info'), /^coverage 100\.0 %.*\n4 patches \(4 ok\), 4 seams \(largest mismatch 0\), 9 corners$/);
+  assert.ok(await ltId('layout-trials-box').isHidden(), 'a layout file has no automatic trials');
+  assert.equal(await ltText('layout-uncovered'), 'not covered: nothing');
+  // Built (3 × 3 members, from the test before) in cm: the kit of the whole, one Fabricate, as kit.zip.
+  await ltId('unit').selectOption('cm');
+  await ltId('layout-build').click();
+  await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-summary]').dataset.ready === '1'), 60000, 'the sphere built');
+  assert.equal((await tableRows('layout-run')).length, 4);
+  assert.match(await ltText('layout-summary'), /^4 of 4 patches built/);
+  const { unzipSync } = createRequire(path.join(web, 'package.json'))('fflate');
+  const [download] = await Promise.all([lt.waitForEvent('download', { timeout: 60000 }), ltId('layout-kit').click()]);
+  assert.equal(download.suggestedFilename(), 'kit.zip');
+  const kit = unzipSync(new Uint8Array(readFileSync(await download.path())));
+  for (const name of ['kit/kit.json', 'kit/joining.svg', 'kit/bom.csv', 'kit/assembly-north-west.svg', 'kit/sheets/sheet-01.dxf'])
+    assert.ok(kit[name], `${name} in ${Object.keys(kit).join(' ')}`);
+  assert.match(await ltText('layout-summary'), /kit: \d+ lamellas on \d+ sheet/);
+  const bad = { ...layout, patches: layout.patches.map((p, i) => (i === 1 ? { corners: [1, 2, 5, 12] } : p)) };
+  allowHttpErrors = true;
+  try {
+    await ltId('layout-input').setInputFiles({ name: 'bad.json', mimeType: 'application/json', buffer: Buffer.from(JSON.stringify(bad)) });
+    await until(() => ltId('error').isVisible(), 15000, 'the error of the bad layout');
+  } finally {
+    allowHttpErrors = false;
+  }
+  assert.match(await ltText('error'), /INVALID_ARGUMENT.*layout\.patches\[1\]\.corners\[3\]: corner 12 is out of range/);
+  assert.match(await lt.locator('.field-error[data-for=layout]').textContent(), /^layout\.patches\[1\]\.corners\[3\]: corner 12/);
+  await canvasIs('layoutPatches', '0');
+  await ltId('layout-input').setInputFiles({ name: 'notes.json', mimeType: 'application/json', buffer: Buffer.from('{"members": []}') });
+  await until(async () => /notes\.json: no layout in it/.test(await lt.locator('.field-error[data-for=layout]').textContent()), 5000,
+              'the file that holds no layout');
+  await lt.close();
 });
 
 test('no console errors, no traffic off loopback', () => {

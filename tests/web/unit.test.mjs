@@ -13,7 +13,8 @@ const web = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../cl
 const esbuild = createRequire(path.join(web, 'package.json'))('esbuild');
 
 async function load(entry) {
-  const out = await esbuild.build({ entryPoints: [path.join(web, entry)], bundle: true, format: 'esm', write: false, platform: 'neutral' });
+  const out = await esbuild.build({ entryPoints: [path.join(web, entry)], bundle: true, format: 'esm', write: false, platform: 'neutral',
+                                    mainFields: ['module', 'main'] }); // fflate (layout.ts) names its entry so
   const dir = mkdtempSync(path.join(tmpdir(), 'gridshell-unit-'));
   const file = path.join(dir, 'm.mjs');
   writeFileSync(file, out.outputFiles[0].text);
@@ -86,6 +87,20 @@ test('errors go next to the control their field names', () => {
   assert.equal(f.errorSlot('simulate', 'options.solver', has), 'simulation');
   assert.equal(f.errorSlot('simulate', 'design.members[4]', has), 'options');
   assert.equal(f.errorSlot('fabricate', 'options.unit', has), 'fabricate');
+  // Layout calls: the automatic options next to the layout controls, design and simulation options
+  // next to theirs, the layout itself under its section.
+  const layoutSlots = new Set([...slots, 'layout.max_patches']);
+  const lhas = (k) => layoutSlots.has(k);
+  assert.equal(f.errorSlot('layout', 'automatic.max_patches', lhas), 'layout.max_patches');
+  assert.equal(f.errorSlot('layout', 'automatic.coverage_goal', lhas), 'layout');
+  assert.equal(f.errorSlot('layout', 'layout.patches[1].corners[2]', lhas), 'layout');
+  assert.equal(f.errorSlot('layout', 'mesh.indices[3]', lhas), 'mesh');
+  assert.equal(f.errorSlot('build', 'design.options.members_u', lhas), 'design.members_u');
+  assert.equal(f.errorSlot('build', 'design.members_u', lhas), 'design.members_u');
+  assert.equal(f.errorSlot('build', 'simulation.material', lhas), 'simulation.material');
+  assert.equal(f.errorSlot('build', 'simulation.solver', lhas), 'layout');
+  assert.equal(f.errorSlot('layout', 'options.eta_max', lhas), 'design.eta_max'); // the patch options of the design section
+  assert.equal(f.errorSlot('layout kit', 'options.unit', lhas), 'layout');
 });
 
 test('URL state round-trips; option keys are the controls\' (older short keys still read)', () => {
@@ -238,6 +253,8 @@ function description({ extra = true } = {}) {
     { group: 'simulation', name: 'interior_anchors', type: 'choice', default_value: '', choices: ['', 'auto'], label: 'Automatic inner anchors', help: 'add inner anchors' },
     { group: 'simulation', name: 'friction_epsilon', type: 'number', default_value: '1e-04', minimum: 0, maximum: 0.5, exclusive_minimum: true, exclusive_maximum: true, zero_allowed: true, zero_means: 'default', advanced: true, label: 'Friction epsilon', help: 'E_p' },
     { group: 'simulation', name: 'lamella_width', type: 'number', default_value: '', unit: 'mesh units', label: 'lamella_width', help: 'from the design', output: true },
+    { group: 'layout', name: 'max_patches', flag: '--max-patches', type: 'integer', default_value: '36', minimum: 1, maximum: 64, zero_allowed: true, zero_means: 'default', label: 'Patches at most', help: "an automatic layout's patches at most" },
+    { group: 'layout', name: 'coverage_goal', flag: '--coverage-goal', type: 'number', default_value: '0.95', minimum: 0, maximum: 1, exclusive_minimum: true, zero_allowed: true, zero_means: 'default', label: 'Coverage goal', help: 'an automatic layout stops growing at this fraction' },
     { group: 'fabrication', name: 'kerf', type: 'number', default_value: '0.15', minimum: 0, maximum: 10, exclusive_maximum: true, unit: 'mm', label: 'Kerf', help: 'laser kerf' },
   ];
   const materials = [
@@ -253,15 +270,29 @@ function description({ extra = true } = {}) {
   return { options, materials, mesh_formats: ['obj', 'off', 'ply', 'stl'], length_units: ['mm', 'cm', 'm', 'in', 'ft'] };
 }
 
-test('form: a control for every design and simulation option of the description, none for output or other groups', () => {
+test('form: a control for every design, simulation and layout option of the description, none for output or other groups', () => {
   const keys = form.controlSpecs(description()).map((c) => c.key);
   assert.deepEqual(keys, ['design.members_u', 'design.lamella_width', 'design.resolution', 'design.geodesic_method',
     'design.eta_max', 'design.interior_anchors', 'design.auto_corner_angles', 'design.test_extra', 'simulation.notches',
-    'simulation.material', 'simulation.unit', 'simulation.interior_anchors', 'simulation.friction_epsilon', 'simulation.test_switch']);
+    'simulation.material', 'simulation.unit', 'simulation.interior_anchors', 'simulation.friction_epsilon',
+    'layout.max_patches', 'layout.coverage_goal', 'simulation.test_switch']);
   // design.alpha is the page's own slider; the rest is exactly the description's, so an option added
   // to it is a control more, with no other change.
   const without = form.controlSpecs(description({ extra: false })).map((c) => c.key);
   assert.deepEqual(keys.filter((k) => !without.includes(k)), ['design.test_extra', 'simulation.test_switch']);
+});
+
+test('form: the layout options (automatic layouts) get their range and default; a request sends only what differs', () => {
+  const specs = new Map(form.controlSpecs(description()).map((c) => [c.key, c]));
+  const max = specs.get('layout.max_patches'), goal = specs.get('layout.coverage_goal');
+  assert.deepEqual([max.kind, max.testid, max.min, max.max, max.step, max.value], ['number', 'max-patches', '0', '64', '1', '36']);
+  assert.deepEqual([goal.kind, goal.testid, goal.min, goal.max, goal.value], ['number', 'coverage-goal', '0', '1', '0.95']);
+  assert.match(max.title, /^an automatic layout's patches at most\nallowed: integer \[1, 64\] \(or 0: default\)\ndefault: 36\nCLI: --max-patches$/);
+  assert.equal(form.checkValue(max.option, '100'), 'must be in [1, 64] (or 0: default)');
+  assert.equal(form.checkValue(goal.option, '0'), '');
+  const values = new Map([['layout.max_patches', '36'], ['layout.coverage_goal', '0.9']]);
+  assert.deepEqual(form.requestOptions(values, form.formOptions(description()), 'layout'), { coverage_goal: 0.9 });
+  assert.equal(form.REQUEST_FIELD.layout, 'automatic'); // the daemon's errors name automatic.max_patches
 });
 
 test('form: a made-up number option gets its range, default, label and help', () => {
@@ -343,12 +374,14 @@ test('form: the built controls in Chromium (a made-up option and material appear
     const errors = [];
     page.on('pageerror', (e) => errors.push(e.message));
     await page.setContent(`<div id="dm"></div><details><summary>Advanced</summary><div id="da"></div></details>
-      <div id="sm"></div><details id="sd"><summary>Advanced</summary><div id="sa"></div></details>`);
+      <div id="sm"></div><details id="sd"><summary>Advanced</summary><div id="sa"></div></details>
+      <div id="lm"></div><details id="ld"><summary>Advanced</summary><div id="la"></div></details>`);
     await page.addScriptTag({ content: bundle.outputFiles[0].text });
     await page.evaluate((d) => {
       const $ = (id) => document.getElementById(id);
       window.form = new window.gridshellForm.OptionsForm(d, { design: { main: $('dm'), advanced: $('da') },
-                                                              simulation: { main: $('sm'), advanced: $('sa') } });
+                                                              simulation: { main: $('sm'), advanced: $('sa') },
+                                                              layout: { main: $('lm'), advanced: $('la') } });
       window.changes = [];
       window.form.onChange = (key, o, settled) => window.changes.push([key, settled]);
     }, description());
@@ -383,10 +416,177 @@ test('form: the built controls in Chromium (a made-up option and material appear
     await page.getByTestId('auto-anchors').check();
     assert.deepEqual(await page.evaluate(() => window.form.changed()),
                      { 'design.test_extra': '9', 'simulation.material': 'test-larch', 'simulation.interior_anchors': 'auto' });
+    // The layout controls: the immediate check names the request's field (LayoutRequest.automatic).
+    const patches = page.getByTestId('max-patches');
+    assert.ok(await patches.evaluate((i) => i.closest('#lm') !== null));
+    await patches.fill('100');
+    assert.equal(await patches.evaluate((i) => i.validity.valid), false);
+    assert.equal(await page.locator('[data-option="layout.max_patches"] .field-error').textContent(),
+                 'automatic.max_patches: must be in [1, 64] (or 0: default)');
+    assert.deepEqual(await page.evaluate(() => window.form.requestOptions('layout')), { max_patches: 100 });
+    await patches.fill('36');
+    assert.equal(await page.locator('#ld').evaluate((d) => d.hidden), true); // no advanced layout option
     assert.equal(await page.evaluate(() => window.form.set('design.test_extra', '51')), true);
     assert.equal(await input.evaluate((i) => i.validity.valid), false);
     assert.deepEqual(errors, []);
   } finally {
     await browser.close();
   }
+});
+
+// ---- multi-patch layouts (layout.ts, issue 35) ----------------------------------------------------
+
+const lay = await load('src/layout.ts');
+const { unzipSync } = createRequire(path.join(web, 'package.json'))('fflate');
+
+/** A 2 x 1 strip of unit squares as two patches (two triangles each) sharing the edge x = 1. */
+function twoPatches() {
+  return [
+    { name: 'P1', positions: [0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0], indices: [0, 1, 2, 0, 2, 3] },
+    { name: 'P2', positions: [1, 0, 0, 2, 0, 0, 2, 1, 0, 1, 1, 0], indices: [0, 1, 2, 0, 2, 3] },
+  ];
+}
+
+test('layout: a layout file read back (a Layout, layout.json, a layout run\'s design.json); what is not one', () => {
+  const layout = { corners: [{ vertex: 0 }, { vertex: 1 }, { point: [1, 2, 3] }, { vertex: 4 }], patches: [{ corners: [0, 1, 2, 3] }] };
+  assert.deepEqual(lay.layoutFromJson(JSON.stringify(layout)), layout);
+  assert.deepEqual(lay.layoutFromJson(JSON.stringify({ input: 'x', coverage: 1, layout })), layout);            // LayoutReport
+  assert.deepEqual(lay.layoutFromJson(JSON.stringify({ input: 'x', layout: { coverage: 1, layout } })), layout); // LayoutDesign
+  assert.throws(() => lay.layoutFromJson('{"corners": ['), /^Error: not JSON/);
+  assert.throws(() => lay.layoutFromJson('{"members": []}'), /no layout in it/);
+  assert.throws(() => lay.layoutFromJson('[1, 2]'), /no layout in it/);
+});
+
+test('layout: boundary edges and the patch sides, seams (shared) apart from outer edges', () => {
+  const [a] = twoPatches();
+  const edges = lay.boundaryEdges(a.indices).map(([x, y]) => [Math.min(x, y), Math.max(x, y)].join('-')).sort();
+  assert.deepEqual(edges, ['0-1', '0-3', '1-2', '2-3']); // the diagonal 0-2 is inner
+  const { seams, outer } = lay.sideSegments(twoPatches());
+  const points = (flat) => Array.from({ length: flat.length / 6 }, (_, i) => flat.slice(6 * i, 6 * i + 6));
+  assert.equal(points(seams).length, 1, 'one seam segment, drawn once');
+  assert.deepEqual(points(seams)[0].filter((_, k) => k % 3 === 0).sort(), [1, 1]); // on x = 1
+  assert.equal(points(outer).length, 6);
+  assert.ok(points(outer).every((s) => !(s[0] === 1 && s[3] === 1)), 'the seam is not an outer edge');
+  // A patch that could not be cut (no arrays) adds nothing.
+  assert.deepEqual(lay.sideSegments([...twoPatches(), { name: 'P3' }]).outer.length, outer.length);
+});
+
+test('layout: patch colours are distinct, valid, and neighbours differ', () => {
+  const colours = Array.from({ length: 64 }, (_, i) => lay.patchColour(i));
+  for (const c of colours) assert.ok(c.every((x) => x >= 0 && x <= 1), String(c));
+  const keys = new Set(colours.map((c) => c.map((x) => x.toFixed(3)).join()));
+  assert.equal(keys.size, 64);
+  for (let i = 1; i < 64; ++i) {
+    const d = colours[i].reduce((s, x, k) => s + Math.abs(x - colours[i - 1][k]), 0);
+    assert.ok(d > 0.15, `patches ${i - 1} and ${i} too alike (${d})`);
+  }
+  assert.equal(lay.cssColour([1, 0.5, 0]), 'rgb(255,128,0)');
+});
+
+test('layout: a run\'s overall progress: the layout the first tenth, then the patches done', () => {
+  const p = lay.runProgress();
+  const at = (stage, fraction) => Math.round(1000 * p({ stage, fraction, message: '' })) / 1000;
+  assert.equal(at('layout: 1 x 1', 0), 0);
+  assert.equal(at('layout: 3 x 2', 0.5), 0.05);
+  assert.equal(at('layout', 1), 0.1);
+  assert.equal(at('P1: distance maps', 0.5), 0.1);            // a patch's own stage keeps the overall
+  assert.equal(at('layout: patches designed and simulated', 0.25), 0.325);
+  assert.equal(at('P3: simulate with notches', 1), 0.325);
+  assert.equal(at('layout: patches designed and simulated', 0.2), 0.325); // never backwards
+  assert.equal(at('layout: patches designed and simulated', 1), 1);
+  assert.equal(at('layout: patches designed and simulated', Number.NaN), 1);
+});
+
+function report() {
+  return {
+    input: 'knet1.obj', layout: { corners: [{ vertex: 1 }, { vertex: 2 }, { vertex: 3 }, { vertex: 4 }, { vertex: 5 }, { vertex: 6 }],
+                                  patches: [{ name: 'P1', corners: [0, 1, 4, 3] }, { name: 'P2', corners: [1, 2, 5, 4] }] },
+    input_area: 200, covered_area: 150, coverage: 0.75,
+    patches: [{ name: 'P1', ok: true, area: 150, eta: 1.0000123, vertices: 40 },
+              { name: 'P2', ok: false, problem_code: 'infeasible', problem_field: 'layout.patches[1]', problem: 'corner angle 3.1 rad too large', area: 0 }],
+    seams: [{ corners: [1, 4], patches: ['P1', 'P2'], length: 5, mismatch: 0 }, { corners: [0, 1], patches: ['P1'], length: 5, mismatch: 0 }],
+    uncovered: [{ where: 'P2', area: 40, reason: 'corner angle 3.1 rad too large' },
+                { where: 'outside the patches', area: 10, reason: 'between the outer patch sides and the boundary' }],
+    automatic: { columns: 2, rows: 1, boundary_corners: [1, 3, 4, 6], seconds: 0.25,
+                 trials: [{ columns: 1, rows: 1, coverage: 0.4378, failing: 0, first_problem: '', seconds: 0.0054 },
+                          { columns: 2, rows: 1, coverage: 0.75, failing: 1, first_problem: 'P2: corner angle', seconds: 0.011 }] },
+  };
+}
+
+test('layout: the summary, the patches\' table, what is not covered and the trials', () => {
+  const r = report();
+  assert.equal(lay.layoutSummary(r), 'coverage 75.0 %: 150 of 200\n2 patches (1 ok, 1 failing), 1 seams (largest mismatch 0), 6 corners\n' +
+                                      'automatic: 2 × 1 grid, 2 trials in 0.25 s');
+  assert.deepEqual(lay.patchRows(r), [['P1', 'ok', '150', '1.00001'],
+                                      ['P2', 'layout.patches[1]: corner angle 3.1 rad too large', '—', '—']]);
+  assert.deepEqual(lay.uncoveredLines(r), ['P2: 40 (20.00 %) — corner angle 3.1 rad too large',
+                                           'outside the patches: 10 (5.00 %) — between the outer patch sides and the boundary']);
+  assert.deepEqual(lay.trialRows(r), [['1 × 1', '1', '43.8 %', '0', '0.005'], ['2 × 1', '2', '75.0 %', '1: P2: corner angle', '0.011']]);
+  assert.deepEqual(lay.trialRows({ ...r, automatic: undefined }), []); // a layout file: no trials
+  assert.equal(lay.percent(0.9537766652778353), '95.4 %');
+  assert.equal(lay.ofDiagonal(0.0337, 50), '0.0337 (0.067 % of the diagonal)');
+  assert.equal(lay.ofDiagonal(undefined, 50), '—');
+});
+
+function runResult({ converged = true } = {}) {
+  const rod = (dev) => ({ member: { family: 'g', index: 0 }, boundary: false, centerline: [[0, 0, 0], [1, 0, 0]], normals: [[0, 0, 1], [0, 0, 1]],
+                          deviation: dev, max_bending_stress: 1e6, max_torsion_stress: 0, max_normal_stress: 1e6 });
+  const file = (name, text) => ({ name, content: Buffer.from(text).toString('base64') });
+  const patch = (dev) => ({
+    design: { design: { options: { lamella_width: 0.5, lamella_thickness: 0.05 } }, report: {}, views: [file('planar.svg', '<svg/>')] },
+    simulation: { deployment: { rods: [rod(dev)] }, views: [file('deployed.obj', 'o x\n')] },
+  });
+  return {
+    layout: { report: report(), patches: twoPatches(), views: [file('layout.svg', '<svg/>')] },
+    patches: [patch([0.1, 0.7]), {}],
+    design: { input: 'knet1.obj', layout: report(), patch_designs: ['patches/P1/design.json', ''], seams: [], seam_bolts: 0 },
+    deployment: {
+      options: { bending_strength: 60e6 }, rms_with_notches: 0.0337437107135822, rms_without_notches: 0.25, converged,
+      grid_vertices: 90, diagonal: 51.1, max_seam_gap: 0, seams_joined: false, max_normal_stress: 30e6, bending_utilization: 0.5,
+      seconds: 1.25, seams: [],
+      patches: [{ name: 'P1', rms_with_notches: 0.0337, rms_without_notches: 0.25, converged, grid_vertices: 90 }],
+    },
+    views: [file('deployed.obj', 'o P1-g0\n'), file('deviation.ply', 'ply\n')],
+  };
+}
+
+test('layout run: the per-patch table, the whole\'s summary (seams not joined), non-convergence', () => {
+  const run = runResult();
+  assert.deepEqual(lay.runRows(run.deployment), [['P1', '90', '0.0337', '0.25', 'yes']]);
+  const text = lay.runSummary(run);
+  assert.match(text, /^1 of 2 patches built; 90 grid vertices$/m);
+  assert.match(text, /^whole RMS with notches 0\.0337 \(0\.066 % of the diagonal\)$/m);
+  assert.match(text, /^whole RMS without notches 0\.25 \(0\.489 % of the diagonal\)$/m);
+  assert.match(text, /^largest seam gap 0 \(0\.000 % of the diagonal\) — before joining: the seams are not joined yet/m);
+  assert.match(text, /^max normal stress 30 MPa = 50% of 60 MPa$/m);
+  assert.match(text, /^every run of every patch converged$/m);
+  assert.deepEqual(lay.notConverged(run.deployment), []);
+  const bad = runResult({ converged: false });
+  assert.match(lay.runSummary(bad), /^NOT converged/m);
+  assert.deepEqual(lay.runRows(bad.deployment)[0].at(-1), 'NO');
+  assert.deepEqual(lay.notConverged(bad.deployment), ['P1']);
+  assert.equal(lay.maxDeviationOf(run.patches), 0.7);
+  const drawn = lay.deployedPatches(run.patches);
+  assert.equal(drawn.length, 1); // the patch without a result draws nothing
+  assert.deepEqual([drawn[0].width, drawn[0].thickness, drawn[0].rods.length], [0.5, 0.05, 1]);
+});
+
+test('layout run: the files of the whole (JSON that parses back) and run.zip with each patch\'s folder', () => {
+  const run = runResult();
+  const files = lay.runFiles(run);
+  assert.deepEqual(files.map((f) => f.name), ['layout.json', 'design.json', 'deployment.json', 'layout.svg', 'deployed.obj', 'deviation.ply']);
+  const json = (name) => JSON.parse(Buffer.from(files.find((f) => f.name === name).content, 'base64').toString('utf8'));
+  assert.deepEqual(json('layout.json'), run.layout.report);
+  assert.deepEqual(json('deployment.json'), run.deployment);
+  assert.equal(json('design.json').seam_bolts, 0);
+  assert.deepEqual(lay.layoutFromJson(JSON.stringify(json('layout.json'))), run.layout.report.layout); // it reads back as a layout
+  assert.deepEqual(lay.layoutFiles(run.layout).map((f) => f.name), ['layout.json', 'layout.svg']);
+  const zip = unzipSync(lay.runZip(run));
+  assert.deepEqual(Object.keys(zip).sort(), ['run/deployed.obj', 'run/deployment.json', 'run/design.json', 'run/deviation.ply',
+    'run/layout.json', 'run/layout.svg', 'run/patches/P1/deployed.obj', 'run/patches/P1/deployment.json',
+    'run/patches/P1/design.json', 'run/patches/P1/planar.svg']);
+  assert.equal(Buffer.from(zip['run/deployed.obj']).toString(), 'o P1-g0\n');
+  assert.deepEqual(JSON.parse(Buffer.from(zip['run/patches/P1/design.json']).toString()), run.patches[0].design.design);
+  const kit = lay.layoutFabricateRequest(run, 'cm');
+  assert.deepEqual([kit.layout, kit.patches.length, kit.options], [run.design, 1, { unit: 'cm' }]);
 });

@@ -11,8 +11,14 @@
 
 import type { MaterialPreset, OptionDescription, OptionsResult } from './api';
 
-/** The option groups the page offers controls for (DesignRequest.Options, SimulationOptions). */
-export const FORM_GROUPS: readonly string[] = ['design', 'simulation'];
+/** The option groups the page offers controls for (DesignRequest.Options, SimulationOptions, AutoLayoutOptions). */
+export const FORM_GROUPS: readonly string[] = ['design', 'simulation', 'layout'];
+
+/**
+ * The request field that holds a group's options, as the daemon's errors name it:
+ * `options.lamella_width`, but `automatic.max_patches` (LayoutRequest.automatic).
+ */
+export const REQUEST_FIELD: Record<string, string> = { design: 'options', simulation: 'options', layout: 'automatic' };
 
 /** "design.lamella_width": a control's key, as in its `data-option` attribute. */
 export function optionKey(o: { group: string; name: string }): string {
@@ -383,7 +389,7 @@ function buildControl(spec: ControlSpec): Control {
 }
 
 /**
- * The built controls of the design and simulation options. `onChange(key, option, settled)` is
+ * The built controls of the design, simulation and layout options. `onChange(key, option, settled)` is
  * called on every edit: settled = a select or checkbox changed (act now), else typing (debounce).
  */
 export class OptionsForm {
@@ -479,6 +485,6 @@ export class OptionsForm {
   private validate(c: Control): void {
     const message = checkValue(c.spec.option, c.get());
     for (const input of c.inputs) input.setCustomValidity(message);
-    c.slot.textContent = message ? `options.${c.spec.option.name}: ${message}` : '';
+    c.slot.textContent = message ? `${REQUEST_FIELD[c.spec.option.group] ?? 'options'}.${c.spec.option.name}: ${message}` : '';
   }
 }

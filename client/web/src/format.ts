@@ -103,9 +103,11 @@ export function maxDeviation(dep: Deployment): number {
  * option's error goes next to its own control (`design.NAME`, `simulation.NAME`) when
  * `hasSlot` says the page has one, else under its section.
  */
-export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate', field: string,
-                          hasSlot: (slot: string) => boolean = () => false): string {
+export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate' | 'layout' | 'build' | 'layout kit',
+                          field: string, hasSlot: (slot: string) => boolean = () => false): string {
   if (call === 'fabricate') return 'fabricate';
+  if (call === 'layout kit') return 'layout'; // the whole's Fabricate: under the layout section
+  if (call === 'layout' || call === 'build') return layoutErrorSlot(field, hasSlot);
   const name = /^options\.([A-Za-z0-9_]+)/.exec(field)?.[1];
   if (call === 'simulate') {
     if (field.startsWith('design')) return 'options';
@@ -116,6 +118,22 @@ export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabr
   if (name && hasSlot(`design.${name}`)) return `design.${name}`; // a patch sends design options too
   if (field.startsWith('options')) return call === 'patch' ? 'corners' : 'options';
   return call === 'load' ? 'mesh' : call === 'patch' ? 'corners' : 'options';
+}
+
+/**
+ * Where an error of a layout call (/v1/layout, /v1/runlayout) goes:
+ * `automatic.max_patches` next to that layout control, `design.options.members_u` (or
+ * `design.members_u`) and `simulation.material` next to theirs, `mesh.*` under the file input,
+ * the rest (`layout.patches[1].corners[2]`, `patches[k].…`) under the layout section.
+ */
+function layoutErrorSlot(field: string, hasSlot: (slot: string) => boolean): string {
+  if (field.startsWith('mesh')) return 'mesh';
+  const m = /^(automatic|design(?:\.options)?|simulation|options)\.([A-Za-z0-9_]+)/.exec(field);
+  if (m) {
+    const group = m[1] === 'automatic' ? 'layout' : m[1]!.startsWith('design') || m[1] === 'options' ? 'design' : 'simulation';
+    if (hasSlot(`${group}.${m[2]}`)) return `${group}.${m[2]}`;
+  }
+  return 'layout';
 }
 
 /** The page's state in the URL hash: example, corners, options (`design.NAME`, `simulation.NAME`). */

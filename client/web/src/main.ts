@@ -4,7 +4,8 @@
 // downloads of the daemon's files. One call in flight at a time: a new one aborts the previous
 // (the daemon cancels a job whose HTTP client went away). The design and simulation controls,
 // the materials and the mesh formats come from the daemon's description of the options
-// (/v1/options, form.ts).
+// (/v1/options, form.ts). The layout section covers the surface with several patches instead
+// (/v1/layout, /v1/runlayout; layout.ts).
 
 import './style.css';
 import {
@@ -19,6 +20,12 @@ import {
 } from './format';
 import { OptionsForm, optionKey, tooltip } from './form';
 import { fabricateRequest, kitSummary, kitZip, type FabricateResult } from './kit';
+import {
+  cssColour, deployedPatches, layoutFabricateRequest, layoutFiles, layoutFromJson, layoutSummary, maxDeviationOf,
+  notConverged, patchColour, patchRows, runFiles, runProgress, runRows, runSummary, runZip, sideSegments, trialRows,
+  uncoveredLines, type LayoutMode, type LayoutResult, type LayoutRunResult,
+} from './layout';
+import type { Rgb } from './colormap';
 import { appendSuggestions } from './suggestions';
 import { Viewer, type Pick } from './viewer';
 import { Zoomable } from './zoom';
@@ -79,6 +86,21 @@ const ui = {
   devMax: el('deviation-max'),
   devTitle: el('deviation-title'),
   colourBy: el<HTMLSelectElement>('colour-by'),
+  layoutOptions: el('layout-options'),
+  layoutAdvanced: el('layout-advanced'),
+  layoutAuto: el<HTMLButtonElement>('layout-auto'),
+  layoutFile: el<HTMLInputElement>('layout-input'),
+  layoutInfo: el('layout-info'),
+  layoutPatches: el<HTMLTableElement>('layout-patches'),
+  layoutUncovered: el('layout-uncovered'),
+  layoutTrialsBox: el<HTMLDetailsElement>('layout-trials-box'),
+  layoutTrials: el<HTMLTableElement>('layout-trials'),
+  layoutBuild: el<HTMLButtonElement>('layout-build'),
+  layoutKit: el<HTMLButtonElement>('layout-kit'),
+  layoutNonConverged: el('layout-nonconverged'),
+  layoutSummary: el('layout-summary'),
+  layoutRun: el<HTMLTableElement>('layout-run'),
+  layoutDownloads: el('layout-downloads'),
 };
 
 const viewer = new Viewer(el<HTMLCanvasElement>('viewer'));
@@ -99,16 +121,19 @@ interface State {
   designWanted: boolean;         // redesign on every change once the user asked for a design
   simulation: SimulateResult | null;
   alphaDeg: number | null;       // null = the daemon's default ("min")
+  layout: LayoutResult | null;   // a multi-patch layout shown instead of the single patch
+  layoutRun: LayoutRunResult | null; // its patches built
 }
 
 const state: State = {
   source: null, mesh: null, loaded: null, corners: [], cornersLabel: '', selected: null,
-  patch: null, design: null, designWanted: false, simulation: null, alphaDeg: null,
+  patch: null, design: null, designWanted: false, simulation: null, alphaDeg: null, layout: null, layoutRun: null,
 };
 
 // ---- calls: one at a time, cancellable ----------------------------------------------------------
 
-type CallKind = 'load' | 'patch' | 'design' | 'simulate' | 'fabricate';
+type CallKind = 'load' | 'patch' | 'design' | 'simulate' | 'fabricate' | 'layout' | 'build' | 'layout kit';
+const LAYOUT_CALLS: ReadonlySet<CallKind> = new Set<CallKind>(['layout', 'build', 'layout kit']);
 let current: { kind: CallKind; controller: AbortController; byUser: boolean } | null = null;
 
 function setBusy(busy: boolean): void {
@@ -119,8 +144,10 @@ function setBusy(busy: boolean): void {
 /**
  * Runs one call with progress; aborts the call in flight. Resolves with the result, or null
  * when it was superseded or cancelled (the status line says which) or failed (the error is shown).
+ * `overall` maps a progress event to the bar's fraction (a layout run's stages are per patch).
  */
-async function run<T>(kind: CallKind, method: string, request: unknown, patchKey?: string | null): Promise<T | null> {
+async function run<T>(kind: CallKind, method: string, request: unknown, patchKey?: string | null,
+                      overall: (p: Progress) => number = (p) => p.fraction): Promise<T | null> {
   if (current) current.controller.abort();
   const job = { kind, controller: new AbortController(), byUser: false };
   current = job;
@@ -132,8 +159,9 @@ async function run<T>(kind: CallKind, method: string, request: unknown, patchKey
   try {
     const result = await call<T>(method, request, job.controller.signal, (p: Progress) => {
       if (current !== job) return;
-      ui.progress.value = Math.max(0, Math.min(1, p.fraction));
-      ui.status.textContent = `${kind}: ${p.stage}${p.message ? ' — ' + p.message : ''} (${Math.round(100 * p.fraction)}%)`;
+      const fraction = Math.max(0, Math.min(1, overall(p)));
+      ui.progress.value = fraction;
+      ui.status.textContent = `${kind}: ${p.stage}${p.message ? ' — ' + p.message : ''} (${Math.round(100 * fraction)}%)`;
     }, patchKey);
     if (current !== job) return null;
     ui.status.textContent = `${kind}: done in ${((performance.now() - t0) / 1000).toFixed(2)} s`;
@@ -170,13 +198,15 @@ function clearErrors(kind: CallKind): void {
   ui.error.hidden = true;
   ui.error.textContent = '';
   const slots = kind === 'simulate' ? ['simulation'] : kind === 'load' ? ['mesh', 'corners', 'options', 'design.alpha']
-    : kind === 'patch' ? ['corners', 'options', 'design.alpha'] : ['options', 'design.alpha'];
+    : kind === 'patch' ? ['corners', 'options', 'design.alpha'] : LAYOUT_CALLS.has(kind) ? ['mesh', 'layout', 'options', 'simulation']
+    : ['options', 'design.alpha'];
   for (const s of slots) {
     const slot = errorSlotElement(s);
     if (slot) slot.textContent = '';
   }
   // Next to each control: the daemon's error goes, the description's own check stays.
-  if (kind !== 'fabricate') form?.clearErrors(kind === 'simulate' ? 'simulation' : 'design');
+  if (kind === 'layout' || kind === 'build') for (const group of ['design', 'simulation', 'layout']) form?.clearErrors(group);
+  else if (kind !== 'fabricate' && kind !== 'layout kit') form?.clearErrors(kind === 'simulate' ? 'simulation' : 'design');
 }
 
 function showError(kind: CallKind, e: unknown): void {
@@ -225,10 +255,11 @@ function buildForm(d: OptionsResult): void {
   form = new OptionsForm(d, {
     design: { main: ui.designOptions, advanced: ui.designAdvanced },
     simulation: { main: ui.simulationOptions, advanced: ui.simulationAdvanced },
+    layout: { main: ui.layoutOptions, advanced: ui.layoutAdvanced },
   });
   form.onChange = (_key, option, settled) => {
     saveUrl();
-    if (option.group !== 'design') return; // a simulation option: the next Simulate takes it
+    if (option.group !== 'design') return; // a simulation or layout option: the next call takes it
     if (patchOptionNames().has(option.name)) repatchSoon(settled ? 0 : 350);
     else redesignSoon(settled ? 0 : 350);
   };
@@ -295,6 +326,7 @@ function resetFromMesh(): void {
   setDownloads([]);
   plan.clear();
   maps.clear();
+  clearLayout();
   updateCorners();
 }
 
@@ -323,6 +355,7 @@ async function loadMesh(mesh: MeshJson, source: NonNullable<State['source']>): P
   ui.meshInfo.dataset['readyMs'] = performance.now().toFixed(0); // since navigation start
   ui.auto.disabled = ui.clear.disabled = false;
   ui.suggested.disabled = (result.example_corners?.vertices ?? []).length !== 4;
+  ui.layoutAuto.disabled = ui.layoutFile.disabled = false;
   saveUrl();
   return true;
 }
@@ -394,6 +427,10 @@ function updateCorners(): void {
 
 viewer.onPick = (pick: Pick) => {
   if (!state.loaded) return;
+  if (state.layout) {
+    ui.status.textContent = 'A layout is shown: Clear (section 2) to place corners of a single patch.';
+    return;
+  }
   if (pick.kind === 'marker') {
     state.selected = state.selected === pick.index ? null : pick.index;
     updateCorners();
@@ -452,6 +489,10 @@ function cornersJson(): { vertices?: number[]; label?: string } {
 
 async function computePatch(): Promise<void> {
   if (!state.mesh) return;
+  if (state.layout) { // a single patch instead of the layout
+    clearLayout();
+    viewer.clearPatch();
+  }
   state.patch = state.design = state.simulation = null;
   ui.design.disabled = ui.simulate.disabled = ui.kit.disabled = true;
   // The design options a patch takes too (geodesics, eta_max, the automatic corners' angles), so
@@ -624,8 +665,12 @@ async function simulate(): Promise<void> {
   setDownloads([...d.views, ...result.views]);
 }
 
-/** The deployment in 3D, coloured as the panel says, with its legend. */
+/** The deployment in 3D (a single patch's, or a layout's patches'), coloured as the panel says, with its legend. */
 function showDeployment(): void {
+  if (state.layoutRun) {
+    showLayoutDeployment();
+    return;
+  }
   const d = state.design, sim = state.simulation;
   if (!d || !sim) return;
   const dep = sim.deployment;
@@ -633,6 +678,10 @@ function showDeployment(): void {
   const max = bending ? Math.max(0, ...dep.rods.map((r) => r.max_bending_stress)) : maxDeviation(dep);
   viewer.setDeployment(dep, d.design.options.lamella_width, d.design.options.lamella_thickness, max,
                        bending ? (rod) => rod.max_bending_stress : (rod, i) => rod.deviation[i] ?? 0);
+  showDeploymentLegend(bending, max);
+}
+
+function showDeploymentLegend(bending: boolean, max: number): void {
   ui.devLegend.hidden = false;
   ui.devTitle.textContent = bending ? 'largest bending stress per lamella' : 'deviation from the target';
   drawBar(ui.devBar, (t) => sequential(t, 1));
@@ -668,6 +717,189 @@ async function downloadKit(): Promise<void> {
   a.click();
 }
 
+// ---- layout: several patches ---------------------------------------------------------------------
+
+/** A table's rows (its caption stays): a header, then one row per item, `num` columns right-aligned. */
+function fillTable(table: HTMLTableElement, header: string[], rows: string[][], num: number[] = [],
+                   decorate: (tr: HTMLTableRowElement, i: number) => void = () => {}): void {
+  for (const child of [...table.children]) if (!(child instanceof HTMLTableCaptionElement)) child.remove();
+  const head = table.createTHead().insertRow();
+  for (const h of header) {
+    const th = document.createElement('th');
+    th.scope = 'col';
+    th.textContent = h;
+    head.append(th);
+  }
+  const body = table.createTBody();
+  rows.forEach((cells, i) => {
+    const tr = body.insertRow();
+    cells.forEach((c, k) => {
+      const td = tr.insertCell();
+      td.textContent = c;
+      if (num.includes(k)) td.className = 'num';
+    });
+    decorate(tr, i);
+  });
+  table.hidden = false;
+}
+
+function swatch(colour: Rgb): HTMLElement {
+  const span = document.createElement('span');
+  span.className = 'swatch';
+  span.style.background = cssColour(colour); // the CSSOM: allowed by the CSP
+  span.setAttribute('aria-hidden', 'true');
+  return span;
+}
+
+/** Forgets the built patches: the run's summary, table, downloads, kit and lamellas. */
+function clearLayoutRun(): void {
+  state.layoutRun = null;
+  ui.layoutKit.disabled = true;
+  ui.layoutNonConverged.hidden = true;
+  ui.layoutNonConverged.textContent = '';
+  ui.layoutSummary.textContent = '';
+  delete ui.layoutSummary.dataset['ready'];
+  ui.layoutRun.hidden = true;
+  if (state.layout) setLayoutDownloads(layoutFiles(state.layout));
+  viewer.setLayoutDeployment(null);
+  ui.devLegend.hidden = true;
+}
+
+/** Forgets the layout and what was built on it (the view is the caller's). */
+function clearLayout(): void {
+  clearLayoutRun();
+  state.layout = null;
+  ui.layoutBuild.disabled = true;
+  ui.layoutInfo.textContent = '';
+  delete ui.layoutInfo.dataset['ready'];
+  ui.layoutPatches.hidden = true;
+  ui.layoutUncovered.textContent = '';
+  ui.layoutTrialsBox.hidden = true;
+  setLayoutDownloads([]);
+  const slot = errorSlotElement('layout');
+  if (slot) slot.textContent = '';
+}
+
+/**
+ * A layout (automatic, or a layout file) for the loaded surface. It replaces the single patch:
+ * corners, patch, design and simulation are cleared, the patches drawn in their colours.
+ */
+async function computeLayout(mode: LayoutMode): Promise<void> {
+  if (!state.mesh) return;
+  resetFromMesh(); // keeps the mesh
+  viewer.clearPatch();
+  saveUrl();
+  // The patch options of the design section (geodesics, eta_max) hold for every patch.
+  const options = form?.requestOptions('design', patchOptionNames()) ?? {};
+  const result = await run<LayoutResult>('layout', 'layout', { mesh: state.mesh, ...mode, options });
+  if (result) showLayout(result);
+}
+
+function showLayout(result: LayoutResult): void {
+  state.layout = result;
+  const r = result.report;
+  const colours = r.patches.map((_, i) => patchColour(i));
+  const drawn = result.patches.map((p, i) => ({ positions: p.positions ?? [], indices: p.indices ?? [], colour: colours[i] ?? patchColour(i) }))
+    .filter((p) => p.indices.length > 0);
+  const sides = sideSegments(result.patches);
+  viewer.setLayout(drawn, sides.seams, sides.outer);
+  ui.layoutInfo.textContent = layoutSummary(r);
+  ui.layoutInfo.dataset['ready'] = '1';
+  ui.layoutInfo.dataset['patches'] = String(r.patches.length);
+  fillTable(ui.layoutPatches, ['patch', 'ok or problem', 'area', 'η'], patchRows(r), [2, 3], (tr, i) => {
+    const p = r.patches[i]!;
+    tr.dataset['patch'] = p.name;
+    tr.cells[0]?.prepend(swatch(colours[i]!));
+    if (!p.ok) tr.classList.add('bad');
+  });
+  const uncovered = uncoveredLines(r);
+  ui.layoutUncovered.textContent = uncovered.length ? `not covered:\n${uncovered.join('\n')}` : 'not covered: nothing';
+  const trials = trialRows(r);
+  ui.layoutTrialsBox.hidden = trials.length === 0;
+  if (trials.length) fillTable(ui.layoutTrials, ['grid', 'patches', 'coverage', 'failing', 's'], trials, [1, 2, 4]);
+  ui.layoutBuild.disabled = !r.patches.some((p) => p.ok);
+  setLayoutDownloads(layoutFiles(result));
+  const svg = result.views.find((f) => f.name === 'layout.svg');
+  if (svg) plan.show(blobUrl(svg));
+}
+
+ui.layoutAuto.addEventListener('click', () => void computeLayout({ automatic: form?.requestOptions('layout') ?? {} }));
+
+ui.layoutFile.addEventListener('change', () => {
+  const f = ui.layoutFile.files?.[0];
+  ui.layoutFile.value = '';
+  if (f) void openLayoutFile(f);
+});
+
+async function openLayoutFile(file: File): Promise<void> {
+  try {
+    const layout = layoutFromJson(await file.text());
+    await computeLayout({ layout });
+  } catch (e) {
+    showError('layout', new ApiError('INVALID_ARGUMENT', 'layout', `${file.name}: ${e instanceof Error ? e.message : String(e)}`, 0));
+  }
+}
+
+ui.layoutBuild.addEventListener('click', () => void buildLayout());
+
+/** Every patch of the layout shown designed and simulated with the options of sections 3 and 4, the whole measured. */
+async function buildLayout(): Promise<void> {
+  const layout = state.layout;
+  if (!layout || !state.mesh) return;
+  clearLayoutRun();
+  const result = await run<LayoutRunResult>('build', 'runlayout', {
+    mesh: state.mesh, layout: layout.report.layout,
+    design: form?.requestOptions('design') ?? {}, simulation: form?.requestOptions('simulation') ?? {},
+  }, null, runProgress());
+  if (!result) return;
+  showLayout(result.layout); // the layout as built (the same, with the options sent)
+  state.layoutRun = result;
+  const d = result.deployment;
+  showLayoutDeployment();
+  ui.layoutSummary.textContent = runSummary(result);
+  ui.layoutSummary.dataset['ready'] = '1';
+  const failing = notConverged(d);
+  ui.layoutNonConverged.hidden = d.converged === true;
+  ui.layoutNonConverged.textContent = d.converged ? ''
+    : `NOT converged: ${failing.length ? `${failing.join(', ')} did not reach equilibrium` : 'a run did not reach equilibrium'}; ` +
+      'their deviations and the whole RMS are not those of a deployed structure.';
+  fillTable(ui.layoutRun, ['patch', 'grid vertices', 'RMS with notches', 'RMS without', 'converged'], runRows(d), [1, 2, 3], (tr, i) => {
+    const p = d.patches[i]!;
+    tr.dataset['patch'] = p.name;
+    const k = result.layout.report.patches.findIndex((q) => q.name === p.name);
+    if (k >= 0) tr.cells[0]?.prepend(swatch(patchColour(k)));
+    if (!p.converged) tr.classList.add('bad');
+  });
+  setLayoutDownloads(runFiles(result));
+  layoutDownload('run.zip', new Blob([runZip(result)], { type: 'application/zip' }));
+  ui.layoutKit.disabled = false;
+}
+
+/** The built patches' deployed lamellas on one colour scale (deviation, or bending stress per lamella). */
+function showLayoutDeployment(): void {
+  const r = state.layoutRun;
+  if (!r) return;
+  const bending = ui.colourBy.value === 'bending';
+  const groups = deployedPatches(r.patches);
+  const max = bending ? Math.max(0, ...groups.flatMap((g) => g.rods.map((rod) => rod.max_bending_stress))) : maxDeviationOf(r.patches);
+  viewer.setLayoutDeployment(groups, max, bending ? (rod) => rod.max_bending_stress : (rod, i) => rod.deviation[i] ?? 0);
+  showDeploymentLegend(bending, max);
+}
+
+ui.layoutKit.addEventListener('click', () => void downloadLayoutKit());
+
+/** The kit of the whole (one Fabricate of the run's design.json and its patches' designs) as kit.zip. */
+async function downloadLayoutKit(): Promise<void> {
+  const built = state.layoutRun;
+  if (!built) return;
+  const result = await run<FabricateResult>('layout kit', 'fabricate', layoutFabricateRequest(built, form?.value('simulation.unit') ?? ''));
+  if (!result) return;
+  ui.layoutDownloads.querySelector('[data-testid="layout-download-kit-zip"]')?.remove();
+  const a = layoutDownload('kit.zip', new Blob([kitZip(result.files)], { type: 'application/zip' }));
+  ui.layoutSummary.textContent = `${ui.layoutSummary.textContent ?? ''}\n${kitSummary(result.kit)}`;
+  a.click();
+}
+
 // ---- downloads, views -----------------------------------------------------------------------
 
 const urls: string[] = [];
@@ -692,6 +924,28 @@ function setDownloads(files: FileJson[]): void {
       : `download-${f.name.replace(/[^a-z0-9]+/gi, '-')}`;
     a.dataset['testid'] = id;
     ui.downloads.append(a);
+  }
+}
+
+/** The layout's downloads (`layout-download-NAME`, e.g. layout-download-layout-json), its own blob URLs. */
+const layoutUrls: string[] = [];
+function layoutDownload(name: string, blob: Blob): HTMLAnchorElement {
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(blob);
+  layoutUrls.push(a.href);
+  a.download = name;
+  a.textContent = name;
+  a.dataset['testid'] = `layout-download-${name.replace(/[^a-z0-9]+/gi, '-')}`;
+  ui.layoutDownloads.append(a);
+  return a;
+}
+
+function setLayoutDownloads(files: FileJson[]): void {
+  for (const u of layoutUrls.splice(0)) URL.revokeObjectURL(u);
+  ui.layoutDownloads.replaceChildren();
+  for (const f of files) {
+    const ext = f.name.split('.').pop() ?? '';
+    layoutDownload(f.name, new Blob([base64ToBytes(f.content)], { type: TYPES[ext] ?? 'application/octet-stream' }));
   }
 }
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The 3D view: the input mesh, four numbered corner markers, the trimmed patch with its Gaussian
 // curvature colours and boundary geodesics, the design on the surface (members, crossings,
-// anchors) and the deployed lamellas as boxes coloured by deviation or bending stress. Everything is drawn
+// anchors) and the deployed lamellas as boxes coloured by deviation or bending stress; or a
+// multi-patch layout (patches in their colours, seams) and its patches' deployed lamellas. Everything is drawn
 // relative to the mesh's bounding-box centre (computed in double precision), so architectural
 // coordinates far from the origin still render and pick precisely. Picking: three-mesh-bvh.
 // Renders on demand only (one frame per change), which matters with a software GL.
@@ -10,7 +11,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { acceleratedRaycast, computeBoundsTree, disposeBoundsTree } from 'three-mesh-bvh';
 import type { Deployment, Design, Lamella } from './api';
-import { diverging, sequential } from './colormap';
+import { diverging, sequential, type Rgb } from './colormap';
 
 THREE.BufferGeometry.prototype.computeBoundsTree = computeBoundsTree;
 THREE.BufferGeometry.prototype.disposeBoundsTree = disposeBoundsTree;
@@ -51,6 +52,8 @@ export class Viewer {
   private patch = new THREE.Group();
   private design = new THREE.Group();
   private deployment = new THREE.Group();
+  private layout = new THREE.Group();           // a multi-patch layout: patches in colours, their sides
+  private layoutDeployment = new THREE.Group(); // its patches' deployed lamellas
   private frameRequested = false;
   private down: { x: number; y: number } | null = null;
 
@@ -66,7 +69,7 @@ export class Viewer {
     const light = new THREE.DirectionalLight(0xffffff, 1.4);
     light.position.set(0.5, 0.3, 1);
     this.camera.add(light);
-    this.scene.add(this.camera, this.markers, this.patch, this.design, this.deployment);
+    this.scene.add(this.camera, this.markers, this.patch, this.design, this.deployment, this.layout, this.layoutDeployment);
     new ResizeObserver(() => this.resize()).observe(canvas);
     canvas.addEventListener('pointerdown', (e) => {
       if (e.button === 0) this.down = { x: e.clientX, y: e.clientY };
@@ -103,7 +106,8 @@ export class Viewer {
   /**
    * Test hooks, after every frame: the markers' pixel positions (CSS pixels from the canvas's
    * top left) as `data-markers` on the canvas, "x,y;x,y;...", corner 1 first; the layers drawn
-   * as `data-layers` ("mesh,markers,patch,design").
+   * as `data-layers` ("mesh,markers,patch,design"; a layout: "mesh,layout,layout-deployment"); the
+   * layout's patches and deployed lamellas drawn as `data-layout-patches` and `data-layout-lamellas`.
    */
   private publishHooks(): void {
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
@@ -115,9 +119,12 @@ export class Viewer {
     }
     this.canvas.dataset['markers'] = spots.join(';');
     const layers: [string, THREE.Object3D | null][] = [['mesh', this.input], ['markers', this.markers], ['patch', this.patch],
-                                                       ['design', this.design], ['deployment', this.deployment]];
+                                                       ['design', this.design], ['deployment', this.deployment],
+                                                       ['layout', this.layout], ['layout-deployment', this.layoutDeployment]];
     this.canvas.dataset['layers'] = layers.filter(([, o]) => o && o.visible && (o === this.input || o.children.length > 0))
       .map(([name]) => name).join(',');
+    this.canvas.dataset['layoutPatches'] = String(this.layout.children.filter((c) => c.name === 'layout-patch').length);
+    this.canvas.dataset['layoutLamellas'] = String(this.layoutDeployment.userData['lamellas'] ?? 0);
   }
 
   /** A Float32Array of `xyz` relative to the mesh's centre. */
@@ -171,7 +178,7 @@ export class Viewer {
   }
 
   private clear(): void {
-    for (const g of [this.markers, this.patch, this.design, this.deployment]) this.clearGroup(g);
+    for (const g of [this.markers, this.patch, this.design, this.deployment, this.layout, this.layoutDeployment]) this.clearGroup(g);
     if (this.input) {
       this.scene.remove(this.input);
       disposeTree(this.input);
@@ -184,6 +191,7 @@ export class Viewer {
       group.remove(child);
       disposeTree(child);
     }
+    group.userData = {};
     this.requestRender();
   }
 
@@ -241,9 +249,7 @@ export class Viewer {
   /** The trimmed patch coloured by Gaussian curvature in [-range, range], and its four sides. */
   setPatch(positions: number[], indices: number[], curvature: number[], range: number,
            sides: number[][]): void {
-    this.clearGroup(this.patch);
-    this.clearGroup(this.design);
-    this.clearGroup(this.deployment);
+    this.clearPatch();
     const local = this.local(positions);
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(local, 3));
@@ -280,10 +286,9 @@ export class Viewer {
     this.requestRender();
   }
 
+  /** Clears the single patch, its design and deployment, and a layout. */
   clearPatch(): void {
-    this.clearGroup(this.patch);
-    this.clearGroup(this.design);
-    this.clearGroup(this.deployment);
+    for (const g of [this.patch, this.design, this.deployment, this.layout, this.layoutDeployment]) this.clearGroup(g);
     this.setInputFaded(false);
   }
 
@@ -342,43 +347,8 @@ export class Viewer {
     this.clearGroup(this.deployment);
     this.design.visible = false;
     this.setPatchOpacity(0.3);
-    const pos: number[] = [], col: number[] = [], idx: number[] = [];
-    const t = new THREE.Vector3(), n = new THREE.Vector3(), b = new THREE.Vector3(), h = new THREE.Vector3();
-    // The cross-section's corners as (±b, ±h) and its four faces as consecutive corner pairs.
-    const signs: [number, number][] = [[1, 1], [-1, 1], [-1, -1], [1, -1]];
-    for (const rod of deployment.rods) {
-      const pts = rod.centerline.map((p) => this.localPoint(p));
-      if (pts.length < 2) continue;
-      const corners: THREE.Vector3[][] = pts.map((p, i) => {
-        t.subVectors(pts[Math.min(pts.length - 1, i + 1)]!, pts[Math.max(0, i - 1)]!).normalize();
-        const nn = rod.normals[i];
-        n.set(nn?.[0] ?? 0, nn?.[1] ?? 0, nn?.[2] ?? 1);
-        b.crossVectors(t, n).normalize().multiplyScalar(width / 2);
-        h.copy(n).normalize().multiplyScalar(thickness / 2);
-        if (!Number.isFinite(b.x)) b.set(0, 0, 0);
-        if (!Number.isFinite(h.x)) h.set(0, 0, 0);
-        return signs.map(([sb, sh]) => p.clone().addScaledVector(b, sb).addScaledVector(h, sh));
-      });
-      for (let face = 0; face < 4; ++face) {
-        const base = pos.length / 3;
-        corners.forEach((c, i) => {
-          const a = c[face]!, d = c[(face + 1) % 4]!;
-          pos.push(a.x, a.y, a.z, d.x, d.y, d.z);
-          const colour = sequential(value(rod, i), max);
-          col.push(...colour, ...colour);
-          if (i + 1 < corners.length) {
-            const k = base + 2 * i;
-            idx.push(k, k + 1, k + 2, k + 1, k + 3, k + 2);
-          }
-        });
-      }
-    }
-    const g = new THREE.BufferGeometry();
-    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
-    g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(col), 3));
-    g.setIndex(pos.length / 3 > 65535 ? new THREE.Uint32BufferAttribute(idx, 1) : new THREE.Uint16BufferAttribute(idx, 1));
-    g.computeVertexNormals();
-    this.deployment.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
+    this.deployment.add(new THREE.Mesh(this.lamellaBoxes([{ rods: deployment.rods, width, thickness }], max, value),
+                                       new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
     // Inner anchors the simulation added (interior_anchors "auto"): orange cubes at their targets.
     const added = deployment.added_anchors ?? [];
     if (added.length) {
@@ -389,6 +359,105 @@ export class Viewer {
       const m = new THREE.Matrix4();
       added.forEach((a, i) => cubes.setMatrixAt(i, m.makeTranslation(this.localPoint(a.position))));
       this.deployment.add(cubes);
+    }
+    this.requestRender();
+  }
+
+  /**
+   * Lamellas as boxes, one geometry: each group's rods with its cross-section (the span of
+   * `normal × tangent` times the width and the material normal times the thickness), coloured by
+   * `value(rod, vertex)` in [0, max] on the sequential map.
+   */
+  private lamellaBoxes(groups: { rods: Lamella[]; width: number; thickness: number }[], max: number,
+                       value: (rod: Lamella, vertex: number) => number): THREE.BufferGeometry {
+    const pos: number[] = [], col: number[] = [], idx: number[] = [];
+    const t = new THREE.Vector3(), n = new THREE.Vector3(), b = new THREE.Vector3(), h = new THREE.Vector3();
+    // The cross-section's corners as (±b, ±h) and its four faces as consecutive corner pairs.
+    const signs: [number, number][] = [[1, 1], [-1, 1], [-1, -1], [1, -1]];
+    for (const { rods, width, thickness } of groups)
+      for (const rod of rods) {
+        const pts = rod.centerline.map((p) => this.localPoint(p));
+        if (pts.length < 2) continue;
+        const corners: THREE.Vector3[][] = pts.map((p, i) => {
+          t.subVectors(pts[Math.min(pts.length - 1, i + 1)]!, pts[Math.max(0, i - 1)]!).normalize();
+          const nn = rod.normals[i];
+          n.set(nn?.[0] ?? 0, nn?.[1] ?? 0, nn?.[2] ?? 1);
+          b.crossVectors(t, n).normalize().multiplyScalar(width / 2);
+          h.copy(n).normalize().multiplyScalar(thickness / 2);
+          if (!Number.isFinite(b.x)) b.set(0, 0, 0);
+          if (!Number.isFinite(h.x)) h.set(0, 0, 0);
+          return signs.map(([sb, sh]) => p.clone().addScaledVector(b, sb).addScaledVector(h, sh));
+        });
+        for (let face = 0; face < 4; ++face) {
+          const base = pos.length / 3;
+          corners.forEach((c, i) => {
+            const a = c[face]!, d = c[(face + 1) % 4]!;
+            pos.push(a.x, a.y, a.z, d.x, d.y, d.z);
+            const colour = sequential(value(rod, i), max);
+            col.push(...colour, ...colour);
+            if (i + 1 < corners.length) {
+              const k = base + 2 * i;
+              idx.push(k, k + 1, k + 2, k + 1, k + 3, k + 2);
+            }
+          });
+        }
+      }
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
+    g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(col), 3));
+    g.setIndex(pos.length / 3 > 65535 ? new THREE.Uint32BufferAttribute(idx, 1) : new THREE.Uint16BufferAttribute(idx, 1));
+    g.computeVertexNormals();
+    return g;
+  }
+
+  /**
+   * A multi-patch layout: each cut patch in its own colour over the faded input, the seams (sides
+   * two patches share) as black lines and the outer sides grey. Clears the single patch.
+   */
+  setLayout(patches: { positions: number[]; indices: number[]; colour: Rgb }[], seams: number[], outer: number[]): void {
+    this.clearPatch();
+    for (const p of patches) {
+      const geometry = new THREE.BufferGeometry();
+      geometry.setAttribute('position', new THREE.BufferAttribute(this.local(p.positions), 3));
+      geometry.setIndex(p.indices);
+      geometry.computeVertexNormals();
+      const surface = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({
+        color: new THREE.Color(...p.colour), roughness: 0.8, side: THREE.DoubleSide,
+        polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 2, // the lines on top win
+      }));
+      surface.name = 'layout-patch';
+      this.layout.add(surface);
+    }
+    for (const [xyz, colour, name] of [[seams, 0x111111, 'layout-seams'], [outer, 0x6b7080, 'layout-outer']] as const) {
+      const lines = new THREE.BufferGeometry();
+      lines.setAttribute('position', new THREE.BufferAttribute(this.local(xyz), 3));
+      const segments = new THREE.LineSegments(lines, new THREE.LineBasicMaterial({ color: colour }));
+      segments.name = name;
+      this.layout.add(segments);
+    }
+    this.setInputFaded(true);
+    this.requestRender();
+  }
+
+  /**
+   * The deployed lamellas of a layout's patches on one colour scale ([0, max]), over its patches
+   * made translucent; `null` clears them (the patches opaque again).
+   */
+  setLayoutDeployment(groups: { rods: Lamella[]; width: number; thickness: number }[] | null, max = 0,
+                      value: (rod: Lamella, vertex: number) => number = () => 0): void {
+    this.clearGroup(this.layoutDeployment);
+    for (const child of this.layout.children) {
+      if (child.name !== 'layout-patch') continue;
+      const m = (child as THREE.Mesh).material as THREE.MeshStandardMaterial;
+      m.opacity = groups ? 0.3 : 1;
+      m.transparent = groups !== null;
+      m.depthWrite = groups === null;
+      m.needsUpdate = true;
+    }
+    if (groups) {
+      this.layoutDeployment.add(new THREE.Mesh(this.lamellaBoxes(groups, max, value),
+                                               new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
+      this.layoutDeployment.userData['lamellas'] = groups.reduce((k, g) => k + g.rods.length, 0);
     }
     this.requestRender();
   }
