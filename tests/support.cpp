@@ -55,6 +55,17 @@ std::string temp_dir() {
   return dir.string();
 }
 
+std::string sphere_layout_json() {
+  std::string corners;
+  for (int j : {0, 16, 32})
+    for (int i : {0, 16, 32})
+      corners += (corners.empty() ? "" : ",") + std::string("{\"vertex\":") +
+                 std::to_string(j * 33 + i) + "}";
+  return "{\"corners\":[" + corners +
+         "],\"patches\":[{\"corners\":[0,1,4,3]},{\"corners\":[1,2,5,4]},"
+         "{\"corners\":[3,4,7,6]},{\"corners\":[4,5,8,7]}]}";
+}
+
 std::string write_text(const std::string& dir, const std::string& name,
                        const std::string& contents) {
   const std::string path = (fs::path(dir) / name).string();

@@ -21,6 +21,10 @@ std::string test_mesh_path(const std::string& name);
 std::string temp_dir();
 
 /// Writes `contents` to `dir/name` and returns the path.
+/// The sphere example's 33 x 33 grid in 2 x 2 patches, as a layout file's JSON (corners by
+/// file-order vertex index; patches P1, P2, P3, P4 counter-clockwise).
+std::string sphere_layout_json();
+
 std::string write_text(const std::string& dir, const std::string& name,
                        const std::string& contents);
 

@@ -18,17 +18,11 @@ namespace {
 using json = nlohmann::json;
 using testing::run_cli;
 
-/// The sphere example's 33 x 33 grid in a 2 x 2 layout (corners by file-order vertex index).
+/// The sphere's 2 x 2 layout; its third patch named "north-west".
 json sphere_layout() {
-  json corners = json::array();
-  for (int j : {0, 16, 32})
-    for (int i : {0, 16, 32}) corners.push_back({{"vertex", j * 33 + i}});
-  return {{"corners", corners},
-          {"patches",
-           {{{"corners", {0, 1, 4, 3}}},
-            {{"corners", {1, 2, 5, 4}}},
-            {{"name", "north-west"}, {"corners", {3, 4, 7, 6}}},
-            {{"corners", {4, 5, 8, 7}}}}}};
+  json layout = json::parse(testing::sphere_layout_json());
+  layout["patches"][2]["name"] = "north-west";
+  return layout;
 }
 
 TEST(CliLayout, ATwoByTwoLayoutCoversTheSphereAndItsFilesReadBack) {

@@ -398,16 +398,8 @@ TEST(SweepCollect, SyntheticRowsSummariseWithoutTheRunFiles) {
 // status and the summary carry the whole's coverage, patch count, RMS and largest seam gap.
 TEST(SweepLocal, ALayoutColumnRunsSeveralPatchesPerRow) {
   const std::string dir = testing::temp_dir();
-  json corners = json::array();
-  for (int j : {0, 16, 32})
-    for (int i : {0, 16, 32}) corners.push_back({{"vertex", j * 33 + i}});
-  const json layout = {{"corners", corners},
-                       {"patches",
-                        {{{"corners", {0, 1, 4, 3}}},
-                         {{"corners", {1, 2, 5, 4}}},
-                         {{"corners", {3, 4, 7, 6}}},
-                         {{"corners", {4, 5, 8, 7}}}}}};
-  const std::string file = testing::write_text(dir, "sphere-layout.json", layout.dump());
+  const std::string file =
+      testing::write_text(dir, "sphere-layout.json", testing::sphere_layout_json());
   const std::string knet = testing::test_mesh_path("knet1.obj");
   const std::string manifest =
       testing::write_text(dir, "rows.csv",

@@ -22,20 +22,6 @@ using testing::read_text;
 using testing::run_cli;
 using testing::TestDaemon;
 
-/// The sphere example's grid in 2 x 2 patches (file-order vertex indices).
-std::string sphere_layout_file(const std::string& dir) {
-  json corners = json::array();
-  for (int j : {0, 16, 32})
-    for (int i : {0, 16, 32}) corners.push_back({{"vertex", j * 33 + i}});
-  const json layout = {{"corners", corners},
-                       {"patches",
-                        {{{"corners", {0, 1, 4, 3}}},
-                         {{"corners", {1, 2, 5, 4}}},
-                         {{"corners", {3, 4, 7, 6}}},
-                         {{"corners", {4, 5, 8, 7}}}}}};
-  return testing::write_text(dir, "layout.json", layout.dump());
-}
-
 /// A file's text without its timings ("seconds" members).
 std::string without_seconds(const std::string& text) {
   return std::regex_replace(text, std::regex("\"seconds[a-z_]*\": [-0-9.e+]+,?"), "");
@@ -43,7 +29,8 @@ std::string without_seconds(const std::string& text) {
 
 TEST(LayoutRemote, CliServerWritesWhatTheInProcessRunWrites) {
   TestDaemon daemon;
-  const std::string dir = testing::temp_dir(), file = sphere_layout_file(dir);
+  const std::string dir = testing::temp_dir();
+  const std::string file = testing::write_text(dir, "layout.json", testing::sphere_layout_json());
   const std::string args = "run example:sphere --layout '" + file +
                            "' --members-u 4 --members-v 4 --notches on --quiet ";
   auto r = run_cli(args + "--out '" + dir + "/local'");
