@@ -12,6 +12,9 @@ same design.json byte for byte from the same request, and the error reports. Aga
 with a site's material library (GRIDSHELL_MATERIALS): the material choices are the daemon's
 description (its built-in materials and the site's), a run with the site's material selected
 simulates with it, and the panel's initial values and choices are the described defaults.
+Layouts of several patches (issue 35): knet1's automatic layout as one coloured object per patch,
+its coverage as the daemon reports it; every patch built, one collection each, the whole's RMS
+as the call answered it; a layout from vertex groups; the errors naming the field.
 """
 
 import json
@@ -33,7 +36,7 @@ sys.path.insert(0, os.path.join(ROOT, "client", "blender"))
 import gridshell_testing as T  # noqa: E402,N812
 
 import gridshell_blender  # noqa: E402
-from gridshell_blender import described, mesh_input, properties, results  # noqa: E402
+from gridshell_blender import described, layouts, mesh_input, properties, results  # noqa: E402
 from gridshell_blender.remote import gs  # noqa: E402
 from gridshell_client.client import encode_request  # noqa: E402
 
@@ -447,8 +450,175 @@ class BlenderMaterialsTest(unittest.TestCase):
                 self.assertIsNone(description.check("design", name, value), name)
 
 
+class BlenderLayoutTest(unittest.TestCase):
+    """Several patches joined at seams: Layout and Build all patches."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.daemon = T.Daemon()
+        gridshell_blender.register()
+        cls.settings = bpy.context.scene.gridshell
+        cls.client = gs.Client(cls.daemon.url)
+        cls.tmp = tempfile.mkdtemp(prefix="gridshell-blender-layout-")
+
+    @classmethod
+    def tearDownClass(cls):
+        gridshell_blender.unregister()
+        cls.daemon.stop()
+
+    def setUp(self):
+        s = self.settings
+        s.server = self.daemon.url
+        s.resolution = RESOLUTION
+        s.notches = "on"
+        s.material_name = ""
+        s.unit = "SCENE"
+        s.lamella_width = 0
+        s.auto_anchors = False
+        s.members_u = s.members_v = 0
+        s.layout_source = "AUTO"
+        s.max_patches = 36
+        s.coverage_goal = 0.95
+
+    def knet1(self):
+        bpy.ops.object.select_all(action="DESELECT")
+        bpy.ops.wm.obj_import(filepath=os.path.join(T.MESHES, "knet1.obj"))
+        obj = bpy.context.selected_objects[0]
+        bpy.context.view_layer.objects.active = obj
+        return obj
+
+    def test_automatic_layout_then_build_all_patches(self):
+        self.knet1()
+        mesh, _, _ = mesh_input.layout_target(bpy.context.active_object, bpy.context.evaluated_depsgraph_get())
+        self.assertEqual(len(mesh["positions"]), 3 * 441)
+        self.assertEqual(self.settings.automatic_options(), {"max_patches": 36, "coverage_goal": 0.95})
+        self.assertEqual(bpy.ops.gridshell.layout(), {"FINISHED"})
+        coll = bpy.data.collections[layouts.LAYOUT]
+        # The daemon's own answer to the same request.
+        report = self.client.layout(mesh, automatic=self.settings.automatic_options())["report"]
+        patches = [o for o in coll.objects]
+        self.assertEqual(len(patches), len(report["patches"]))
+        self.assertEqual(coll["patches"], len(report["patches"]))
+        self.assertEqual(len(report["patches"]), 20)  # knet1: 5 x 4 (docs/multi-patch.md)
+        self.assertEqual(coll["coverage"], report["coverage"])
+        self.assertAlmostEqual(coll["coverage"], 0.954, delta=0.001)
+        self.assertEqual(coll["automatic_grid"], "5 x 4")
+        self.assertEqual(sorted(o["patch"] for o in patches), sorted(p["name"] for p in report["patches"]))
+        self.assertEqual(sorted(o.name for o in patches), sorted(p["name"] for p in report["patches"]))
+        self.assertEqual(len({tuple(o.color) for o in patches}), len(patches))  # distinct colours
+        for o in patches:
+            self.assertEqual(o.type, "MESH")
+            self.assertGreater(len(o.data.polygons), 0)
+        self.assertAlmostEqual(coll["uncovered_area"], sum(u["area"] for u in report["uncovered"]), delta=1e-9)
+        self.assertIn("outside the patches", coll["uncovered"])
+        self.assertEqual(json.loads(bpy.data.texts[layouts.LAYOUT_TEXT].as_string()), report["layout"])
+
+        # Every patch built, with the layout found (the text), small grids: one collection each.
+        s = self.settings
+        s.layout_source = "LAST"
+        s.members_u = s.members_v = 3
+        self.assertEqual(bpy.ops.gridshell.build_layout(), {"FINISHED"})
+        parent = bpy.data.collections[layouts.PATCHES]
+        deployment = json.loads(bpy.data.texts[layouts.DEPLOYMENT_TEXT].as_string())  # the call's
+        built = [p["name"] for p in deployment["patches"]]
+        self.assertGreater(len(built), 0)
+        self.assertEqual(sorted(c.name for c in parent.children), sorted(layouts.PATCH_PREFIX + n for n in built))
+        self.assertEqual(parent["patches_built"], len(built))
+        self.assertEqual(parent["patches_built"] + parent["patches_failed"], 20)
+        self.assertEqual(parent["rms_with_notches"], deployment["rms_with_notches"])
+        self.assertEqual(parent["rms_with_notches_percent"], 100 * deployment["rms_with_notches"] / deployment["diagonal"])
+        self.assertNotIn("rms_without_notches", parent)  # notches "on"
+        self.assertEqual(parent["converged"], deployment["converged"])
+        self.assertEqual(parent["max_seam_gap"], deployment["max_seam_gap"])
+        self.assertGreater(parent["seam_bolts"], 0)
+        for child in parent.children:
+            lamellas = [o for o in child.objects if o.type == "MESH"]
+            self.assertEqual(len(lamellas), 1, child.name)
+            self.assertIn("deviation", lamellas[0].data.color_attributes)
+            name = child["patch"]
+            self.assertEqual(child["rms_with_notches"],
+                             next(p for p in deployment["patches"] if p["name"] == name)["rms_with_notches"])
+        # The panel's rows.
+        rows = {label: value for label, value, _ in layouts.summary(bpy.context.scene)}
+        self.assertEqual(rows["Built"].split()[0], str(len(built)))
+
+    def test_layout_from_vertex_groups(self):
+        obj = dome("grouped dome", n=8)
+        n = 8
+        index = lambda i, j: j * (n + 1) + i  # noqa: E731 (the grid primitive's numbering)
+        half = n // 2
+        for name, (i, j) in (("A", (0, 0)), ("B", (half, 0)), ("C", (0, half)), ("D", (half, half))):
+            group = obj.vertex_groups.new(name=name)
+            group.add([index(i, j), index(i + half, j), index(i + half, j + half), index(i, j + half)], 1.0, "REPLACE")
+        obj.vertex_groups.new(name="other").add([0, 1], 1.0, "REPLACE")  # not 4: left out
+        select(obj, [])
+        layout, ignored = mesh_input.vertex_group_layout(obj)
+        self.assertEqual([p["name"] for p in layout["patches"]], ["A", "B", "C", "D"])
+        self.assertEqual(len(layout["corners"]), 9)  # shared corners once
+        self.assertEqual(ignored, ["other (2 vertices)"])
+        self.settings.layout_source = "GROUPS"
+        self.assertEqual(bpy.ops.gridshell.layout(), {"FINISHED"})
+        coll = bpy.data.collections[layouts.LAYOUT]
+        self.assertEqual(sorted(o.name for o in coll.objects), ["A", "B", "C", "D"])
+        self.assertEqual(coll["failing_patches"], 0)
+        self.assertEqual(coll["seams"], 4)  # the 2 x 2 layout's inner seams
+        # The same layout written as a file, a layout report as the CLI writes it.
+        path = os.path.join(self.tmp, "layout.json")
+        with open(path, "w") as f:
+            json.dump({"coverage": coll["coverage"], "layout": json.loads(bpy.data.texts[layouts.LAYOUT_TEXT].as_string())}, f)
+        self.settings.layout_source = "FILE"
+        self.settings.layout_file = path
+        covered = coll["coverage"]
+        self.assertEqual(bpy.ops.gridshell.layout(), {"FINISHED"})
+        self.assertEqual(coll["coverage"], covered)
+        self.assertEqual(sorted(o.name for o in coll.objects), ["A", "B", "C", "D"])
+
+    def test_layout_errors_name_the_field(self):
+        self.knet1()
+        s = self.settings
+        s.max_patches = 100
+        with self.assertRaisesRegex(RuntimeError, r"invalid input: Patches at most \(automatic.max_patches\): .*100"):
+            bpy.ops.gridshell.layout()
+        with self.assertRaisesRegex(RuntimeError, r"invalid input: Patches at most \(automatic.max_patches\)"):
+            bpy.ops.gridshell.build_layout()
+        s.max_patches = 36
+        # A layout file whose patch names a corner it does not have.
+        path = os.path.join(self.tmp, "bad-layout.json")
+        with open(path, "w") as f:
+            json.dump({"corners": [{"vertex": 0}, {"vertex": 20}, {"vertex": 440}],
+                       "patches": [{"corners": [0, 1, 2, 5]}]}, f)
+        s.layout_source = "FILE"
+        s.layout_file = path
+        with self.assertRaisesRegex(RuntimeError, r"invalid input: Layout \(layout.patches\[0\].corners\[3\]\)"):
+            bpy.ops.gridshell.layout()
+        s.layout_file = os.path.join(self.tmp, "no-such-layout.json")
+        with self.assertRaisesRegex(RuntimeError, "cannot read the layout file"):
+            bpy.ops.gridshell.layout()
+        with open(path, "w") as f:
+            json.dump({"coverage": 1}, f)
+        s.layout_file = path
+        with self.assertRaisesRegex(RuntimeError, "holds no layout"):
+            bpy.ops.gridshell.layout()
+        s.layout_source = "GROUPS"
+        with self.assertRaisesRegex(RuntimeError, "has no vertex group of 4 vertices"):
+            bpy.ops.gridshell.layout()
+        self.assertEqual(self.client.health(), "SERVING")
+
+    def test_layout_options_are_the_described_ones(self):
+        description = gs.describe(self.client)
+        rna = properties.GridshellSettings.bl_rna.properties
+        for name in ("max_patches", "coverage_goal"):
+            option = description.option("layout", name)
+            self.assertIsNotNone(option, name)
+            self.assertAlmostEqual(rna[name].default, description.default("layout", name), delta=1e-7)
+            self.assertEqual(rna[name].hard_min, 0, name)
+            self.assertIsNone(description.check("layout", name, self.settings.automatic_options()[name]), name)
+        self.assertIsNotNone(description.check("layout", "max_patches", 100))
+
+
 def main():
     suite = unittest.defaultTestLoader.loadTestsFromTestCase(BlenderAddonTest)
+    suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(BlenderLayoutTest))
     suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(BlenderMaterialsTest))
     result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
     failed = len(result.failures) + len(result.errors)

@@ -37,6 +37,7 @@ try:
     assert os.path.dirname(gs.__file__) == os.path.join(here, "gridshell_client"), gs.__file__
     assert hasattr(bpy.ops.gridshell, "design") and hasattr(bpy.types.Scene, "gridshell")
     assert hasattr(bpy.ops.gridshell, "refresh_options"), "no refresh of the daemon's materials"
+    assert hasattr(bpy.ops.gridshell, "layout") and hasattr(bpy.ops.gridshell, "build_layout"), "no layouts"
     assert hasattr(gs, "Description") and hasattr(gs.options, "cached"), "the client it carries is old"
     assert bpy.context.scene.gridshell.server, "no default server"
     bpy.ops.preferences.addon_disable(module="gridshell_blender")

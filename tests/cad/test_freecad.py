@@ -12,7 +12,9 @@ deviation, RMS as the daemon computes it), design.json byte for byte as the CLI 
 and cancellation, and the error messages. Against a daemon with a site's material library
 (GRIDSHELL_MATERIALS): the material choices are the daemon's description (built-in and the
 site's), a run with the site's material simulates with it, and the settings' initial values and
-the spin boxes' ranges are the described ones.
+the spin boxes' ranges are the described ones. Layouts of several patches (issue 35): knet1's
+automatic layout as one Mesh per patch, its coverage as the daemon reports it; every patch built,
+one group each, the whole's RMS as the call answered it; a layout file; errors naming the field.
 """
 
 import json
@@ -356,9 +358,143 @@ class FreeCADMaterialsTest(unittest.TestCase):
             self.assertIsNone(description.check("design", name, value), name)
 
 
+class FreeCADLayoutTest(unittest.TestCase):
+    """Several patches joined at seams: Layout and Build all patches."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.daemon = T.Daemon()
+        cls.client = gs.Client(cls.daemon.url)
+        cls.tmp = tempfile.mkdtemp(prefix="gridshell-freecad-layout-")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.daemon.stop()
+
+    def setUp(self):
+        self.doc = FreeCAD.newDocument("gridshell_layout")
+        self.settings = core.Settings(server=self.daemon.url, resolution=RESOLUTION, notches="on")
+        self.knet1 = self.doc.addObject("Mesh::Feature", "knet1")
+        self.knet1.Mesh = Mesh.read(os.path.join(T.MESHES, "knet1.obj"))
+        self.doc.recompute()
+
+    def tearDown(self):
+        FreeCAD.closeDocument(self.doc.Name)
+
+    def test_automatic_layout_then_build_all_patches(self):
+        self.assertEqual(self.settings.automatic_options(), {"max_patches": 36, "coverage_goal": 0.95})
+        group = core.layout(self.doc, self.knet1, self.settings)
+        mesh = core.layout_target(self.knet1)
+        self.assertEqual(len(mesh["positions"]), 3 * 441)
+        report = self.client.layout(mesh, automatic=self.settings.automatic_options())["report"]
+        patches = [o for o in group.Group if o.TypeId == "Mesh::Feature"]
+        self.assertEqual(len(patches), len(report["patches"]))
+        self.assertEqual(group.Patches, len(report["patches"]))
+        self.assertEqual(len(report["patches"]), 20)  # knet1: 5 x 4 (docs/multi-patch.md)
+        self.assertEqual(group.Coverage, report["coverage"])
+        self.assertAlmostEqual(group.Coverage, 0.954, delta=0.001)
+        self.assertEqual(group.AutomaticGrid, "5 x 4")
+        self.assertEqual(sorted(o.Label for o in patches), sorted(p["name"] for p in report["patches"]))
+        self.assertEqual(len({tuple(o.Colour) for o in patches}), len(patches))  # distinct colours
+        for o in patches:
+            self.assertGreater(o.Mesh.CountFacets, 0)
+        self.assertAlmostEqual(group.UncoveredArea, sum(u["area"] for u in report["uncovered"]), delta=1e-9)
+        self.assertTrue(any(u.startswith("outside the patches") for u in group.Uncovered))
+        self.assertEqual(json.loads(group.LayoutJson), report["layout"])
+
+        # Every patch built with the layout found, small grids: one group per built patch.
+        s = self.settings
+        s.layout = "last"
+        s.members_u = s.members_v = 3
+        parent = core.build_layout(self.doc, self.knet1, s)
+        deployment = json.loads(parent.DeploymentJson)  # the call's own answer
+        built = [p["name"] for p in deployment["patches"]]
+        self.assertGreater(len(built), 0)
+        groups = [o for o in parent.Group if o.TypeId == "App::DocumentObjectGroup"]
+        self.assertEqual(sorted(g.Label for g in groups), sorted(core.PATCH_PREFIX + n for n in built))
+        self.assertEqual(parent.PatchesBuilt, len(built))
+        self.assertEqual(parent.PatchesBuilt + len(parent.FailedPatches), 20)
+        self.assertEqual(parent.RmsWithNotches, deployment["rms_with_notches"])
+        self.assertEqual(parent.RmsWithNotchesPercent, 100 * deployment["rms_with_notches"] / deployment["diagonal"])
+        self.assertNotIn("RmsWithoutNotches", parent.PropertiesList)  # notches "on"
+        self.assertEqual(parent.Converged, deployment["converged"])
+        self.assertEqual(parent.MaxSeamGap, deployment["max_seam_gap"])
+        self.assertGreater(parent.SeamBolts, 0)
+        for g in groups:
+            lamellas = [o for o in g.Group if o.TypeId == "Mesh::Feature"]
+            self.assertEqual(len(lamellas), 1, g.Label)
+            self.assertGreater(len(lamellas[0].Deviation), 0)
+            numbers = next(p for p in deployment["patches"] if p["name"] == g.Patch)
+            self.assertEqual(g.RmsWithNotches, numbers["rms_with_notches"])
+        # Building again replaces the groups.
+        core.build_layout(self.doc, self.knet1, s)
+        self.assertEqual(len([o for o in parent.Group if o.TypeId == "App::DocumentObjectGroup"]), len(built))
+
+    def test_layout_file(self):
+        """A layout report as the CLI writes it (layout.json): its 'layout' is sent."""
+        path = os.path.join(self.tmp, "layout.json")
+        # knet1.obj is a 21 x 21 grid: its four corner vertices, as points (FreeCAD numbers the
+        # vertices its own way; the daemon snaps the points onto the surface).
+        with open(os.path.join(T.MESHES, "knet1.obj")) as f:
+            vertices = [[float(x) for x in line.split()[1:4]] for line in f if line.startswith("v ")]
+        n = 20
+        corners = [vertices[c] for c in (0, n, (n + 1) * (n + 1) - 1, n * (n + 1))]
+        with open(path, "w") as f:
+            json.dump({"coverage": 0, "layout": {
+                "corners": [{"point": c} for c in corners],
+                "patches": [{"name": "whole", "corners": [0, 1, 2, 3]}]}}, f)
+        mesh = core.layout_target(self.knet1)
+        self.settings.layout = "file"
+        self.settings.layout_file = path
+        group = core.layout(self.doc, self.knet1, self.settings)
+        answer = self.client.layout(mesh, layout=core.read_layout_file(path))["report"]
+        self.assertEqual([o.Label for o in group.Group], ["whole"])
+        self.assertEqual(group.Coverage, answer["coverage"])
+        self.assertTrue(group.Group[0].Ok, group.Group[0].Problem)
+        self.assertAlmostEqual(group.Coverage, 0.486, delta=0.001)  # one patch (docs/multi-patch.md)
+
+    def test_layout_errors_name_the_field(self):
+        s = self.settings
+        s.max_patches = 100
+        for call in (core.layout, core.build_layout):
+            with self.assertRaises(gs.InvalidInput) as caught:
+                call(self.doc, self.knet1, s)
+            self.assertRegex(core.error_message(caught.exception, s),
+                             r"invalid input: Patches at most \(automatic.max_patches\): .*100")
+        s.max_patches = 36
+        path = os.path.join(self.tmp, "bad-layout.json")
+        with open(path, "w") as f:
+            json.dump({"corners": [{"vertex": 0}, {"vertex": 20}, {"vertex": 440}],
+                       "patches": [{"corners": [0, 1, 2, 5]}]}, f)
+        s.layout, s.layout_file = "file", path
+        with self.assertRaises(gs.InvalidInput) as caught:
+            core.layout(self.doc, self.knet1, s)
+        self.assertIn("invalid input: Layout (layout.patches[0].corners[3])", core.error_message(caught.exception, s))
+        s.layout_file = os.path.join(self.tmp, "missing.json")
+        with self.assertRaises(core.InputError) as caught:
+            core.layout(self.doc, self.knet1, s)
+        self.assertIn("cannot read the layout file", core.error_message(caught.exception, s))
+        s.layout = "last"
+        with self.assertRaises(core.InputError) as caught:
+            core.build_layout(self.doc, self.knet1, s)
+        self.assertIn("no layout yet", str(caught.exception))
+        self.assertEqual(self.client.health(), "SERVING")
+
+    def test_layout_options_are_the_described_ones(self):
+        description = core.describe(self.settings)
+        for name in ("max_patches", "coverage_goal"):
+            option = description.option("layout", name)
+            self.assertIsNotNone(option, name)
+            self.assertEqual(core.Settings.FIELDS[name], description.default("layout", name), name)
+            self.assertEqual(core.spin_range(description, "layout", name), (0 if name == "max_patches" else 0.0,
+                                                                           option["maximum"]), name)
+            self.assertIsNone(description.check("layout", name, self.settings.automatic_options()[name]), name)
+
+
 def main():
     try:
         suite = unittest.defaultTestLoader.loadTestsFromTestCase(FreeCADWorkbenchTest)
+        suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(FreeCADLayoutTest))
         suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(FreeCADMaterialsTest))
         result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
         failed = len(result.failures) + len(result.errors)

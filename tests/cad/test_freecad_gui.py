@@ -5,8 +5,9 @@ gridshelld: the workbench loads, a Design from the task panel with four picked p
 blocking FreeCAD (its event loop keeps running), shows progress and builds the result objects, its
 spin boxes' ranges the daemon's; a Design + Simulate run with a site's material (the daemon runs
 with a material library, GRIDSHELL_MATERIALS), chosen from the panel's material list, which is the
-daemon's description; the panel's Cancel stops the daemon's work. With GRIDSHELL_SCREENSHOTS=DIR
-it also saves the docs' screenshots. Run by scripts/test-cad.sh:
+daemon's description; the panel's Cancel stops the daemon's work; Layout and Build all patches on
+knet1 from their panels (one coloured Mesh per patch, one group per built patch). With
+GRIDSHELL_SCREENSHOTS=DIR it also saves the docs' screenshots. Run by scripts/test-cad.sh:
 
     FREECAD_USER_HOME=TMP (with TMP/Mod/gridshell unzipped) QTWEBENGINE_DISABLE_SANDBOX=1 \\
         xvfb-run -a -s "-screen 0 1440x900x24" freecad tests/cad/test_freecad_gui.py
@@ -232,6 +233,61 @@ def steps(daemon):
     )
     check(cancelled is not None, "the daemon cancelled the work")
     FreeCADGui.Control.closeDialog()
+    yield 0.5
+
+    # Several patches: Layout, then Build all patches, from their panels, on knet1.
+    knet1 = doc.addObject("Mesh::Feature", "knet1")
+    knet1.Mesh = Mesh.read(os.path.join(T.MESHES, "knet1.obj"))
+    doc.recompute()
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, knet1.Name)
+    p.SetInt("resolution", 24)
+    p.SetString("layout", "auto")
+    FreeCADGui.runCommand("Gridshell_Layout")
+    yield 0.5
+    panel = gui.TaskPanel.current
+    check(panel is not None and panel.mode == "layout", "the Layout panel opened")
+    started = time.monotonic()
+    while panel.description is None and time.monotonic() - started < 30:
+        yield 0.05
+    box = panel.layout_fields["max_patches"]
+    option = panel.description.option("layout", "max_patches") if panel.description else None
+    check(option is not None and box.maximum() == option["maximum"],
+          "Patches at most takes the daemon's range: %d to %d" % (box.minimum(), box.maximum()))
+    panel.accept()
+    started = time.monotonic()
+    while panel.call is not None and time.monotonic() - started < 120:
+        yield 0.05
+    group = doc.getObject("gridshell_layout")
+    patches = [o for o in group.Group if o.TypeId == "Mesh::Feature"] if group is not None else []
+    check(group is not None and len(patches) == group.Patches == 20,
+          "one Mesh per patch: %d" % len(patches))
+    colours = {tuple(o.ViewObject.ShapeColor[:3]) for o in patches}
+    check(len(colours) == len(patches), "each patch in its own colour (%d colours)" % len(colours))
+    check(group is not None and abs(group.Coverage - 0.954) < 0.001, "coverage %.4f" % (group.Coverage if group else 0))
+    p.SetInt("members_u", 3)
+    p.SetInt("members_v", 3)
+    p.SetString("layout", "last")
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, knet1.Name)
+    FreeCADGui.runCommand("Gridshell_BuildLayout")
+    yield 0.5
+    panel = gui.TaskPanel.current
+    check(panel is not None and panel.mode == "build" and panel.layout_source.currentData() == "last",
+          "the Build all patches panel opened, with the last layout")
+    panel.accept()
+    started = time.monotonic()
+    while panel.call is not None and time.monotonic() - started < 300:
+        yield 0.1
+    parent = doc.getObject("gridshell_patches")
+    groups = [o for o in parent.Group if o.TypeId == "App::DocumentObjectGroup"] if parent is not None else []
+    check(parent is not None and len(groups) == parent.PatchesBuilt > 0,
+          "one group per built patch: %d" % len(groups))
+    check(parent is not None and parent.RmsWithNotches == json.loads(parent.DeploymentJson)["rms_with_notches"],
+          "the whole's RMS on the group")
+    p.SetInt("members_u", 0)
+    p.SetInt("members_v", 0)
+    p.SetString("layout", "auto")
 
 
 def main():

@@ -16,10 +16,10 @@ bl_info = {
 if "operators" in locals():  # "Reload Scripts"
     import importlib
 
-    for _module in (remote, described, properties, mesh_input, results, operators, panel):  # noqa: F821
+    for _module in (remote, described, properties, mesh_input, results, layouts, operators, panel):  # noqa: F821
         importlib.reload(_module)
 else:
-    from . import remote, described, properties, mesh_input, results, operators, panel  # noqa: F401
+    from . import remote, described, properties, mesh_input, results, layouts, operators, panel  # noqa: F401
 
 
 def register():

@@ -76,8 +76,7 @@ def around_centroid(mesh, vertices):
     return [vertices[a] for a in order]
 
 
-def target(obj, depsgraph):
-    """(mesh message, corners or None, description) for a design of ``obj``'s surface."""
+def _check_object(obj):
     if obj is None or obj.type != "MESH":
         raise InputError(
             "select a mesh object as the target surface (%s)"
@@ -85,6 +84,23 @@ def target(obj, depsgraph):
         )
     if obj.mode == "EDIT":
         obj.update_from_editmode()
+
+
+def _evaluated_arrays(obj, depsgraph):
+    """(world positions, triangle indices, vertex count) of the object's evaluated mesh."""
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        if len(mesh.polygons) == 0:
+            raise InputError("%s has no faces" % obj.name)
+        return world_positions(mesh, obj.matrix_world), triangles(mesh), len(mesh.vertices)
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def target(obj, depsgraph):
+    """(mesh message, corners or None, description) for a design of ``obj``'s surface."""
+    _check_object(obj)
     corners, base_count = selected_corners(obj)
     if corners and len(corners) != 4:
         raise InputError(
@@ -120,3 +136,78 @@ def target(obj, depsgraph):
 def request_mesh_for_scene(context):
     """The request's mesh and corners for the active object of ``context`` (for scripts)."""
     return target(context.active_object, context.evaluated_depsgraph_get())
+
+
+def layout_target(obj, depsgraph):
+    """(mesh message, description, vertex count of the evaluated mesh) of ``obj``'s surface for
+    a layout of several patches (the selection plays no part: the layout says where the corners
+    are)."""
+    _check_object(obj)
+    positions, indices, count = _evaluated_arrays(obj, depsgraph)
+    what = "%s (%d vertices)" % (obj.name, len(positions) // 3)
+    return gs.mesh_arrays(positions, indices, name=obj.name), what, count
+
+
+def vertex_group_layout(obj, evaluated_count=None):
+    """A ``gridshell.v1.Layout`` from the object's vertex groups: every vertex group of exactly 4
+    vertices is one patch, named by the group; a vertex in several groups is one corner that the
+    patches share. Each patch's corners are ordered around their centre, counter-clockwise seen
+    from the side the mesh's normals point to (the sum of the 4 vertices' normals), so that all
+    patches turn the same way. ``evaluated_count``: the vertices of the mesh sent (modifiers
+    that change them: the corners go as points). Returns (layout, the groups left out)."""
+    _check_object(obj)
+    mesh = obj.data
+    members = {group.index: [] for group in obj.vertex_groups}
+    for vertex in mesh.vertices:
+        for element in vertex.groups:
+            if element.weight > 0 and element.group in members:
+                members[element.group].append(vertex.index)
+    patches, ignored, corner_of = [], [], {}
+    for group in obj.vertex_groups:
+        vertices = members[group.index]
+        if len(vertices) != 4:
+            ignored.append("%s (%d vertices)" % (group.name, len(vertices)))
+            continue
+        ordered = around_normal(mesh, vertices)
+        ids = []
+        for v in ordered:
+            if v not in corner_of:
+                corner_of[v] = len(corner_of)
+            ids.append(corner_of[v])
+        patches.append({"name": group.name, "corners": ids})
+    if not patches:
+        raise InputError(
+            "%s has no vertex group of 4 vertices: each patch of a layout from vertex groups is a "
+            "vertex group holding its 4 corner vertices%s"
+            % (obj.name, " (groups: %s)" % ", ".join(ignored) if ignored else "")
+        )
+    corners = sorted(corner_of, key=corner_of.get)
+    if evaluated_count is None or evaluated_count == len(mesh.vertices):
+        layout_corners = [{"vertex": v} for v in corners]
+    else:  # modifiers changed the vertices: the corners as points, snapped to the surface
+        base = world_positions(mesh, obj.matrix_world)
+        layout_corners = [{"point": base[3 * v : 3 * v + 3]} for v in corners]
+    return {"corners": layout_corners, "patches": patches}, ignored
+
+
+def around_normal(mesh, vertices):
+    """``vertices`` ordered counter-clockwise around their centre, seen from the side their
+    normals point to."""
+    points = [tuple(mesh.vertices[v].co) for v in vertices]
+    c = [sum(p[k] for p in points) / len(points) for k in range(3)]
+    n = [sum(mesh.vertices[v].normal[k] for v in vertices) for k in range(3)]
+    if math.sqrt(sum(x * x for x in n)) < 1e-12:
+        return around_centroid(mesh, vertices)
+    # A basis (u, w) of the plane across n, right-handed with n: (u, w, n).
+    a = [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 * math.sqrt(sum(x * x for x in n)) else [0.0, 1.0, 0.0]
+    u = _cross(a, n)
+    w = _cross(n, u)
+    angle = []
+    for p in points:
+        d = [p[k] - c[k] for k in range(3)]
+        angle.append(math.atan2(sum(d[k] * w[k] for k in range(3)), sum(d[k] * u[k] for k in range(3))))
+    return [vertices[k] for k in sorted(range(len(points)), key=angle.__getitem__)]
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]

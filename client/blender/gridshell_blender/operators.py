@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Operators ``gridshell.design``, ``gridshell.simulate`` and ``gridshell.run``, and
+"""Operators ``gridshell.design``, ``gridshell.simulate`` and ``gridshell.run``,
+``gridshell.layout`` and ``gridshell.build_layout`` (several patches joined at seams), and
 ``gridshell.refresh_options`` (reads the daemon's description: its materials and option ranges).
 
 Started from the UI (a button: INVOKE) they call the daemon on a background thread and keep
@@ -14,7 +15,7 @@ import time
 
 import bpy
 
-from . import described, mesh_input, results
+from . import described, layouts, mesh_input, results
 from .properties import FIELD_LABELS
 from .remote import gs
 
@@ -23,6 +24,7 @@ STATE = {"call": None, "label": "", "text": ""}
 
 
 FIELD_NAMES = dict(FIELD_LABELS, design="the design (text '%s')" % results.DESIGN_TEXT)
+LAYOUT_FIELD_NAMES = dict(FIELD_LABELS)  # a layout call's "design" is its design options
 
 
 def _redraw_sidebars(context):
@@ -50,8 +52,10 @@ class _GridshellOperator:
     def prepare(self, context):
         raise NotImplementedError
 
+    field_names = FIELD_NAMES
+
     def _report_error(self, error, call):
-        lines = gs.plugin.error_text(error, call.server if call else "", FIELD_NAMES, call.source if call else "")
+        lines = gs.plugin.error_text(error, call.server if call else "", self.field_names, call.source if call else "")
         level = {"WARNING"} if isinstance(error, gs.Cancelled) else {"ERROR"}
         self.report(level, "\n".join(lines))
         return {"CANCELLED"}
@@ -70,10 +74,14 @@ class _GridshellOperator:
 
     def _finish(self, context, call, result, seconds):
         try:
-            call.finish(context.scene, result, seconds)
+            lines = call.finish(context.scene, result, seconds)
         except gs.GridshellError as e:
             return self._report_error(e, call)
         described.reached(context.scene.gridshell.server)
+        # What the results say (a layout's coverage, a patch that failed, a run that did not
+        # converge), then the time.
+        for level, text in lines if isinstance(lines, list) else []:
+            self.report({level}, text)
         self.report({"INFO"}, "gridshell: %s done in %.1f s" % (call.label, seconds))
         return {"FINISHED"}
 
@@ -220,6 +228,73 @@ class GRIDSHELL_OT_run(_GridshellOperator, bpy.types.Operator):
         return _Call("design + simulation", client.server, mesh["name"], work, finish)
 
 
+def _layout_inputs(context, settings, mesh_count):
+    """(layout, automatic, how) of the layout settings: a layout dict or None, the automatic
+    options or None, and words for the report."""
+    source = settings.layout_source
+    if source == "AUTO":
+        return None, settings.automatic_options(), "automatic"
+    if source == "FILE":
+        return layouts.read_layout_file(settings.layout_file), None, "file %s" % settings.layout_file
+    if source == "LAST":
+        return layouts.last_layout(), None, "last layout (text '%s')" % layouts.LAYOUT_TEXT
+    layout, ignored = mesh_input.vertex_group_layout(context.active_object, mesh_count)
+    how = "vertex groups %s" % ", ".join(p["name"] for p in layout["patches"])
+    if ignored:
+        how += " (left out: %s)" % ", ".join(ignored)
+    return layout, None, how
+
+
+class GRIDSHELL_OT_layout(_GridshellOperator, bpy.types.Operator):
+    """Cover the active mesh object with several four-sided patches joined at seams (automatic,
+    from a layout file, from vertex groups of 4 vertices, or the last layout): the patches, the
+    coverage and what is not covered"""
+
+    bl_idname = "gridshell.layout"
+    bl_label = "Layout (several patches)"
+    field_names = LAYOUT_FIELD_NAMES
+
+    def prepare(self, context):
+        settings = context.scene.gridshell
+        mesh, what, count = mesh_input.layout_target(context.active_object, context.evaluated_depsgraph_get())
+        layout, automatic, how = _layout_inputs(context, settings, count)
+        client = settings.client()
+
+        def work(progress, cancel):
+            return client.layout(mesh, layout=layout, automatic=automatic, progress=progress, cancel=cancel)
+
+        def finish(scene, result, seconds):
+            return layouts.show_layout(scene, result, mesh["name"], client.server, seconds, how)
+
+        return _Call("layout", client.server, mesh["name"], work, finish)
+
+
+class GRIDSHELL_OT_build_layout(_GridshellOperator, bpy.types.Operator):
+    """Design and simulate every patch of the layout (as Layout chooses it) in one call: each
+    patch's deployed lamellas in its own collection, the whole's RMS, seam bolts and gaps"""
+
+    bl_idname = "gridshell.build_layout"
+    bl_label = "Build all patches"
+    field_names = LAYOUT_FIELD_NAMES
+
+    def prepare(self, context):
+        settings = context.scene.gridshell
+        mesh, what, count = mesh_input.layout_target(context.active_object, context.evaluated_depsgraph_get())
+        layout, automatic, how = _layout_inputs(context, settings, count)
+        client = settings.client()
+        design_options = settings.design_options()
+        simulation = settings.simulation_options(context.scene)
+
+        def work(progress, cancel):
+            return client.run_layout(mesh, layout=layout, automatic=automatic, design_options=design_options,
+                                     simulation=simulation, progress=progress, cancel=cancel)
+
+        def finish(scene, result, seconds):
+            return layouts.show_build(scene, result, mesh["name"], client.server, seconds, how)
+
+        return _Call("build all patches", client.server, mesh["name"], work, finish)
+
+
 class GRIDSHELL_OT_cancel(bpy.types.Operator):
     """Cancel the running gridshell call"""
 
@@ -260,6 +335,8 @@ CLASSES = (
     GRIDSHELL_OT_design,
     GRIDSHELL_OT_simulate,
     GRIDSHELL_OT_run,
+    GRIDSHELL_OT_layout,
+    GRIDSHELL_OT_build_layout,
     GRIDSHELL_OT_cancel,
     GRIDSHELL_OT_refresh_options,
 )

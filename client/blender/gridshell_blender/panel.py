@@ -7,7 +7,7 @@ from array import array
 
 import bpy
 
-from . import described, results
+from . import described, layouts, results
 from .operators import STATE
 
 DRAWS = [0]  # how often the panel was drawn (for tests of the UI)
@@ -42,11 +42,13 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
         described.ensure(settings)
         description = described.description(settings)
 
-        def field(column, name, **kwargs):
-            """A design option's field, red when the daemon's description refuses its value."""
+        def field(column, name, group="design", option=None, value=None, **kwargs):
+            """An option's field, red when the daemon's description refuses its value."""
             row = column.row()
-            if description is not None and description.option("design", name) is not None:
-                row.alert = description.check("design", name, getattr(settings, name)) is not None
+            option = option or name
+            if description is not None and description.option(group, option) is not None:
+                value = getattr(settings, name) if value is None else value
+                row.alert = description.check(group, option, value) is not None
             row.prop(settings, name, **kwargs)
 
         layout.label(text=corners_text(context.active_object), icon="MESH_DATA")
@@ -89,6 +91,27 @@ class VIEW3D_PT_gridshell(bpy.types.Panel):
             row.operator("gridshell.design")
             row.operator("gridshell.simulate")
             layout.operator("gridshell.run")
+
+        # Several patches joined at seams: the layout, then every patch built.
+        box = layout.box()
+        box.label(text="Several patches", icon="MESH_GRID")
+        box.prop(settings, "layout_source", text="")
+        if settings.layout_source == "AUTO":
+            col = box.column(align=True)
+            field(col, "max_patches", group="layout")
+            field(col, "coverage_goal", group="layout", value=settings.automatic_options().get("coverage_goal", 0.0))
+        elif settings.layout_source == "FILE":
+            box.prop(settings, "layout_file", text="")
+        elif settings.layout_source == "GROUPS":
+            box.label(text="a vertex group of 4 vertices per patch", icon="GROUP_VERTEX")
+        if STATE["call"] is None:
+            box.operator("gridshell.layout")
+            box.operator("gridshell.build_layout")
+        for label, value, alert in layouts.summary(context.scene):
+            split = box.split(factor=0.4)
+            split.alert = alert
+            split.label(text=label)
+            split.label(text=str(value), icon="ERROR" if alert else "NONE")
 
         rows = results.summary(context.scene)
         if rows:

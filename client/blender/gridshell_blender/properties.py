@@ -43,7 +43,30 @@ FIELD_LABELS = {
     "simulation.notches": "Notches",
     "options.notches": "Notches",
     "corners": "selected corner",
+    # A layout of several patches (Layout, Build all patches).
+    "automatic.max_patches": "Patches at most",
+    "automatic.coverage_goal": "Coverage goal",
+    "design.alpha": "Planar angle",
+    "design.members_u": "Members u",
+    "design.members_v": "Members v",
+    "design.lamella_width": "Lamella width",
+    "design.lamella_thickness": "Lamella thickness",
+    "design.resolution": "Map resolution",
+    "design.interior_anchors": "Inner anchors",
+    "layout": "Layout",
 }
+
+LAYOUT_SOURCES = [
+    ("AUTO", "Automatic", "The daemon computes the layout (a grid of patches on a disk-like surface, "
+     "fewest patches that reach the coverage goal)"),
+    ("FILE", "File", "A layout.json: a gridshell.v1.Layout, or a layout report as 'gridshell layout' "
+     "writes it (its 'layout' is sent); vertex corners are indices of the mesh as sent"),
+    ("GROUPS", "Vertex groups", "Every vertex group of the object holding exactly 4 vertices is one "
+     "patch, named by the group, its corners ordered around their centre; vertices in several groups "
+     "are shared corners"),
+    ("LAST", "Last layout", "The layout the last Layout found (the text 'gridshell layout.json', "
+     "editable)"),
+]
 
 
 def default_server():
@@ -132,6 +155,26 @@ class GridshellSettings(bpy.types.PropertyGroup):
         default="both",
     )
 
+    layout_source: EnumProperty(
+        name="Layout", description="Where the patches of a layout come from", items=LAYOUT_SOURCES,
+        default="AUTO",
+    )
+    layout_file: StringProperty(
+        name="Layout file", description="layout.json: a gridshell.v1.Layout or a layout report",
+        subtype="FILE_PATH",
+    )
+    # An automatic layout's options (AutoLayoutOptions; 0 = the daemon's default). Initial values:
+    # the API's defaults; the ranges are the daemon's description's (red in the panel outside).
+    max_patches: IntProperty(
+        name="Patches at most", description="An automatic layout's patches at most (0 = default)",
+        default=36, min=0,
+    )
+    coverage_goal: FloatProperty(
+        name="Coverage goal",
+        description="An automatic layout stops at this fraction of the area covered (0 = default)",
+        default=0.95, min=0, precision=3,
+    )
+
     def client(self):
         from .remote import gs
 
@@ -154,6 +197,15 @@ class GridshellSettings(bpy.types.PropertyGroup):
             if value:
                 options[name] = value
         options["resolution"] = self.resolution
+        return options
+
+    def automatic_options(self):
+        """AutoLayoutOptions: the options that are set (0: the daemon's default)."""
+        options = {}
+        if self.max_patches:
+            options["max_patches"] = self.max_patches
+        if self.coverage_goal:
+            options["coverage_goal"] = float("%.6g" % self.coverage_goal)  # as typed, not float32
         return options
 
     def simulation_options(self, scene):

@@ -181,20 +181,20 @@ def deviation_material():
     return material
 
 
-def show_deployment(scene, result, call_seconds):
-    """The deployed lamellas of ``result`` (SimulateResult) into ``gridshell deployed``."""
+def lamella_objects(result, coll, prefix="gridshell lamellas", scale=None):
+    """The deployed lamellas of ``result`` (SimulateResult with its views) as meshes in ``coll``
+    (one per run: ``prefix``, ``prefix without notches``, hidden when both ran), coloured by
+    their deviation from the target: blue 0 to red at ``scale`` (default: the run's largest)."""
     deployment = result["deployment"]
     views = gs.files_of(result)
-    top = collection(scene, COLLECTION)
-    deployed = collection(scene, DEPLOYED, top)
-    clear(deployed)
     runs = [r for r in (True, False) if ("deployed%s.obj" % ("" if r else "_without_notches")) in views]
+    made = []
     for notches in runs:
         positions, polygons, deviation = gs.plugin.deployed_mesh(result, views, notches)
         run = deployment["with_notches" if notches else "without_notches"]
-        name = "gridshell lamellas" + ("" if notches else " without notches")
+        name = prefix + ("" if notches else " without notches")
         mesh = new_mesh(name, positions, polygons)
-        top_deviation = max(deviation) if deviation else 0.0
+        top_deviation = scale if scale is not None else (max(deviation) if deviation else 0.0)
         colours = mesh.color_attributes.new("deviation", "FLOAT_COLOR", "POINT")
         rgba = []
         for d in deviation:
@@ -208,10 +208,21 @@ def show_deployment(scene, result, call_seconds):
         obj["rms"] = run.get("rms", 0.0)
         obj["max_deviation"] = run.get("max_deviation", 0.0)
         obj["notches"] = notches
-        deployed.objects.link(obj)
+        coll.objects.link(obj)
         if not notches and len(runs) > 1:
             obj.hide_set(True)
             obj.hide_render = True
+        made.append(obj)
+    return made
+
+
+def show_deployment(scene, result, call_seconds):
+    """The deployed lamellas of ``result`` (SimulateResult) into ``gridshell deployed``."""
+    deployment = result["deployment"]
+    top = collection(scene, COLLECTION)
+    deployed = collection(scene, DEPLOYED, top)
+    clear(deployed)
+    lamella_objects(result, deployed)
     for key in ("rms_with_notches", "rms_without_notches", "seconds_with_notches", "seconds_without_notches"):
         if key in deployment:
             top[key] = deployment[key]

@@ -1,6 +1,8 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The workbench without its GUI (importable in freecadcmd): the target of a request from a Mesh
-object, calls to the daemon, and the results as document objects.
+object, calls to the daemon, and the results as document objects; also layouts of several
+patches joined at seams (``layout``, ``build_layout``: groups ``gridshell layout`` and
+``gridshell patches``, docs/freecad.md).
 
     import FreeCAD, gridshell_freecad.core as core
     settings = core.Settings(server="http://127.0.0.1:8080", resolution=40)
@@ -15,6 +17,8 @@ values, ᾱ and times are properties of the group ``gridshell`` (section "Gridsh
 design.json is kept in its hidden property ``DesignJson`` (what Simulate sends).
 """
 
+import colorsys
+import json
 import os
 import time
 
@@ -46,7 +50,25 @@ FIELD_LABELS = {
     "options.notches": "Notches",
     "simulation.notches": "Notches",
     "corners": "picked corner",
+    # A layout of several patches (Layout, Build all patches).
+    "automatic.max_patches": "Patches at most",
+    "automatic.coverage_goal": "Coverage goal",
+    "design.alpha": "Planar angle",
+    "design.members_u": "Members u",
+    "design.members_v": "Members v",
+    "design.lamella_width": "Lamella width",
+    "design.lamella_thickness": "Lamella thickness",
+    "design.resolution": "Map resolution",
+    "design.interior_anchors": "Inner anchors",
+    "layout": "Layout",
 }
+
+# Where a layout's patches come from (Settings.layout).
+LAYOUT_SOURCES = (
+    ("auto", "Automatic"),
+    ("file", "Layout file"),
+    ("last", "Last layout (group 'gridshell layout')"),
+)
 
 
 class InputError(Exception):
@@ -76,6 +98,10 @@ class Settings:
         "material": "",  # a name of the daemon's materials; "" = its default
         "notches": "both",
         "auto_anchors": False,  # simulate with interior_anchors "auto"
+        "layout": "auto",  # "auto" | "file" | "last": where a layout's patches come from
+        "layout_file": "",  # layout.json: a gridshell.v1.Layout or a layout report
+        "max_patches": 36,  # an automatic layout's options (0 = the daemon's default)
+        "coverage_goal": 0.95,
     }
 
     def __init__(self, **values):
@@ -134,6 +160,15 @@ class Settings:
             if getattr(self, name):
                 options[name] = getattr(self, name)
         options["resolution"] = self.resolution
+        return options
+
+    def automatic_options(self):
+        """AutoLayoutOptions: the options that are set (0: the daemon's default)."""
+        options = {}
+        if self.max_patches:
+            options["max_patches"] = int(self.max_patches)
+        if self.coverage_goal:
+            options["coverage_goal"] = float(self.coverage_goal)
         return options
 
     def simulation_options(self):
@@ -344,13 +379,14 @@ def show_design(doc, result, source, server, call_seconds):
     return top
 
 
-def show_deployment(doc, result, call_seconds):
-    """The deployed lamellas of ``result`` (SimulateResult) into the group ``gridshell deployed``."""
+def _lamella_objects(doc, result, group, prefix="gridshell lamellas", scale=None):
+    """The deployed lamellas of ``result`` (SimulateResult with its views) as Mesh objects in
+    ``group``, one per run (``prefix``, ``prefix without notches``), with the deviation of every
+    box vertex and facet (``scale``: the largest deviation of the colour map, kept as
+    ``DeviationScale``; default the run's own largest)."""
     deployment = result["deployment"]
     views = gs.files_of(result)
-    top = _group(doc, GROUP)
-    deployed = _group(doc, DEPLOYED, top)
-    _clear(doc, deployed)
+    made = []
     for notches in (True, False):
         if ("deployed%s.obj" % ("" if notches else "_without_notches")) not in views:
             continue
@@ -365,7 +401,7 @@ def show_deployment(doc, result, call_seconds):
         facet_deviation = [max(deviation[i] for i in f) for f in facets]
         run = deployment["with_notches" if notches else "without_notches"]
         obj = doc.addObject("Mesh::Feature", "gridshell_lamellas")
-        obj.Label = "gridshell lamellas" + ("" if notches else " without notches")
+        obj.Label = prefix + ("" if notches else " without notches")
         obj.Mesh = mesh
         _set(obj, "Notches", "App::PropertyBool", notches)
         _set(obj, "Rms", "App::PropertyFloat", run.get("rms", 0.0))
@@ -375,7 +411,20 @@ def show_deployment(doc, result, call_seconds):
         _set(obj, "Positions", "App::PropertyVectorList", points, hidden=True)
         if mesh.CountFacets == len(facets):
             _set(obj, "FacetDeviation", "App::PropertyFloatList", facet_deviation)
-        deployed.addObject(obj)
+        if scale is not None:
+            _set(obj, "DeviationScale", "App::PropertyFloat", scale)
+        group.addObject(obj)
+        made.append(obj)
+    return made
+
+
+def show_deployment(doc, result, call_seconds):
+    """The deployed lamellas of ``result`` (SimulateResult) into the group ``gridshell deployed``."""
+    deployment = result["deployment"]
+    top = _group(doc, GROUP)
+    deployed = _group(doc, DEPLOYED, top)
+    _clear(doc, deployed)
+    _lamella_objects(doc, result, deployed)
     for key, name in (("rms_with_notches", "RmsWithNotches"), ("rms_without_notches", "RmsWithoutNotches")):
         if key in deployment:
             _set(top, name, "App::PropertyFloat", deployment[key])
@@ -401,6 +450,296 @@ def show_deployment(doc, result, call_seconds):
     _set(top, "AnchorTrialRms", "App::PropertyFloatList", list(deployment.get("anchor_trial_rms", [])))
     doc.recompute()
     return deployed
+
+
+# ---- several patches joined at seams (issue 35, docs/multi-patch.md) -------------------------
+
+LAYOUT = "gridshell layout"
+PATCHES = "gridshell patches"
+PATCH_PREFIX = "gridshell "  # a built patch's group: "gridshell P1"
+
+
+def layout_of(data, where):
+    """The ``gridshell.v1.Layout`` in ``data`` (gridshell_client.plugin.layout_of), InputError
+    when it holds none."""
+    try:
+        return gs.plugin.layout_of(data, where)
+    except ValueError as e:
+        raise InputError(str(e)) from None
+
+
+def read_layout_file(path):
+    """The layout of a layout.json file (gridshell_client.plugin.read_layout_file)."""
+    try:
+        return gs.plugin.read_layout_file(path)
+    except ValueError as e:
+        raise InputError(str(e)) from None
+
+
+def last_layout(doc):
+    """The layout the last Layout found (the hidden property ``LayoutJson`` of ``gridshell layout``)."""
+    group = doc.getObject(LAYOUT.replace(" ", "_"))
+    text = getattr(group, "LayoutJson", "") if group is not None else ""
+    if not text:
+        raise InputError("no layout yet: run Layout first (group '%s')" % LAYOUT)
+    return layout_of(json.loads(text), "the group '%s'" % LAYOUT)
+
+
+def layout_inputs(doc, settings):
+    """(layout, automatic, how) of the settings: a layout dict or None, the automatic options or
+    None, and words for the report."""
+    if settings.layout == "auto":
+        return None, settings.automatic_options(), "automatic"
+    if settings.layout == "file":
+        return read_layout_file(settings.layout_file), None, "file %s" % settings.layout_file
+    if settings.layout == "last":
+        return last_layout(doc), None, "last layout"
+    raise InputError("unknown layout source %r: expected one of %s"
+                     % (settings.layout, ", ".join(k for k, _ in LAYOUT_SOURCES)))
+
+
+def patch_colour(k):
+    """A distinct colour for the k-th patch (0-based): hues a golden angle apart."""
+    r, g, b = colorsys.hsv_to_rgb((0.61803398875 * k) % 1.0, 0.55, 0.95)
+    return (r, g, b)
+
+
+FAILED_COLOUR = (0.35, 0.35, 0.35)
+
+
+def _remove_tree(doc, group):
+    """Removes ``group``'s objects and its sub-groups with theirs."""
+    for obj in list(group.Group):
+        if obj.TypeId == "App::DocumentObjectGroup":
+            _remove_tree(doc, obj)
+        doc.removeObject(obj.Name)
+
+
+def _percent(x):
+    return "%.1f %%" % (100 * x)
+
+
+def _patches(count):
+    return "%d patch%s" % (count, "" if count == 1 else "es")
+
+
+def _say(lines):
+    for level, text in lines:
+        if level == "WARNING":
+            FreeCAD.Console.PrintWarning(text + "\n")
+        else:
+            FreeCAD.Console.PrintMessage(text + "\n")
+
+
+def show_layout(doc, result, source, server, call_seconds, how="", report_view=True):
+    """The patches of ``result`` (LayoutResult) into the group ``gridshell layout``: one Mesh
+    per patch, labelled by the patch, in its own colour (``Colour``; the GUI shows it); the
+    coverage and what is not covered as properties of the group, and in the report view.
+    Returns the group."""
+    report = result.get("report", {})
+    summaries = report.get("patches", [])
+    meshes = result.get("patches", [])
+    top = _group(doc, GROUP)
+    group = _group(doc, LAYOUT, top)
+    _remove_tree(doc, group)
+    for k, summary in enumerate(summaries):
+        name = summary.get("name") or "P%d" % (k + 1)
+        mesh = meshes[k] if k < len(meshes) else {}
+        positions, indices = mesh.get("positions", []), mesh.get("indices", [])
+        ok = bool(summary.get("ok", False))
+        obj = doc.addObject("Mesh::Feature", "gridshell_layout_patch")
+        obj.Label = name
+        if positions and indices:
+            points = [Vector(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]) for i in indices]
+            obj.Mesh = Mesh.Mesh(points)
+        colour = patch_colour(k) if ok else FAILED_COLOUR
+        _set(obj, "Patch", "App::PropertyString", name)
+        _set(obj, "Ok", "App::PropertyBool", ok)
+        _set(obj, "Problem", "App::PropertyString", summary.get("problem", ""))
+        _set(obj, "ProblemField", "App::PropertyString", summary.get("problem_field", ""))
+        _set(obj, "Area", "App::PropertyFloat", summary.get("area", 0.0))
+        _set(obj, "Eta", "App::PropertyFloat", summary.get("eta", 0.0))
+        _set(obj, "CornerAngles", "App::PropertyFloatList", list(summary.get("corner_angles", [])))
+        _set(obj, "SideLengths", "App::PropertyFloatList", list(summary.get("side_lengths", [])))
+        _set(obj, "Colour", "App::PropertyColor", colour)
+        if getattr(obj, "ViewObject", None) is not None:
+            obj.ViewObject.ShapeColor = colour
+        group.addObject(obj)
+
+    seams = [x for x in report.get("seams", []) if len(x.get("patches", [])) == 2]
+    uncovered = report.get("uncovered", [])
+    failing = [x for x in summaries if not x.get("ok", False)]
+    automatic = report.get("automatic")
+    _set(group, "Source", "App::PropertyString", source)
+    _set(group, "Server", "App::PropertyString", server)
+    _set(group, "Layout", "App::PropertyString", how)
+    _set(group, "Coverage", "App::PropertyFloat", report.get("coverage", 0.0))
+    _set(group, "InputArea", "App::PropertyFloat", report.get("input_area", 0.0))
+    _set(group, "CoveredArea", "App::PropertyFloat", report.get("covered_area", 0.0))
+    _set(group, "UncoveredArea", "App::PropertyFloat", sum(u.get("area", 0.0) for u in uncovered))
+    _set(group, "Uncovered", "App::PropertyStringList", [
+        "%s: %.6g (%s)" % (u.get("where", ""), u.get("area", 0.0), u.get("reason", "")) for u in uncovered])
+    _set(group, "Patches", "App::PropertyInteger", len(summaries))
+    _set(group, "FailingPatches", "App::PropertyStringList", [
+        "%s: %s" % (x.get("name", ""), x.get("problem", "")) for x in failing])
+    _set(group, "Seams", "App::PropertyInteger", len(seams))
+    _set(group, "MaxSeamMismatch", "App::PropertyFloat", max((x.get("mismatch", 0.0) for x in seams), default=0.0))
+    _set(group, "AutomaticGrid", "App::PropertyString",
+         "%d x %d" % (automatic.get("columns", 0), automatic.get("rows", 0)) if automatic else "")
+    _set(group, "LayoutCallSeconds", "App::PropertyFloat", call_seconds)
+    _set(group, "LayoutJson", "App::PropertyString", json.dumps(report.get("layout", {})), hidden=True)
+    doc.recompute()
+
+    grid = " (%s)" % group.AutomaticGrid if automatic else ""
+    lines = [("INFO", "gridshell: layout of %s: %s%s, %s of the area covered (%.6g of %.6g)" % (
+        source, _patches(len(summaries)), grid, _percent(group.Coverage), group.CoveredArea, group.InputArea))]
+    for u in uncovered:
+        lines.append(("INFO", "gridshell: not covered: %s, area %.6g: %s" % (
+            u.get("where", ""), u.get("area", 0.0), u.get("reason", ""))))
+    for x in failing:
+        lines.append(("WARNING", "gridshell: patch %s fails: %s%s" % (
+            x.get("name", ""), x.get("problem", ""),
+            " (%s)" % x["problem_field"] if x.get("problem_field") else "")))
+    if report_view:
+        _say(lines)
+    return group
+
+
+def _largest_deviation(run):
+    deployment = run.get("deployment", {})
+    values = [d for key in ("rods", "rods_without_notches") for rod in deployment.get(key, [])
+              for d in rod.get("deviation", [])]
+    return max(values, default=0.0)
+
+
+def show_build(doc, result, source, server, call_seconds, how=""):
+    """The patches of ``result`` (LayoutRunResult) built: the layout into ``gridshell layout``,
+    each built patch's deployed lamellas into the group ``gridshell P1`` ... in ``gridshell
+    patches``, the whole's numbers as properties of ``gridshell patches`` (and in the report
+    view, with a warning for a patch not built and for a run that did not converge). Returns the
+    group ``gridshell patches``."""
+    show_layout(doc, result.get("layout", {}), source, server, call_seconds, how, report_view=False)
+    report = result.get("layout", {}).get("report", {})
+    summaries = report.get("patches", [])
+    runs = result.get("patches", [])
+    deployment = result.get("deployment", {})
+    design = result.get("design", {})
+    top = _group(doc, GROUP)
+    parent = _group(doc, PATCHES, top)
+    _remove_tree(doc, parent)
+    per_patch = {p.get("name"): p for p in deployment.get("patches", [])}
+    # One colour scale for every patch (as the whole's deviation.ply): blue 0, red at the largest.
+    scale = max((_largest_deviation(r["simulation"]) for r in runs if r.get("simulation")), default=0.0)
+    built, failed = [], []
+    for k, summary in enumerate(summaries):
+        name = summary.get("name") or "P%d" % (k + 1)
+        run = runs[k] if k < len(runs) else {}
+        if not run.get("simulation"):
+            failed.append("%s: %s%s" % (name, summary.get("problem", "") or "not built",
+                                        " (%s)" % summary["problem_field"] if summary.get("problem_field") else ""))
+            continue
+        group = _group(doc, PATCH_PREFIX + name, parent)
+        _lamella_objects(doc, run["simulation"], group, prefix="%s lamellas" % name, scale=scale)
+        numbers = per_patch.get(name, {})
+        _set(group, "Patch", "App::PropertyString", name)
+        for key, prop in (("rms_with_notches", "RmsWithNotches"), ("rms_without_notches", "RmsWithoutNotches"),
+                          ("max_normal_stress", "MaxNormalStress")):
+            if key in numbers:
+                _set(group, prop, "App::PropertyFloat", numbers[key])
+        _set(group, "GridVertices", "App::PropertyInteger", numbers.get("grid_vertices", 0))
+        _set(group, "Converged", "App::PropertyBool", bool(numbers.get("converged", False)))
+        patch_design = run.get("design", {}).get("design", {})
+        if patch_design:
+            _set(group, "AlphaBarRadians", "App::PropertyFloat", patch_design.get("alpha_bar", 0.0))
+            _set(group, "Members", "App::PropertyInteger", len(patch_design.get("members", [])))
+        built.append(name)
+
+    diagonal = deployment.get("diagonal", 0.0)
+    for key, prop in (("rms_with_notches", "RmsWithNotches"), ("rms_without_notches", "RmsWithoutNotches")):
+        for name in (prop, prop + "Percent"):
+            if name in parent.PropertiesList:
+                parent.removeProperty(name)
+        if key in deployment:
+            _set(parent, prop, "App::PropertyFloat", deployment[key])
+            if diagonal > 0:  # % of the diagonal of the input's bounding box
+                _set(parent, prop + "Percent", "App::PropertyFloat", 100 * deployment[key] / diagonal)
+    _set(parent, "Diagonal", "App::PropertyFloat", diagonal)
+    _set(parent, "Converged", "App::PropertyBool", bool(deployment.get("converged", False)))
+    _set(parent, "SeamBolts", "App::PropertyInteger", design.get("seam_bolts", 0))
+    _set(parent, "MaxSeamGap", "App::PropertyFloat", deployment.get("max_seam_gap", 0.0))
+    _set(parent, "MaxSeamGapPercent", "App::PropertyFloat",
+         100 * deployment.get("max_seam_gap", 0.0) / diagonal if diagonal > 0 else 0.0)
+    _set(parent, "SeamsJoined", "App::PropertyBool", bool(deployment.get("seams_joined", False)))
+    _set(parent, "GridVertices", "App::PropertyInteger", deployment.get("grid_vertices", 0))
+    _set(parent, "MaxNormalStress", "App::PropertyFloat", deployment.get("max_normal_stress", 0.0))
+    _set(parent, "PatchesBuilt", "App::PropertyInteger", len(built))
+    _set(parent, "FailedPatches", "App::PropertyStringList", failed)
+    _set(parent, "Coverage", "App::PropertyFloat", report.get("coverage", 0.0))
+    _set(parent, "Material", "App::PropertyString", deployment.get("options", {}).get("material", ""))
+    _set(parent, "Source", "App::PropertyString", source)
+    _set(parent, "Server", "App::PropertyString", server)
+    _set(parent, "BuildCallSeconds", "App::PropertyFloat", call_seconds)
+    _set(parent, "DeploymentJson", "App::PropertyString", json.dumps(deployment), hidden=True)
+    doc.recompute()
+
+    rms = ", ".join(
+        "%s %.4g (%.3f %% of the diagonal)" % (what, deployment[key], 100 * deployment[key] / diagonal if diagonal else 0)
+        for what, key in (("RMS2", "rms_with_notches"), ("RMS1", "rms_without_notches")) if key in deployment
+    )
+    lines = [("INFO", "gridshell: layout of %s: %s, %s of the area covered" % (
+        source, _patches(len(summaries)), _percent(report.get("coverage", 0.0))))]
+    lines.append(("INFO", "gridshell: built %d of %d patches of %s; whole %s; %d seam bolts; largest seam gap "
+                  "before joining %.4g (%.3f %% of the diagonal)" % (
+                      len(built), len(summaries), source, rms or "no RMS", parent.SeamBolts,
+                      parent.MaxSeamGap, parent.MaxSeamGapPercent)))
+    for line in failed:
+        lines.append(("WARNING", "gridshell: patch %s" % line))
+    if not parent.Converged:
+        late = [p.get("name", "") for p in deployment.get("patches", []) if not p.get("converged", False)]
+        lines.append(("WARNING", "gridshell: NOT CONVERGED: the simulation of %s did not reach "
+                      "equilibrium; the deviations are not those of the deployed shell" % (
+                          "patches " + ", ".join(late) if late else "the whole")))
+    _say(lines)
+    return parent
+
+
+def layout_target(obj):
+    """The mesh message of a Mesh object for a layout (the layout says where the corners are)."""
+    mesh, _ = target(obj)
+    return mesh
+
+
+def prepare_layout(doc, obj, settings):
+    """(work(progress, cancel), finish(result, seconds)) of a layout of ``obj``."""
+    mesh = layout_target(obj)
+    layout, automatic, how = layout_inputs(doc, settings)
+    client = settings.client()
+
+    def work(progress=None, cancel=None):
+        return client.layout(mesh, layout=layout, automatic=automatic, progress=progress, cancel=cancel)
+
+    def finish(result, seconds):
+        return show_layout(doc, result, mesh["name"], client.server, seconds, how)
+
+    return work, finish
+
+
+def prepare_build(doc, obj, settings):
+    """(work, finish) of every patch of the layout designed and simulated."""
+    mesh = layout_target(obj)
+    layout, automatic, how = layout_inputs(doc, settings)
+    client = settings.client()
+    design_options = settings.design_options()
+    simulation = settings.simulation_options()
+
+    def work(progress=None, cancel=None):
+        return client.run_layout(mesh, layout=layout, automatic=automatic, design_options=design_options,
+                                 simulation=simulation, progress=progress, cancel=cancel)
+
+    def finish(result, seconds):
+        return show_build(doc, result, mesh["name"], client.server, seconds, how)
+
+    return work, finish
 
 
 def design_json(doc):
@@ -484,6 +823,18 @@ def simulate(doc, settings, progress=None, cancel=None):
 def run(doc, obj, settings, corners=None, progress=None, cancel=None):
     """Design and simulation in one call (blocking); returns the group ``gridshell``."""
     return _blocking(prepare_run(doc, obj, settings, corners), progress, cancel)
+
+
+def layout(doc, obj, settings, progress=None, cancel=None):
+    """A layout of several patches on ``obj`` (blocking; ``settings.layout``: "auto", "file",
+    "last"); returns the group ``gridshell layout``."""
+    return _blocking(prepare_layout(doc, obj, settings), progress, cancel)
+
+
+def build_layout(doc, obj, settings, progress=None, cancel=None):
+    """Every patch of the layout designed and simulated in one call (blocking); returns the
+    group ``gridshell patches``."""
+    return _blocking(prepare_build(doc, obj, settings), progress, cancel)
 
 
 def error_message(error, settings, source=""):

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The workbench's GUI: commands Design, Simulate and Run, each opening a task panel with the
-server and the options; the call runs on a background thread while FreeCAD stays responsive
+"""The workbench's GUI: commands Design, Simulate and Run, and for layouts of several patches
+Layout and Build all patches, each opening a task panel with the server and the options; the call runs on a background thread while FreeCAD stays responsive
 (progress in the panel and the status bar, Cancel stops the daemon's work), and the results are
 built in the document when the answer is in. Errors go to the panel and the report view.
 
@@ -19,7 +19,9 @@ from PySide2 import QtCore, QtWidgets
 from . import core
 from .remote import gs
 
-COMMANDS = ["Gridshell_Design", "Gridshell_Simulate", "Gridshell_Run"]
+COMMANDS = ["Gridshell_Design", "Gridshell_Simulate", "Gridshell_Run", "Gridshell_Layout",
+            "Gridshell_BuildLayout"]
+LAYOUT_MODES = ("layout", "build")
 
 
 def picked_target():
@@ -34,7 +36,8 @@ def picked_target():
 
 
 class TaskPanel:
-    """Options, progress and errors of one call (mode "design", "simulate" or "run")."""
+    """Options, progress and errors of one call (mode "design", "simulate", "run", "layout" or
+    "build")."""
 
     current = None  # the open panel (for scripts and tests)
 
@@ -66,6 +69,8 @@ class TaskPanel:
             target = "the design in the group 'gridshell'"
         elif self.obj is None:
             target = "(select a Mesh object)"
+        elif self.mode in LAYOUT_MODES:
+            target = "%s, several patches (the layout below)" % self.obj.Label
         else:
             target = "%s, corners %s" % (
                 self.obj.Label,
@@ -79,7 +84,44 @@ class TaskPanel:
         self.token.setEchoMode(QtWidgets.QLineEdit.Password)
         layout.addRow("Token", self.token)
         self.fields = {}
-        if self.mode in ("design", "run"):
+        self.layout_fields = {}
+        if self.mode in LAYOUT_MODES:
+            self.layout_source = QtWidgets.QComboBox()
+            for key, label in core.LAYOUT_SOURCES:
+                self.layout_source.addItem(label, key)
+            self.layout_source.setCurrentIndex(max(0, self.layout_source.findData(s.layout)))
+            layout.addRow("Layout", self.layout_source)
+            self.layout_file = QtWidgets.QLineEdit(s.layout_file)
+            self.layout_file.setPlaceholderText("layout.json (a gridshell.v1.Layout or a layout report)")
+            browse = QtWidgets.QPushButton("...")
+            browse.clicked.connect(self._browse_layout)
+            row = QtWidgets.QHBoxLayout()
+            row.addWidget(self.layout_file)
+            row.addWidget(browse)
+            layout.addRow("Layout file", row)
+            # The ranges are the daemon's (group "layout" of its description), once read.
+            box = QtWidgets.QSpinBox()
+            box.setRange(0, 2147483647)
+            box.setValue(int(s.max_patches))
+            layout.addRow("Patches at most (0 = default)", box)
+            self.layout_fields["max_patches"] = box
+            box = QtWidgets.QDoubleSpinBox()
+            box.setRange(0, 1)
+            box.setDecimals(3)
+            box.setSingleStep(0.01)
+            box.setValue(float(s.coverage_goal))
+            layout.addRow("Coverage goal (0 = default)", box)
+            self.layout_fields["coverage_goal"] = box
+
+            def sources(_=None):
+                automatic = self.layout_source.currentData() == "auto"
+                for widget in self.layout_fields.values():
+                    widget.setEnabled(automatic)
+                self.layout_file.setEnabled(self.layout_source.currentData() == "file")
+
+            self.layout_source.currentIndexChanged.connect(sources)
+            sources()
+        if self.mode in ("design", "run", "build"):
             self.alpha = QtWidgets.QComboBox()
             self.alpha.addItems(["min", "max", "value"])
             self.alpha_value = QtWidgets.QDoubleSpinBox()
@@ -119,7 +161,7 @@ class TaskPanel:
                 box.setValue(float(getattr(s, name)))
                 layout.addRow(label, box)
                 self.fields[name] = box
-        if self.mode in ("simulate", "run"):
+        if self.mode in ("simulate", "run", "build"):
             # The daemon's materials (_described); until they are read, the saved one or the
             # daemon's default.
             self.material = QtWidgets.QComboBox()
@@ -140,6 +182,13 @@ class TaskPanel:
         self.status.setWordWrap(True)
         layout.addRow(self.status)
         return form
+
+    def _browse_layout(self):
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(
+            self.form, "Layout file", self.layout_file.text(), "Layouts (*.json);;All files (*)")
+        if path:
+            self.layout_file.setText(path)
+            self.layout_source.setCurrentIndex(self.layout_source.findData("file"))
 
     def _fill_materials(self, description, chosen):
         self.material.clear()
@@ -201,17 +250,29 @@ class TaskPanel:
             option = description.option("design", name)
             if option is not None:
                 box.setToolTip(option.get("help", ""))
+        for name, box in self.layout_fields.items():
+            span = core.spin_range(description, "layout", name)
+            if span is not None:
+                box.setRange(*span)
+            option = description.option("layout", name)
+            if option is not None:
+                box.setToolTip(option.get("help", ""))
 
     def _read_form(self):
         s = self.settings
         s.server = self.server.text().strip()
         s.token = self.token.text().strip()
-        if self.mode in ("design", "run"):
+        if self.mode in LAYOUT_MODES:
+            s.layout = self.layout_source.currentData()
+            s.layout_file = self.layout_file.text().strip()
+            s.max_patches = self.layout_fields["max_patches"].value()
+            s.coverage_goal = round(self.layout_fields["coverage_goal"].value(), 6)
+        if self.mode in ("design", "run", "build"):
             mode = self.alpha.currentText()
             s.alpha = mode if mode != "value" else "%gdeg" % self.alpha_value.value()
             for name, box in self.fields.items():
                 setattr(s, name, box.value())
-        if self.mode in ("simulate", "run"):
+        if self.mode in ("simulate", "run", "build"):
             s.material = self.material.currentData() or ""
             s.notches = self.notches.currentText()
             s.auto_anchors = self.auto_anchors.isChecked()
@@ -229,6 +290,10 @@ class TaskPanel:
                 work, self.finish = core.prepare_design(self.doc, self.obj, self.settings, self.points)
             elif self.mode == "simulate":
                 work, self.finish = core.prepare_simulate(self.doc, self.settings)
+            elif self.mode == "layout":
+                work, self.finish = core.prepare_layout(self.doc, self.obj, self.settings)
+            elif self.mode == "build":
+                work, self.finish = core.prepare_build(self.doc, self.obj, self.settings)
             else:
                 work, self.finish = core.prepare_run(self.doc, self.obj, self.settings, self.points)
         except (core.InputError, gs.GridshellError) as e:
@@ -265,12 +330,16 @@ class TaskPanel:
         FreeCADGui.getMainWindow().statusBar().clearMessage()
         try:
             result = call.result()
-            self.finish(result, call.finished - call.started)
+            made = self.finish(result, call.finished - call.started)
         except Exception as e:  # every failure is shown, never a traceback
             self._error(e)
             return
         FreeCAD.Console.PrintMessage("gridshell: %s done in %.1f s\n" % (self.mode, call.finished - call.started))
         colour_by_deviation(self.doc)
+        if self.mode in LAYOUT_MODES:
+            colour_patches(self.doc)
+        if self.mode == "build" and not made.Converged:
+            warn_not_converged(made)
         FreeCADGui.Control.closeDialog()
         FreeCADGui.SendMsgToActiveView("ViewFit")
 
@@ -281,15 +350,26 @@ class TaskPanel:
         FreeCAD.Console.PrintError(message + "\n")
 
 
+def _lamella_objects(doc):
+    """The deployed lamellas of the single patch and of every built patch of a layout."""
+    group = doc.getObject(core.DEPLOYED.replace(" ", "_"))
+    objects = list(group.Group) if group is not None else []
+    parent = doc.getObject(core.PATCHES.replace(" ", "_"))
+    for sub in parent.Group if parent is not None else []:
+        if sub.TypeId == "App::DocumentObjectGroup":
+            objects += list(sub.Group)
+    return objects
+
+
 def colour_by_deviation(doc, bins=12):
     """Colours the deployed lamellas' facets by their deviation from the target: deviation.ply's
-    map, blue at 0 to red at the largest, in ``bins`` steps (mesh segments)."""
-    group = doc.getObject(core.DEPLOYED.replace(" ", "_"))
-    for obj in group.Group if group is not None else []:
+    map, blue at 0 to red at the largest (a layout's patches: the largest of all of them), in
+    ``bins`` steps (mesh segments)."""
+    for obj in _lamella_objects(doc):
         values = getattr(obj, "FacetDeviation", None)
         if not values or obj.ViewObject is None:
             continue
-        top = max(values) or 1.0
+        top = getattr(obj, "DeviationScale", 0.0) or max(values) or 1.0
         segments = [[] for _ in range(bins)]
         for facet, value in enumerate(values):
             segments[min(bins - 1, int(bins * value / top))].append(facet)
@@ -301,6 +381,32 @@ def colour_by_deviation(doc, bins=12):
                 colours.append(gs.plugin.deviation_colour((k + 0.5) / bins, 1.0))
         obj.Mesh = mesh
         obj.ViewObject.highlightSegments(colours)
+
+
+def colour_patches(doc):
+    """The layout's patches in their colours (the property ``Colour`` of each)."""
+    group = doc.getObject(core.LAYOUT.replace(" ", "_"))
+    for obj in group.Group if group is not None else []:
+        if obj.ViewObject is not None and "Colour" in obj.PropertiesList:
+            obj.ViewObject.ShapeColor = obj.Colour
+
+
+_WARNINGS = []  # the open warning boxes (kept alive)
+
+
+def warn_not_converged(parent):
+    """A warning box (not modal) when the simulation of a layout's patches did not converge."""
+    late = [g.Label for g in parent.Group if getattr(g, "Converged", True) is False]
+    box = QtWidgets.QMessageBox(
+        QtWidgets.QMessageBox.Warning, "gridshell: not converged",
+        "The simulation of %s did not reach equilibrium: the deviations (RMS %s) are not those of "
+        "the deployed shell." % (", ".join(late) or "the patches",
+                                 "%.4g" % parent.RmsWithNotches if "RmsWithNotches" in parent.PropertiesList else "-"),
+        QtWidgets.QMessageBox.Ok, FreeCADGui.getMainWindow())
+    box.setModal(False)
+    box.finished.connect(lambda _: _WARNINGS.remove(box) if box in _WARNINGS else None)
+    _WARNINGS.append(box)
+    box.show()
 
 
 class _Command:
@@ -333,7 +439,21 @@ class RunCommand(_Command):
     tip = "Design and simulate the selected Mesh in one call"
 
 
+class LayoutCommand(_Command):
+    mode, text = "layout", "Layout (several patches)"
+    tip = ("Cover the selected Mesh with several four-sided patches joined at seams (automatic, from "
+           "a layout file, or the last layout): one coloured Mesh per patch, the coverage")
+
+
+class BuildLayoutCommand(_Command):
+    mode, text = "build", "Build all patches"
+    tip = ("Design and simulate every patch of the layout in one call: each patch's deployed "
+           "lamellas in its own group, the whole's RMS, seam bolts and gaps")
+
+
 def register():
     FreeCADGui.addCommand("Gridshell_Design", DesignCommand())
     FreeCADGui.addCommand("Gridshell_Simulate", SimulateCommand())
     FreeCADGui.addCommand("Gridshell_Run", RunCommand())
+    FreeCADGui.addCommand("Gridshell_Layout", LayoutCommand())
+    FreeCADGui.addCommand("Gridshell_BuildLayout", BuildLayoutCommand())

@@ -5,7 +5,9 @@ the deployed lamellas of a SimulateResult as a mesh with a deviation per vertex,
 deviation colour map of deviation.ply.
 """
 
+import json
 import math
+import os
 import re
 import threading
 import time
@@ -244,3 +246,39 @@ def deviation_colour(value, top):
     r = min(max(2 * f - 1, 0.0), 1.0)
     b = min(max(1 - 2 * f, 0.0), 1.0)
     return (r, 1 - r - b, b)
+
+
+def layout_of(data, where):
+    """The ``gridshell.v1.Layout`` in ``data``: a Layout itself, or the ``layout`` member of a
+    LayoutReport (layout.json as ``gridshell layout`` writes it), of a LayoutResult's report, or
+    of a layout run's design.json. ValueError naming ``where`` when it holds none."""
+    node = data
+    for _ in range(4):
+        if not isinstance(node, dict):
+            break
+        if isinstance(node.get("corners"), list) and isinstance(node.get("patches"), list):
+            return {"corners": node["corners"], "patches": node["patches"]}
+        if isinstance(node.get("layout"), dict):
+            node = node["layout"]
+        elif isinstance(node.get("report"), dict):
+            node = node["report"]
+        else:
+            break
+    raise ValueError(
+        "%s holds no layout: expected a gridshell.v1.Layout (corners, patches) or a layout report "
+        "with one as its 'layout'" % where
+    )
+
+
+def read_layout_file(path):
+    """The layout of a layout.json file (``layout_of``); ValueError saying what is wrong."""
+    if not path:
+        raise ValueError("choose a layout file (Layout file: a layout.json)")
+    try:
+        with open(path, "r", encoding="utf-8") as f:
+            data = json.load(f)
+    except OSError as e:
+        raise ValueError("cannot read the layout file %s: %s" % (path, e.strerror)) from None
+    except ValueError as e:
+        raise ValueError("the layout file %s is not JSON: %s" % (path, e)) from None
+    return layout_of(data, "the layout file %s" % os.path.basename(path))
