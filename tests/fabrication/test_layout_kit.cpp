@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 #include <set>
 
 #include "gridshell/design/design.h"
@@ -17,7 +16,6 @@
 namespace gridshell {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 struct Vault {
   LayoutResult layout;
