@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/surface_distance.h"
 
 namespace gridshell {
@@ -158,73 +159,82 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
     }
   }
 
-  // Each patch cut along its sides and checked as a single patch is, without smoothing.
-  // Smoothing moves a patch's interior only (its sides, shared with neighbours, stay fixed) and
-  // never re-cuts a side: a patch whose sides stop being shortest geodesics fails.
+  // Each patch cut along its sides and checked as a single patch is. Smoothing moves a patch's
+  // interior only (its sides, shared with neighbours, stay fixed) and never re-cuts a side: a
+  // patch whose sides stop being shortest geodesics fails. The patches are independent: cut and
+  // checked side by side, each on a share of the threads (the result does not depend on them).
+  const size_t count = out.layout.patches.size();
+  ParallelOptions parallel;
+  parallel.threads = static_cast<int>(
+      std::min<size_t>(static_cast<size_t>(resolve_threads(options.coverability.threads)), count));
+  parallel.stage = "layout: patches";
   TargetPatchOptions patch_options = options;
   patch_options.fixed_sides = true;
+  patch_options.coverability.threads =
+      std::max(1, resolve_threads(options.coverability.threads) / std::max(1, parallel.threads));
   out.input_area = surface_area(mesh);
-  for (size_t j = 0; j < out.layout.patches.size(); ++j) {
-    const PatchLayout::Quad& quad = out.layout.patches[j];
-    const std::string field = "layout.patches[" + std::to_string(j) + "]";
-    progress.report("layout: " + quad.name, static_cast<double>(j) / out.layout.patches.size());
-    LayoutPatch result;
-    result.name = quad.name;
-    try {
-      std::array<int, 4> corners{};
-      std::array<std::vector<SurfacePoint>, 4> patch_sides;
-      std::array<SurfacePoint, 4> input_corners;
-      for (int k = 0; k < 4; ++k) {
-        const int a = quad.corners[k], b = quad.corners[(k + 1) % 4];
-        const std::pair<int, int> key{std::min(a, b), std::max(a, b)};
-        if (side_errors.count(key)) throw side_errors.at(key);
-        patch_sides[k] = side_paths.at(key);
-        if (a != key.first) std::reverse(patch_sides[k].begin(), patch_sides[k].end());
-        corners[k] = cornered.corners[a];
-        input_corners[k] = points[a];
-      }
-      Patch cut = cut_patch_along(cornered.mesh, corners, patch_sides, mesh.vertex_count(),
-                                  options.cut, progress.checker());
-      if (checks == LayoutChecks::CutOnly) {
-        check_convex_corners(cut);
-        TargetPatch& t = result.target.emplace();
-        t.input_corners = input_corners;
-        t.corner_angles = corner_angles(cut);
-        t.boundary_lengths = side_lengths(cut);
-        t.area = surface_area(cut.mesh);
-        t.patch = std::move(cut);
-        out.covered_area += t.area;
-        out.patches.push_back(std::move(result));
-        continue;
-      }
-      result.target =
-          target_patch_from_cut(std::move(cut), input_corners, patch_options, progress.checker());
-      const TargetPatch& t = *result.target;
-      // As for a single patch, an eta above eta_max is left where the injectivity bound holds
-      // (smooth_until_coverable runs otherwise): only without smoothing does it fail.
-      if (!patch_options.smooth && t.smoothing.eta_after > patch_options.coverability.eta_max) {
-        std::ostringstream msg;
-        msg << "gap factor eta " << t.smoothing.eta_after << " is above eta_max "
-            << patch_options.coverability.eta_max << " and smoothing is off";
-        result.problem = Infeasible(field, msg.str());
-      } else {
-        for (int k = 0; k < 4; ++k)
-          if (t.boundary_excess[k] > kBoundaryGeodesicTolerance) {
-            std::ostringstream msg;
-            msg << "side " << k << " is " << t.boundary_excess[k]
-                << " (relative) longer than the shortest geodesic between its corners";
-            result.problem = Infeasible(field, msg.str());
-            break;
+  out.patches.resize(count);
+  parallel_for(
+      count,
+      [&](std::size_t j, const Progress& inner) {
+        const PatchLayout::Quad& quad = out.layout.patches[j];
+        const std::string field = "layout.patches[" + std::to_string(j) + "]";
+        LayoutPatch& result = out.patches[j];
+        result.name = quad.name;
+        try {
+          std::array<int, 4> corners{};
+          std::array<std::vector<SurfacePoint>, 4> patch_sides;
+          std::array<SurfacePoint, 4> input_corners;
+          for (int k = 0; k < 4; ++k) {
+            const int a = quad.corners[k], b = quad.corners[(k + 1) % 4];
+            const std::pair<int, int> key{std::min(a, b), std::max(a, b)};
+            if (side_errors.count(key)) throw side_errors.at(key);
+            patch_sides[k] = side_paths.at(key);
+            if (a != key.first) std::reverse(patch_sides[k].begin(), patch_sides[k].end());
+            corners[k] = cornered.corners[a];
+            input_corners[k] = points[a];
           }
-      }
-    } catch (const Cancelled&) {
-      throw;
-    } catch (const Error& e) {
-      result.problem = Error(e.code(), join_field(field, e.field()), e.message(), e.reason());
-    }
-    if (result.target && !result.problem) out.covered_area += result.target->area;
-    out.patches.push_back(std::move(result));
-  }
+          Patch cut = cut_patch_along(cornered.mesh, corners, patch_sides, mesh.vertex_count(),
+                                      options.cut, inner);
+          if (checks == LayoutChecks::CutOnly) {
+            check_convex_corners(cut);
+            TargetPatch& t = result.target.emplace();
+            t.input_corners = input_corners;
+            t.corner_angles = corner_angles(cut);
+            t.boundary_lengths = side_lengths(cut);
+            t.area = surface_area(cut.mesh);
+            t.patch = std::move(cut);
+            return;
+          }
+          result.target =
+              target_patch_from_cut(std::move(cut), input_corners, patch_options, inner);
+          const TargetPatch& t = *result.target;
+          // As for a single patch, an eta above eta_max is left where the injectivity bound holds
+          // (smooth_until_coverable runs otherwise): only without smoothing does it fail.
+          if (!patch_options.smooth && t.smoothing.eta_after > patch_options.coverability.eta_max) {
+            std::ostringstream msg;
+            msg << "gap factor eta " << t.smoothing.eta_after << " is above eta_max "
+                << patch_options.coverability.eta_max << " and smoothing is off";
+            result.problem = Infeasible(field, msg.str());
+          } else {
+            for (int k = 0; k < 4; ++k)
+              if (t.boundary_excess[k] > kBoundaryGeodesicTolerance) {
+                std::ostringstream msg;
+                msg << "side " << k << " is " << t.boundary_excess[k]
+                    << " (relative) longer than the shortest geodesic between its corners";
+                result.problem = Infeasible(field, msg.str());
+                break;
+              }
+          }
+        } catch (const Cancelled&) {
+          throw;
+        } catch (const Error& e) {
+          result.problem = Error(e.code(), join_field(field, e.field()), e.message(), e.reason());
+        }
+      },
+      progress, parallel);
+  for (const LayoutPatch& p : out.patches)
+    if (p.target && !p.problem) out.covered_area += p.target->area;
 
   // Seams: two patches on opposite sides, cut along the same curve.
   const double scale = std::max(1.0, bounding_box_size(mesh).norm());
