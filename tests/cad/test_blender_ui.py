@@ -112,7 +112,7 @@ def prepare_scene():
         bpy.ops.view3d.view_orbit(angle=0.5, type="ORBITLEFT")
         bpy.ops.view3d.view_all()
     settings = bpy.context.scene.gridshell
-    settings.resolution = 150
+    settings.resolution = 400  # slow enough (about 1 s) for the progress to be seen
     settings.notches = "on"
     return obj
 
