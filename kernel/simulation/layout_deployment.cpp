@@ -93,4 +93,65 @@ DeploymentRun combine_runs(const std::vector<const DeploymentRun*>& runs) {
   return whole;
 }
 
+std::vector<Anchor> whole_anchors(const std::vector<Anchor>& anchors, int patch, const Grid& grid,
+                                  const std::vector<SeamJoints>& joints) {
+  auto on_seam = [&](Family family, int member) {
+    for (const SeamJoints& seam : joints)
+      for (const SeamLamella& l : seam.lamellas)
+        if (l.patch == patch && l.family == family && l.member == member) return true;
+    return false;
+  };
+  auto boundary = [](const std::vector<Member>& members, int index) {
+    return index >= 0 && index < static_cast<int>(members.size()) && members[index].boundary;
+  };
+  std::vector<Anchor> out;
+  for (const Anchor& a : anchors) {
+    const bool on_g = boundary(grid.g, a.g), on_h = boundary(grid.h, a.h);
+    const bool inside = (!on_g || on_seam(Family::G, a.g)) && (!on_h || on_seam(Family::H, a.h));
+    // Inner anchors (on no boundary member) hold the whole too.
+    if ((on_g || on_h) && inside) continue;
+    out.push_back(a);
+  }
+  return out;
+}
+
+std::vector<PartBolt> seam_bolts(const std::vector<SeamJoints>& joints,
+                                 const std::vector<int>& part_of) {
+  std::vector<PartBolt> out;
+  auto part = [&](int patch) {
+    return patch >= 0 && patch < static_cast<int>(part_of.size()) ? part_of[patch] : -1;
+  };
+  for (const SeamJoints& seam : joints) {
+    std::array<const SeamLamella*, 2> ends{&seam.lamellas[0], &seam.lamellas[1]};
+    if (ends[1]->patch < ends[0]->patch) std::swap(ends[0], ends[1]);
+    if (part(ends[0]->patch) < 0 || part(ends[1]->patch) < 0) continue;
+    for (const SeamJoint& joint : seam.joints) {
+      PartBolt bolt;
+      for (int k = 0; k < 2; ++k) {
+        const SeamLamella& l = *ends[k];
+        bolt.part[k] = part(l.patch);
+        bolt.family[k] = l.family;
+        bolt.member[k] = l.member;
+        bolt.s[k] = std::clamp(l.forward ? joint.s : l.length - joint.s, 0.0, l.length);
+      }
+      out.push_back(bolt);
+    }
+  }
+  return out;
+}
+
+TriangleMesh merge_meshes(const std::vector<const TriangleMesh*>& meshes) {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  for (const TriangleMesh* mesh : meshes) {
+    const int offset = static_cast<int>(vertices.size());
+    vertices.insert(vertices.end(), mesh->vertices().begin(), mesh->vertices().end());
+    for (Face f : mesh->faces()) {
+      for (int& v : f) v += offset;
+      faces.push_back(f);
+    }
+  }
+  return TriangleMesh(std::move(vertices), std::move(faces));
+}
+
 }  // namespace gridshell

@@ -102,9 +102,11 @@ struct Slider {
 };
 
 struct Joint {
-  int g = 0, h = 0;
-  Slider end[2];  // [0] on member g, [1] on member h
+  int g = 0, h = 0;  // member indices in the part's families (a crossing)
+  Slider end[2];     // [0] on member g, [1] on member h (a bolt: the lower, the upper lamella)
   int anchor = -1;
+  int part = 0;   // the part whose crossing it is
+  int bolt = -1;  // >= 0: a bolt between parts (index into the bolts given), not a crossing
 };
 
 struct AnchorTarget {
@@ -206,9 +208,16 @@ void check_inputs(const Grid& grid, double width, double thickness,
 
 class Deployment {
  public:
-  Deployment(const Grid& grid, const std::vector<Anchor>& anchors, const TriangleMesh& target,
-             double width, double thickness, const SimulationOptions& options);
+  /// Several parts, each a grid with its anchors, and bolts between their lamellas (one part and
+  /// no bolts: a single patch's deployment).
+  Deployment(const std::vector<DeploymentPart>& parts, const std::vector<PartBolt>& bolts,
+             const TriangleMesh& target, double width, double thickness,
+             const SimulationOptions& options);
   DeploymentRun solve(const Progress& progress);
+  /// After solve(): each part's lamellas and connections with its RMS (results of that part).
+  std::vector<DeploymentRun> part_results();
+  /// After solve(): every bolt's gap and force, and the force's unit.
+  std::vector<BoltState> bolt_states(std::string* unit);
 
  private:
   // The steps of the constructor, in order.
@@ -217,9 +226,18 @@ class Deployment {
   /// One discrete elastic rod per member, on its geodesic offset by half the thickness.
   void build_rods(const Grid& grid, double thickness);
   /// A joint per crossing: two sliders (fixed, or sliding within the notch).
-  void build_connections(const Grid& grid);
-  /// Pins the anchored joints to the target.
-  void bind_anchors(const std::vector<Anchor>& anchors);
+  void build_connections(const Grid& grid, int part);
+  /// Pins the anchored joints of a part to the target.
+  void bind_anchors(const std::vector<Anchor>& anchors, int part);
+  /// The mean rest edge length over all rods and the connection and anchor weights from it.
+  void finish_rods();
+  /// A joint per bolt between parts: two fixed sliders.
+  void build_bolts(const std::vector<PartBolt>& bolts);
+  /// The rod of a part's member (checked).
+  int rod_of(int part, Family family, int member) const;
+  /// Results of the rods [first, last) and of the joints that `take` accepts.
+  DeploymentRun results_of(int first_rod, int last_rod,
+                           const std::function<bool(const Joint&)>& take);
 
   struct Terms {
     std::vector<std::unique_ptr<ceres::CostFunction>> owned;
@@ -267,7 +285,8 @@ class Deployment {
   double h_mean_ = 1;  // mean rest edge length, scaled
   double w_position_ = 0, w_direction_ = 0, w_anchor_position_ = 0, w_anchor_direction_ = 0;
   std::vector<Rod> rods_;
-  int ng_ = 0;
+  std::vector<int> first_rod_;        // per part: its first rod (g members, then h)
+  std::vector<int> part_g_, part_h_;  // per part: members per family
   std::vector<Joint> joints_;
   std::vector<AnchorTarget> anchors_;
   int moves_ = 0;
@@ -276,15 +295,41 @@ class Deployment {
   double compression_scale_ = 1;
 };
 
-Deployment::Deployment(const Grid& grid, const std::vector<Anchor>& anchors,
+Deployment::Deployment(const std::vector<DeploymentPart>& parts, const std::vector<PartBolt>& bolts,
                        const TriangleMesh& target, double width, double thickness,
                        const SimulationOptions& options)
     : options_(options), distance_(target) {
-  check_inputs(grid, width, thickness, options);
+  // A single patch's fields are its own; a part's carry "parts[i]." before them.
+  const bool single = parts.size() == 1 && bolts.empty();
+  auto within = [&](size_t p, auto&& step) {
+    try {
+      step();
+    } catch (const InvalidInput& e) {
+      if (single) throw;
+      rethrow_within(e, "parts[" + std::to_string(p) + "]");
+    }
+  };
+  if (parts.empty()) throw InvalidInput("parts", "no grid to simulate");
+  for (size_t p = 0; p < parts.size(); ++p)
+    within(p, [&] {
+      if (!parts[p].grid) throw InvalidInput("design", "no grid");
+      check_inputs(*parts[p].grid, width, thickness, options);
+    });
   set_scale(target, width, thickness);
-  build_rods(grid, thickness);
-  build_connections(grid);
-  bind_anchors(anchors);
+  for (size_t p = 0; p < parts.size(); ++p)
+    within(p, [&] {
+      first_rod_.push_back(static_cast<int>(rods_.size()));
+      part_g_.push_back(static_cast<int>(parts[p].grid->g.size()));
+      part_h_.push_back(static_cast<int>(parts[p].grid->h.size()));
+      build_rods(*parts[p].grid, thickness);
+    });
+  finish_rods();
+  for (size_t p = 0; p < parts.size(); ++p)
+    within(p, [&] {
+      build_connections(*parts[p].grid, static_cast<int>(p));
+      bind_anchors(parts[p].anchors, static_cast<int>(p));
+    });
+  build_bolts(bolts);
 }
 
 void Deployment::set_scale(const TriangleMesh& target, double width, double thickness) {
@@ -317,13 +362,12 @@ void Deployment::set_scale(const TriangleMesh& target, double width, double thic
 
 void Deployment::build_rods(const Grid& grid, double thickness) {
   const int ng = static_cast<int>(grid.g.size()), nh = static_cast<int>(grid.h.size());
-  ng_ = ng;
+  const size_t first = rods_.size();
   std::vector<int> crossings_per_rod(ng + nh, 0);
   for (const Crossing& c : grid.crossings) {
     ++crossings_per_rod[c.g];
     ++crossings_per_rod[ng + c.h];
   }
-  double h_sum = 0;
   for (const auto* family : {&grid.g, &grid.h})
     for (const Member& m : *family) {
       Rod rod;
@@ -331,12 +375,11 @@ void Deployment::build_rods(const Grid& grid, double thickness) {
       rod.index = m.index;
       rod.boundary = m.boundary;
       rod.rest_length = m.planar_length * scale_;
-      const int count = crossings_per_rod[rods_.size()];
+      const int count = crossings_per_rod[rods_.size() - first];
       rod.n = std::max(
           4,
           static_cast<int>(std::ceil(options_.edges_per_interval * std::max(1, count - 1) - 1e-9)));
       rod.h = rod.rest_length / rod.n;
-      h_sum += rod.h;
       std::vector<double> cumulative{0.0};
       for (size_t k = 1; k < m.surface.size(); ++k)
         cumulative.push_back(cumulative.back() + (m.surface[k] - m.surface[k - 1]).norm());
@@ -370,6 +413,11 @@ void Deployment::build_rods(const Grid& grid, double thickness) {
       update_reference_twist(rod);
       rods_.push_back(std::move(rod));
     }
+}
+
+void Deployment::finish_rods() {
+  double h_sum = 0;
+  for (const Rod& rod : rods_) h_sum += rod.h;
   const double h_mean = h_sum / rods_.size();
   h_mean_ = h_mean;
   w_position_ = options_.connection_position_weight * k_.EA / h_mean;
@@ -378,7 +426,8 @@ void Deployment::build_rods(const Grid& grid, double thickness) {
   w_anchor_direction_ = options_.anchor_direction_weight * k_.EI_strong / h_mean;
 }
 
-void Deployment::build_connections(const Grid& grid) {
+void Deployment::build_connections(const Grid& grid, int part) {
+  const int first = first_rod_[part], ng = part_g_[part];
   auto make_slider = [&](int rod_index, double s, double s_bar, bool may_slide) {
     const Rod& rod = rods_[rod_index];
     const double surface_to_rest = 1.0;  // criterion (i): surface length == planar length
@@ -410,14 +459,53 @@ void Deployment::build_connections(const Grid& grid) {
     Joint joint;
     joint.g = c.g;
     joint.h = c.h;
+    joint.part = part;
     const bool may_slide = options_.notches && !c.on_boundary;
-    joint.end[0] = make_slider(c.g, c.s_g, c.s_bar_g, may_slide);
-    joint.end[1] = make_slider(ng_ + c.h, c.s_h, c.s_bar_h, may_slide);
+    joint.end[0] = make_slider(first + c.g, c.s_g, c.s_bar_g, may_slide);
+    joint.end[1] = make_slider(first + ng + c.h, c.s_h, c.s_bar_h, may_slide);
     joints_.push_back(joint);
   }
 }
 
-void Deployment::bind_anchors(const std::vector<Anchor>& anchors) {
+int Deployment::rod_of(int part, Family family, int member) const {
+  if (part < 0 || part >= static_cast<int>(first_rod_.size())) return -1;
+  const int count = family == Family::G ? part_g_[part] : part_h_[part];
+  if (member < 0 || member >= count) return -1;
+  return first_rod_[part] + (family == Family::G ? 0 : part_g_[part]) + member;
+}
+
+void Deployment::build_bolts(const std::vector<PartBolt>& bolts) {
+  for (size_t k = 0; k < bolts.size(); ++k) {
+    const PartBolt& b = bolts[k];
+    const std::string field = "bolts[" + std::to_string(k) + "]";
+    Joint joint;
+    joint.part = -1;
+    joint.bolt = static_cast<int>(k);
+    for (int end = 0; end < 2; ++end) {
+      const int rod_index = rod_of(b.part[end], b.family[end], b.member[end]);
+      if (rod_index < 0)
+        throw InvalidInput(field, "end " + std::to_string(end) + " names part " +
+                                      std::to_string(b.part[end]) + " member " +
+                                      (b.family[end] == Family::G ? "g" : "h") +
+                                      std::to_string(b.member[end]) + ", which does not exist");
+      const Rod& rod = rods_[rod_index];
+      const double s = b.s[end] * scale_;
+      // Rounding of the arc lengths along a seam: a hundredth of an edge past an end is the end.
+      if (!std::isfinite(s) || s < -0.01 * rod.h || s > rod.rest_length + 0.01 * rod.h)
+        throw InvalidInput(field, "end " + std::to_string(end) + ": arc length " +
+                                      std::to_string(b.s[end]) + " is outside its lamella (0 to " +
+                                      std::to_string(rod.rest_length / scale_) + ")");
+      Slider& slider = joint.end[end];
+      slider.rod = rod_index;
+      slider.s_bar = std::clamp(s, 0.0, rod.rest_length);
+      slider.edge = std::clamp(static_cast<int>(std::floor(slider.s_bar / rod.h)), 0, rod.n - 1);
+      slider.beta = slider.s_bar / rod.h - slider.edge;
+    }
+    joints_.push_back(joint);
+  }
+}
+
+void Deployment::bind_anchors(const std::vector<Anchor>& anchors, int part) {
   for (size_t k = 0; k < anchors.size(); ++k) {
     const Anchor& a = anchors[k];
     const std::string field = "design.anchors[" + std::to_string(k) + "]";
@@ -426,7 +514,8 @@ void Deployment::bind_anchors(const std::vector<Anchor>& anchors) {
                                     std::to_string(a.h) + ") has a non-finite position or normal");
     int found = -1;
     for (size_t j = 0; j < joints_.size(); ++j)
-      if (joints_[j].g == a.g && joints_[j].h == a.h) found = static_cast<int>(j);
+      if (joints_[j].part == part && joints_[j].g == a.g && joints_[j].h == a.h)
+        found = static_cast<int>(j);
     if (found < 0)
       throw InvalidInput(field, "anchor at (" + std::to_string(a.g) + ", " + std::to_string(a.h) +
                                     ") is not a crossing of the grid");
@@ -964,6 +1053,51 @@ DeploymentRun Deployment::solve(const Progress& progress) {
 }
 
 DeploymentRun Deployment::results() {
+  return results_of(0, static_cast<int>(rods_.size()), [](const Joint&) { return true; });
+}
+
+std::vector<DeploymentRun> Deployment::part_results() {
+  std::vector<DeploymentRun> out;
+  for (size_t p = 0; p < first_rod_.size(); ++p) {
+    const int last = p + 1 < first_rod_.size() ? first_rod_[p + 1] : static_cast<int>(rods_.size());
+    const int part = static_cast<int>(p);
+    DeploymentRun run =
+        results_of(first_rod_[p], last, [part](const Joint& joint) { return joint.part == part; });
+    run.energies.clear();
+    out.push_back(std::move(run));
+  }
+  return out;
+}
+
+std::vector<BoltState> Deployment::bolt_states(std::string* unit) {
+  std::vector<BoltState> out;
+  const double position = std::sqrt(2 * w_position_), direction = std::sqrt(2 * w_direction_);
+  // Forces are Pa x (scaled length)^2: in model units divide by scale^2, in newtons multiply by
+  // the unit's length^2.
+  const bool newtons = options_.unit_in_meters > 0;
+  const double to_force =
+      (newtons ? options_.unit_in_meters * options_.unit_in_meters : 1.0) / (scale_ * scale_);
+  *unit = newtons ? "N" : "Pa*unit^2";
+  for (Joint& joint : joints_) {
+    if (joint.bolt < 0) continue;
+    const Binding a = bind(joint.end[0]), b = bind(joint.end[1]);
+    double r[rod_terms::ConnectionResidual::kResiduals];
+    rod_terms::ConnectionResidual{a.edge, b.edge, thickness_, position, direction}.evaluate(
+        const_cast<const double* const*>(a.parameters.data()),
+        const_cast<const double* const*>(b.parameters.data()), r);
+    const Vec3 d1 = Vec3(r[0], r[1], r[2]) / position, d2 = Vec3(r[3], r[4], r[5]) / position;
+    BoltState state;
+    state.gap = d1.norm() / scale_;
+    // E = w |d1|^2 + w |d2|^2 with d1 = q_0 - q_1 + t m_0, d2 = q_1 - q_0 - t m_1: the force on
+    // q_0 is dE/dq_0 = 2 w (d1 - d2) (and its opposite on q_1).
+    state.force = (2 * w_position_ * (d1 - d2)).norm() * to_force;
+    out.push_back(state);
+  }
+  return out;
+}
+
+DeploymentRun Deployment::results_of(int first_rod, int last_rod,
+                                     const std::function<bool(const Joint&)>& take) {
   DeploymentRun run;
   const double E = options_.material.young_modulus, G = options_.material.shear_modulus;
   double sum_sq = 0;
@@ -971,7 +1105,12 @@ DeploymentRun Deployment::results() {
   std::map<std::string, double> energy{{"stretch", 0},     {"bend_weak", 0},  {"bend_strong", 0},
                                        {"twist", 0},       {"connection", 0}, {"anchor", 0},
                                        {"notch_limit", 0}, {"friction", 0}};
-  for (const Rod& rod : rods_) {
+  const bool bolts = std::any_of(joints_.begin(), joints_.end(), [&](const Joint& joint) {
+    return joint.bolt >= 0 && take(joint);
+  });
+  if (bolts) energy["bolts"] = 0;
+  for (int rod_index = first_rod; rod_index < last_rod; ++rod_index) {
+    const Rod& rod = rods_[rod_index];
     SimulatedLamella lamella;
     lamella.family = rod.family;
     lamella.index = rod.index;
@@ -1034,6 +1173,7 @@ DeploymentRun Deployment::results() {
   run.rms = count > 0 ? std::sqrt(sum_sq / count) : 0.0;
   const double position = std::sqrt(2 * w_position_), direction = std::sqrt(2 * w_direction_);
   for (Joint& joint : joints_) {
+    if (!take(joint)) continue;
     Slider& a = joint.end[0];
     Slider& b = joint.end[1];
     const Rod& ra = rods_[a.rod];
@@ -1043,8 +1183,10 @@ DeploymentRun Deployment::results() {
     rod_terms::ConnectionResidual{bg.edge, bh.edge, thickness_, position, direction}.evaluate(
         const_cast<const double* const*>(bg.parameters.data()),
         const_cast<const double* const*>(bh.parameters.data()), r);
+    double& connection_energy = energy[joint.bolt >= 0 ? "bolts" : "connection"];
     for (int i = 0; i < rod_terms::ConnectionResidual::kResiduals; ++i)
-      energy["connection"] += 0.5 * r[i] * r[i];
+      connection_energy += 0.5 * r[i] * r[i];
+    if (joint.bolt >= 0) continue;  // fixed: no anchor, notch or friction terms
     SimulatedConnection c;
     c.g = joint.g;
     c.h = joint.h;
@@ -1107,8 +1249,32 @@ DeploymentRun simulate_deployment(const Grid& grid, const std::vector<Anchor>& a
                                   const TriangleMesh& target, double lamella_width,
                                   double lamella_thickness, const SimulationOptions& options,
                                   const Progress& progress) {
-  Deployment deployment(grid, anchors, target, lamella_width, lamella_thickness, options);
+  Deployment deployment({DeploymentPart{&grid, anchors}}, {}, target, lamella_width,
+                        lamella_thickness, options);
   return deployment.solve(progress);
+}
+
+JoinedDeploymentRun simulate_joined(const std::vector<DeploymentPart>& parts,
+                                    const std::vector<PartBolt>& bolts, const TriangleMesh& target,
+                                    double lamella_width, double lamella_thickness,
+                                    const SimulationOptions& options, const Progress& progress) {
+  Deployment deployment(parts, bolts, target, lamella_width, lamella_thickness, options);
+  JoinedDeploymentRun out;
+  out.whole = deployment.solve(progress);
+  out.parts = deployment.part_results();
+  for (DeploymentRun& part : out.parts) {
+    part.notches = out.whole.notches;
+    part.iterations = out.whole.iterations;
+    part.outer_iterations = out.whole.outer_iterations;
+    part.converged = out.whole.converged;
+    part.gradient_norm = out.whole.gradient_norm;
+    part.gradient_tolerance = out.whole.gradient_tolerance;
+    part.termination = out.whole.termination;
+    part.seconds = out.whole.seconds;
+    part.energy_unit = out.whole.energy_unit;
+  }
+  out.bolts = deployment.bolt_states(&out.force_unit);
+  return out;
 }
 
 }  // namespace gridshell

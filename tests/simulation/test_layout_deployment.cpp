@@ -50,6 +50,21 @@ const TwoPatchVault& vault() {
   return v;
 }
 
+/// The point at arc length fraction t of a polyline.
+Vec3 point_at_fraction(const std::vector<Vec3>& points, double t) {
+  double total = 0;
+  for (size_t k = 0; k + 1 < points.size(); ++k) total += (points[k + 1] - points[k]).norm();
+  double s = std::clamp(t, 0.0, 1.0) * total;
+  for (size_t k = 0; k + 1 < points.size(); ++k) {
+    const double length = (points[k + 1] - points[k]).norm();
+    if (s <= length || k + 2 == points.size())
+      return points[k] +
+             (length > 0 ? std::clamp(s / length, 0.0, 1.0) : 0.0) * (points[k + 1] - points[k]);
+    s -= length;
+  }
+  return points.front();
+}
+
 double distance_to_polyline(const Vec3& p, const std::vector<Vec3>& line) {
   double best = 1e300;
   for (size_t k = 0; k + 1 < line.size(); ++k) {
@@ -174,6 +189,103 @@ TEST(LayoutDeployment, TwoPatchesOfABarrelVaultDeployAndTheirSeamIsMeasured) {
   EXPECT_GE(whole.rms, std::min(runs[0].rms, runs[1].rms));
   EXPECT_LE(whole.rms, std::max(runs[0].rms, runs[1].rms));
   EXPECT_LT(whole.rms, 0.005 * diagonal);
+}
+
+TEST(LayoutDeployment, OnePartWithoutBoltsIsTheSinglePatchDeploymentBitForBit) {
+  const Design& d = vault().designs[0];
+  const DeploymentRun alone = simulate_deployment(d.grid, d.anchors, d.target.patch.mesh,
+                                                  d.lamella_width, d.lamella_thickness);
+  const JoinedDeploymentRun joined =
+      simulate_joined({DeploymentPart{&d.grid, d.anchors}}, {}, d.target.patch.mesh,
+                      d.lamella_width, d.lamella_thickness);
+  ASSERT_EQ(joined.parts.size(), 1u);
+  EXPECT_TRUE(joined.bolts.empty());
+  for (const DeploymentRun* run : {&joined.whole, &joined.parts[0]}) {
+    EXPECT_EQ(run->rms, alone.rms);
+    EXPECT_EQ(run->iterations, alone.iterations);
+    ASSERT_EQ(run->lamellas.size(), alone.lamellas.size());
+    for (size_t k = 0; k < alone.lamellas.size(); ++k)
+      EXPECT_EQ(run->lamellas[k].centerline, alone.lamellas[k].centerline);
+    ASSERT_EQ(run->connections.size(), alone.connections.size());
+  }
+  EXPECT_EQ(joined.whole.energies, alone.energies);
+}
+
+TEST(LayoutDeployment, TwoPatchesOfABarrelVaultJoinedAtTheirSeamCloseItInOneEquilibrium) {
+  const TwoPatchVault& v = vault();
+  const std::vector<SeamJoints> joints = seam_joints(v.layout, {&v.designs[0], &v.designs[1]});
+  ASSERT_EQ(joints.size(), 1u);
+  // The anchors that hold the whole: none on the seam, every other one kept.
+  std::vector<DeploymentPart> parts;
+  for (int j = 0; j < 2; ++j) {
+    const Design& d = v.designs[j];
+    const std::vector<Anchor> kept = whole_anchors(d.anchors, j, d.grid, joints);
+    int on_seam = 0;
+    for (const Anchor& a : d.anchors) {
+      const bool seam_g = joints[0].lamellas[j].family == Family::G &&
+                          a.g == joints[0].lamellas[j].member,
+                 seam_h = joints[0].lamellas[j].family == Family::H &&
+                          a.h == joints[0].lamellas[j].member;
+      const bool outer_g = d.grid.g[a.g].boundary && !seam_g,
+                 outer_h = d.grid.h[a.h].boundary && !seam_h;
+      // On the seam and on no outer side (the seam's two corners are on outer sides too).
+      if ((seam_g || seam_h) && !outer_g && !outer_h) ++on_seam;
+    }
+    EXPECT_EQ(kept.size() + on_seam, d.anchors.size());
+    for (const Anchor& a : kept) {
+      const SeamLamella& l = joints[0].lamellas[j];
+      const bool on_this_seam = l.family == Family::G ? a.g == l.member : a.h == l.member;
+      if (on_this_seam) {
+        EXPECT_TRUE(a.corner) << "anchor (" << a.g << ", " << a.h << ")";
+      }
+    }
+    parts.push_back({&d.grid, kept});
+  }
+  const std::vector<PartBolt> bolts = seam_bolts(joints, {0, 1});
+  ASSERT_EQ(bolts.size(), joints[0].joints.size());
+  for (const PartBolt& b : bolts) {
+    EXPECT_EQ(b.part[0], 0);  // the first patch's lamella below
+    EXPECT_EQ(b.part[1], 1);
+  }
+  const TriangleMesh whole_target =
+      merge_meshes({&v.designs[0].target.patch.mesh, &v.designs[1].target.patch.mesh});
+  EXPECT_EQ(whole_target.face_count(), v.designs[0].target.patch.mesh.face_count() +
+                                           v.designs[1].target.patch.mesh.face_count());
+  const Design& d = v.designs[0];
+  ASSERT_EQ(d.lamella_width, v.designs[1].lamella_width);
+  const JoinedDeploymentRun joined =
+      simulate_joined(parts, bolts, whole_target, d.lamella_width, d.lamella_thickness);
+  EXPECT_TRUE(joined.whole.converged) << joined.whole.termination;
+  ASSERT_EQ(joined.parts.size(), 2u);
+  ASSERT_EQ(joined.bolts.size(), bolts.size());
+  EXPECT_EQ(joined.whole.grid_vertices,
+            joined.parts[0].grid_vertices + joined.parts[1].grid_vertices);
+  EXPECT_EQ(joined.whole.lamellas.size(),
+            joined.parts[0].lamellas.size() + joined.parts[1].lamellas.size());
+  EXPECT_TRUE(joined.whole.energies.count("bolts"));
+  const double diagonal = bounding_box_size(v.mesh).norm();
+  EXPECT_LT(joined.whole.rms, 0.005 * diagonal);
+  // Closed: at every bolt the two lamellas' points are one thickness apart, up to the bolt's
+  // reported gap, and far closer than 0.1 % of the diagonal.
+  for (size_t k = 0; k < bolts.size(); ++k) {
+    std::array<Vec3, 2> at;
+    for (int e = 0; e < 2; ++e) {
+      const SimulatedLamella* lamella = nullptr;
+      for (const SimulatedLamella& l : joined.parts[bolts[k].part[e]].lamellas)
+        if (l.family == bolts[k].family[e] && l.index == bolts[k].member[e]) lamella = &l;
+      ASSERT_NE(lamella, nullptr);
+      at[e] = point_at_fraction(lamella->centerline, bolts[k].s[e] / lamella->rest_length);
+    }
+    EXPECT_LT(joined.bolts[k].gap, 1e-3 * diagonal);
+    // The centerline is sampled at rod vertices: the bolt's point between them is off the
+    // chord by the lamella's sag over one edge, far below the thickness.
+    EXPECT_NEAR((at[0] - at[1]).norm(), d.lamella_thickness,
+                joined.bolts[k].gap + 0.2 * d.lamella_thickness)
+        << "bolt " << k;
+    EXPECT_GE(joined.bolts[k].force, 0);
+    EXPECT_TRUE(std::isfinite(joined.bolts[k].force));
+  }
+  EXPECT_EQ(joined.force_unit, "Pa*unit^2");
 }
 
 }  // namespace

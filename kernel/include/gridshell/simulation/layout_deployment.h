@@ -2,7 +2,8 @@
 // gridshell — the deployment of a layout's patches taken together (issue 35,
 // docs/multi-patch.md): each patch deploys on its own, then the whole is measured: its RMS over
 // every patch's rod vertices, and how far apart the two boundary lamellas of each seam are at its
-// joints (the gaps the seam bolts have to close).
+// joints (the gaps the seam bolts have to close); and the inputs of the whole's joined
+// simulation (simulate_joined): the anchors that hold the whole and the seams' bolts.
 #pragma once
 
 #include <vector>
@@ -31,5 +32,21 @@ std::vector<SeamGaps> seam_gaps(const std::vector<SeamJoints>& joints,
 /// rod vertices (each run's RMS weighted by its grid vertices), the largest deviation, the
 /// iterations and seconds added up; converged only if every run did. Null runs are skipped.
 DeploymentRun combine_runs(const std::vector<const DeploymentRun*>& runs);
+
+/// The anchors of a patch that hold the whole (docs/multi-patch.md, "Simulation of the whole"):
+/// a seam lies inside the whole, so an anchor whose boundary members are all seam lamellas of
+/// `patch` (in `joints`) is dropped; anchors on an outer side (a corner: on either of its
+/// sides) and inner anchors stay. `grid` is the patch's grid.
+std::vector<Anchor> whole_anchors(const std::vector<Anchor>& anchors, int patch, const Grid& grid,
+                                  const std::vector<SeamJoints>& joints);
+
+/// The seam joints as bolts between parts: `part_of[j]` is patch j's part (-1: none, its seams
+/// are skipped). End 0 is the lamella of the patch that comes first in the layout (it lies
+/// below), each end's arc length along its own lamella.
+std::vector<PartBolt> seam_bolts(const std::vector<SeamJoints>& joints,
+                                 const std::vector<int>& part_of);
+
+/// The meshes as one (their disjoint union, vertices and faces in order).
+TriangleMesh merge_meshes(const std::vector<const TriangleMesh*>& meshes);
 
 }  // namespace gridshell

@@ -16,6 +16,7 @@
 // model's physical size.
 #pragma once
 
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
@@ -193,5 +194,56 @@ DeploymentRun simulate_deployment(const Grid& grid, const std::vector<Anchor>& a
                                   const TriangleMesh& target, double lamella_width,
                                   double lamella_thickness, const SimulationOptions& options = {},
                                   const Progress& progress = {});
+
+/// One grid of a structure simulated as a whole (several patches joined at seams): its grid and
+/// its anchors, as simulate_deployment takes them.
+struct DeploymentPart {
+  const Grid* grid = nullptr;
+  std::vector<Anchor> anchors;
+};
+
+/// A bolt joining a lamella of one part to a lamella of another at a fixed point of each (it
+/// does not slide): end 0's lamella lies below end 1's, offset by the thickness along end 0's
+/// material normal, as a crossing's h lies on g; the two may turn about their common normal.
+struct PartBolt {
+  std::array<int, 2> part{};  ///< index into the parts
+  std::array<Family, 2> family{Family::G, Family::G};
+  std::array<int, 2> member{};  ///< index in its part's family
+  std::array<double, 2> s{};    ///< arc length from the member's start (surface = rest length)
+};
+
+/// A bolt's state at the joined equilibrium.
+struct BoltState {
+  /// |q_0 - q_1 + t m_0|: how far the bolt is from closed (the penalty's gap), in mesh units.
+  double gap = 0;
+  /// The force the bolt carries: |dE/dq_0| of its position terms, in newtons when the unit is
+  /// known (SimulationOptions::unit_in_meters), else in Pa x (mesh unit)^2.
+  double force = 0;
+};
+
+struct JoinedDeploymentRun {
+  /// Everything together: the lamellas and crossings' connections of every part in part order,
+  /// the RMS over all rod vertices to the target, the solver's counts, the energies (the
+  /// bolts' under "bolts").
+  DeploymentRun whole;
+  /// Per part: its lamellas and connections, the RMS and largest deviation over its rod
+  /// vertices (to the whole target), the stresses; the solver's fields are the whole's; no
+  /// energies.
+  std::vector<DeploymentRun> parts;
+  std::vector<BoltState> bolts;  ///< in the order of the bolts given
+  std::string force_unit;        ///< "N" or "Pa*unit^2"
+};
+
+/// Simulates several grids as one structure: each part's rods, crossings and anchors as
+/// simulate_deployment builds them, and the bolts between parts' lamellas, in one equilibrium
+/// found from the same start (every rod on its geodesic of the target, every connection and
+/// bolt closed). `target` is the whole surface (distances and normals). Throws InvalidInput as
+/// simulate_deployment does, with "parts[i]." before a part's fields, and naming "bolts[k]" for
+/// a bolt whose part or member does not exist or whose arc length is outside its lamella.
+JoinedDeploymentRun simulate_joined(const std::vector<DeploymentPart>& parts,
+                                    const std::vector<PartBolt>& bolts, const TriangleMesh& target,
+                                    double lamella_width, double lamella_thickness,
+                                    const SimulationOptions& options = {},
+                                    const Progress& progress = {});
 
 }  // namespace gridshell
