@@ -202,6 +202,7 @@ DeploymentJob run_deployment_job(const v1::Design& design_message,
     if (without) job.without_notches = simulate(without_options);
     if (with) job.with_notches = simulate(with_options);
   }
+  job.anchors = design.anchors;
   job.deployment = to_proto(job.without_notches ? &*job.without_notches : nullptr,
                             job.with_notches ? &*job.with_notches : nullptr, options, design_name);
   if (found) {

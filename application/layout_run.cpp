@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // A layout's patches designed and simulated, then measured together (see
 // gridshell/application/layout.h, docs/multi-patch.md).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -10,6 +14,7 @@
 #include "gridshell/application/convert.h"
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/layout.h"
+#include "gridshell/design/members.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/foundation/parallel.h"
 #include "gridshell/simulation/deployment_export.h"
@@ -34,6 +39,95 @@ Progress patch_progress(const Progress& progress, const std::string& name) {
         progress.report(name + ": " + std::string(stage), fraction);
       },
       progress.cancel_flag());
+}
+
+double max_normal_stress(const DeploymentRun& run) {
+  double most = 0;
+  for (const SimulatedLamella& l : run.lamellas) most = std::max(most, l.max_normal_stress);
+  return most;
+}
+
+/// The whole in one equilibrium (docs/multi-patch.md, "Simulation of the whole").
+struct JoinedWhole {
+  std::vector<int> part_of;  ///< per patch: its part in the joined runs, -1 if none
+  int anchors = 0;           ///< the anchors that hold the whole
+  std::optional<JoinedDeploymentRun> without_notches, with_notches;
+  std::string problem;  ///< why joining failed ("" if it did not)
+};
+
+/// Joins every patch that deployed, with the seam bolts between them and the anchors that hold
+/// the whole, in the modes its patches ran (side by side when both did and threads allow).
+/// Nothing to join (no seam between two built patches): no run.
+JoinedWhole join_patches(const LayoutResult& cut, const std::vector<std::optional<Design>>& designs,
+                         const std::vector<std::optional<DeploymentJob>>& jobs,
+                         const std::vector<SeamJoints>& joints,
+                         const v1::SimulationOptions& requested, const Progress& progress,
+                         int threads) {
+  JoinedWhole out;
+  out.part_of.assign(cut.patches.size(), -1);
+  std::vector<DeploymentPart> parts;
+  std::vector<const TriangleMesh*> targets;
+  const Design* first = nullptr;
+  for (size_t j = 0; j < cut.patches.size(); ++j) {
+    if (!designs[j] || !jobs[j]) continue;
+    out.part_of[j] = static_cast<int>(parts.size());
+    parts.push_back({&designs[j]->grid, whole_anchors(jobs[j]->anchors, static_cast<int>(j),
+                                                      designs[j]->grid, joints)});
+    out.anchors += static_cast<int>(parts.back().anchors.size());
+    targets.push_back(&designs[j]->target.patch.mesh);
+    if (!first) first = &*designs[j];
+  }
+  const std::vector<PartBolt> bolts = seam_bolts(joints, out.part_of);
+  if (bolts.empty() || !first) return out;
+  const v1::SimulationOptions options = resolve_simulation_options(requested);
+  const bool without = options.notches() != "on", with = options.notches() != "off";
+  const TriangleMesh target = merge_meshes(targets);
+  const Progress whole_progress = patch_progress(progress, "whole");
+  const int available = resolve_threads(threads);
+  auto join = [&](bool notches, int run_threads) {
+    SimulationOptions o = kernel_simulation_options(options, notches);
+    o.threads = run_threads;
+    std::vector<DeploymentPart> started = parts;
+    for (size_t j = 0; j < cut.patches.size(); ++j)
+      if (out.part_of[j] >= 0) {
+        DeploymentPart& part = started[out.part_of[j]];
+        const std::optional<DeploymentRun>& run =
+            notches ? jobs[j]->with_notches : jobs[j]->without_notches;
+        part.start = run ? &*run : nullptr;
+        // Each patch deploys, its connections are tightened, then the seams are bolted: with
+        // the sliders free the joined run of pillow_1 (16 patches) had not converged after 300 s,
+        // locked it took 27 iterations, 16 s (docs/multi-patch.md).
+        part.lock_connections = true;
+      }
+    return simulate_joined(started, bolts, target, first->lamella_width, first->lamella_thickness,
+                           o, whole_progress);
+  };
+  try {
+    if (without && with && available >= 2) {
+      ParallelOptions parallel;
+      parallel.threads = 2;
+      parallel_for(
+          2,
+          [&](std::size_t run, const Progress&) {
+            if (run == 0)
+              out.without_notches = join(false, std::max(1, available / 2));
+            else
+              out.with_notches = join(true, std::max(1, available / 2));
+          },
+          progress, parallel);
+    } else {
+      if (without) out.without_notches = join(false, available);
+      if (with) out.with_notches = join(true, available);
+    }
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const std::exception& e) {
+    // Reported with the patches alone: nothing they computed is lost.
+    out.without_notches.reset();
+    out.with_notches.reset();
+    out.problem = std::string("joining the patches failed: ") + e.what();
+  }
+  return out;
 }
 
 }  // namespace
@@ -81,6 +175,16 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
   const int inner_threads = std::max(1, threads / parallel.threads);
   DesignOptions options = in.options;
   options.maps.threads = options.grid.threads = options.patch.coverability.threads = inner_threads;
+  // One cross-section for the whole: the seams bolt two patches' lamellas together, the joined
+  // simulation has one section, and a kit is cut from one stock. An automatic width is the
+  // thinnest a patch would get alone (1 % of its longest side), so that every patch keeps the
+  // clearance between its members that it would have alone; the thickness follows it.
+  if (options.members.lamella_width == 0 && !built.empty()) {
+    double width = std::numeric_limits<double>::infinity();
+    for (size_t j : built)
+      width = std::min(width, lamella_size(cut.patches[j].target->patch, options.members).width);
+    options.members.lamella_width = width;
+  }
   parallel_for(
       built.size(),
       [&](std::size_t k, const Progress& inner) {
@@ -160,7 +264,7 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
   }
   whole_design.set_seam_bolts(bolts);
 
-  // The whole deployment: each patch's runs together, and the seams' gaps on the main run.
+  // The whole deployment: each patch alone, then the whole joined in one equilibrium.
   v1::LayoutDeployment& whole = *out.mutable_deployment();
   whole.set_design("design.json");
   *whole.mutable_options() = simulation;
@@ -172,6 +276,17 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
     if (jobs[j]->with_notches) with[j] = &*jobs[j]->with_notches;
     if (jobs[j]->without_notches) without[j] = &*jobs[j]->without_notches;
     main[j] = with[j] ? with[j] : without[j];
+  }
+  const bool any = std::any_of(main.begin(), main.end(), [](auto* r) { return r != nullptr; });
+  const bool main_with = std::any_of(with.begin(), with.end(), [](auto* r) { return r; });
+  const JoinedWhole joined =
+      join_patches(cut, designs, jobs, joints, simulation, progress, threads);
+  const JoinedDeploymentRun* main_joined =
+      joined.with_notches ? &*joined.with_notches
+                          : (joined.without_notches ? &*joined.without_notches : nullptr);
+
+  for (size_t j = 0; j < count; ++j) {
+    if (!jobs[j]) continue;
     const v1::Deployment& d = jobs[j]->deployment;
     v1::LayoutDeployment::PatchDeployment& p = *whole.add_patches();
     p.set_name(cut.patches[j].name);
@@ -183,47 +298,134 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
     const v1::SimulationRun& m = with[j] ? d.with_notches() : d.without_notches();
     p.set_max_normal_stress(m.max_normal_stress());
     if (m.has_bending_utilization()) p.set_bending_utilization(m.bending_utilization());
-    whole.set_max_normal_stress(std::max(whole.max_normal_stress(), m.max_normal_stress()));
-    if (m.has_bending_utilization())
-      whole.set_bending_utilization(std::max(whole.bending_utilization(), m.bending_utilization()));
+    if (main_joined && joined.part_of[j] >= 0) {
+      const DeploymentRun& part = main_joined->parts[joined.part_of[j]];
+      p.set_joined_rms(part.rms);
+      p.set_joined_max_normal_stress(max_normal_stress(part));
+    }
   }
-  const bool any = std::any_of(main.begin(), main.end(), [](auto* r) { return r != nullptr; });
   bool converged = any;
   for (const v1::LayoutDeployment::PatchDeployment& p : whole.patches())
     converged = converged && p.converged();
+  for (const auto* run : {&joined.without_notches, &joined.with_notches})
+    if (*run) converged = converged && (*run)->whole.converged;
+  if (!joined.problem.empty()) converged = false;
   whole.set_converged(converged);
-  if (std::any_of(with.begin(), with.end(), [](auto* r) { return r != nullptr; }))
+  const DeploymentRun alone = combine_runs(main);
+  if (any) whole.set_rms_before_joining(alone.rms);
+  if (joined.with_notches)
+    whole.set_rms_with_notches(joined.with_notches->whole.rms);
+  else if (main_with)
     whole.set_rms_with_notches(combine_runs(with).rms);
-  if (std::any_of(without.begin(), without.end(), [](auto* r) { return r != nullptr; }))
+  if (joined.without_notches)
+    whole.set_rms_without_notches(joined.without_notches->whole.rms);
+  else if (std::any_of(without.begin(), without.end(), [](auto* r) { return r != nullptr; }))
     whole.set_rms_without_notches(combine_runs(without).rms);
-  const DeploymentRun combined = combine_runs(main);
-  whole.set_grid_vertices(combined.grid_vertices);
-  whole.set_seams_joined(false);
-  for (const SeamGaps& gaps : seam_gaps(joints, main)) {
-    const LayoutSeam& s = cut.seams[gaps.seam];
+  whole.set_grid_vertices(alone.grid_vertices);
+  whole.set_seams_joined(main_joined != nullptr);
+  for (const auto& [run, field] :
+       {std::pair{&joined.without_notches, whole.mutable_joined_without_notches()},
+        std::pair{&joined.with_notches, whole.mutable_joined_with_notches()}}) {
+    if (!*run) continue;
+    const DeploymentRun& w = (*run)->whole;
+    field->set_notches(w.notches);
+    field->set_rms(w.rms);
+    field->set_max_deviation(w.max_deviation);
+    field->set_converged(w.converged);
+    field->set_iterations(w.iterations);
+    field->set_termination(w.termination);
+    field->set_gradient_norm(w.gradient_norm);
+    field->set_anchors(joined.anchors);
+    field->set_max_normal_stress(max_normal_stress(w));
+    if (simulation.bending_strength() > 0)
+      field->set_bending_utilization(field->max_normal_stress() / simulation.bending_strength());
+    for (const auto& [term, energy] : w.energies) (*field->mutable_energies())[term] = energy;
+    field->set_energy_unit(w.energy_unit);
+    field->set_seconds(w.seconds);
+  }
+  if (!joined.without_notches) whole.clear_joined_without_notches();
+  if (!joined.with_notches) whole.clear_joined_with_notches();
+  if (!joined.problem.empty()) {
+    // Joining failed: the patches alone are still the answer, said so.
+    v1::JoinedRun& failed =
+        main_with ? *whole.mutable_joined_with_notches() : *whole.mutable_joined_without_notches();
+    failed.set_notches(main_with);
+    failed.set_converged(false);
+    failed.set_termination(joined.problem);
+  }
+  // Stresses: of the whole joined when it was, else of the patches alone.
+  for (const v1::LayoutDeployment::PatchDeployment& p : whole.patches()) {
+    whole.set_max_normal_stress(
+        std::max(whole.max_normal_stress(),
+                 main_joined ? p.joined_max_normal_stress() : p.max_normal_stress()));
+  }
+  if (simulation.bending_strength() > 0 && any)
+    whole.set_bending_utilization(whole.max_normal_stress() / simulation.bending_strength());
+  if (main_joined) whole.set_force_unit(main_joined->force_unit);
+
+  // Seams: before joining on the patches alone, after joining on the main joined run (its bolts
+  // are the seams' joints in order, seam_bolts).
+  const std::vector<SeamGaps> before = seam_gaps(joints, main);
+  size_t bolt = 0;
+  for (const SeamJoints& seam : joints) {
+    const LayoutSeam& s = cut.seams[seam.seam];
+    const SeamGaps* gaps = nullptr;
+    for (const SeamGaps& g : before)
+      if (g.seam == seam.seam) gaps = &g;
+    const bool bolted = main_joined && joined.part_of[seam.lamellas[0].patch] >= 0 &&
+                        joined.part_of[seam.lamellas[1].patch] >= 0;
+    if (!gaps && !bolted) continue;
     v1::SeamDeployment& m = *whole.add_seams();
     m.add_corners(s.corners[0]);
     m.add_corners(s.corners[1]);
     for (const auto& [j, k] : s.uses) m.add_patches(cut.patches[j].name);
-    for (double g : gaps.gaps) m.add_gaps(g);
-    m.set_max_gap(gaps.max_gap);
-    m.set_rms_gap(gaps.rms_gap);
-    whole.set_max_seam_gap(std::max(whole.max_seam_gap(), gaps.max_gap));
+    if (gaps) {
+      for (double g : gaps->gaps) m.add_gaps_before_joining(g);
+      m.set_max_gap_before_joining(gaps->max_gap);
+      whole.set_max_seam_gap_before_joining(
+          std::max(whole.max_seam_gap_before_joining(), gaps->max_gap));
+    }
+    double squares = 0;
+    if (bolted) {
+      for (size_t k = 0; k < seam.joints.size() && bolt < main_joined->bolts.size(); ++k, ++bolt) {
+        const BoltState& b = main_joined->bolts[bolt];
+        m.add_gaps(b.gap);
+        m.add_forces(b.force);
+        m.set_max_gap(std::max(m.max_gap(), b.gap));
+        m.set_max_force(std::max(m.max_force(), b.force));
+        squares += b.gap * b.gap;
+      }
+      whole.set_max_bolt_force(std::max(whole.max_bolt_force(), m.max_force()));
+    } else {
+      for (double g : gaps->gaps) m.add_gaps(g), squares += g * g;
+      m.set_max_gap(gaps->max_gap);
+    }
+    m.set_rms_gap(m.gaps_size() > 0 ? std::sqrt(squares / m.gaps_size()) : 0);
+    whole.set_max_seam_gap(std::max(whole.max_seam_gap(), m.max_gap()));
   }
 
-  // The whole's views: every patch's lamellas ("P1-g0" ...) and deviations on one colour scale.
+  // The whole's views: every patch's lamellas ("P1-g0" ...) and deviations on one colour scale,
+  // of the whole joined when it was.
   if (any) {
     std::vector<std::pair<std::string, std::string>> parts;
-    for (size_t j = 0; j < count; ++j)
-      if (main[j]) parts.emplace_back(cut.patches[j].name, jobs[j]->deployed_obj);
+    for (size_t j = 0; j < count; ++j) {
+      if (!main[j]) continue;
+      if (main_joined && joined.part_of[j] >= 0)
+        parts.emplace_back(cut.patches[j].name,
+                           deployed_obj(main_joined->parts[joined.part_of[j]],
+                                        designs[j]->lamella_width, designs[j]->lamella_thickness));
+      else
+        parts.emplace_back(cut.patches[j].name, jobs[j]->deployed_obj);
+    }
     v1::File& obj = *out.add_views();
     obj.set_name("deployed.obj");
     obj.set_content(merge_obj("gridshell deployed lamellas of " + input + ", " +
-                                  std::to_string(parts.size()) + " patches",
+                                  std::to_string(parts.size()) + " patches" +
+                                  (main_joined ? ", joined" : ""),
                               parts));
     v1::File& ply = *out.add_views();
     ply.set_name("deviation.ply");
-    ply.set_content(deviation_ply(combined));
+    ply.set_content(deviation_ply(main_joined ? main_joined->whole : alone));
   }
   // The per-patch simulation answers last: they take the jobs' views.
   for (size_t j = 0; j < count; ++j)

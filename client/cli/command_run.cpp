@@ -108,26 +108,53 @@ int run_layout(const RunArguments& args) {
   const v1::LayoutReport::PatchSummary* failed = print_layout_report(result.design().layout());
   const v1::LayoutDeployment& d = result.deployment();
   const double percent = d.diagonal() > 0 ? 100 / d.diagonal() : 0;
-  for (const v1::LayoutDeployment::PatchDeployment& p : d.patches())
-    std::printf(
-        "  %-6s deployed %d grid vertices, RMS%s %.4g (%.3f %% of the diagonal)%s\n",
-        p.name().c_str(), p.grid_vertices(),
-        p.has_rms_with_notches() ? "2 (notches)" : "1 (no notches)",
-        p.has_rms_with_notches() ? p.rms_with_notches() : p.rms_without_notches(),
-        percent * (p.has_rms_with_notches() ? p.rms_with_notches() : p.rms_without_notches()),
-        p.converged() ? "" : ", NOT converged");
+  for (const v1::LayoutDeployment::PatchDeployment& p : d.patches()) {
+    const double alone = p.has_rms_with_notches() ? p.rms_with_notches() : p.rms_without_notches();
+    std::printf("  %-6s deployed %d grid vertices, alone RMS%s %.4g (%.3f %% of the diagonal)%s",
+                p.name().c_str(), p.grid_vertices(),
+                p.has_rms_with_notches() ? "2 (notches)" : "1 (no notches)", alone, percent * alone,
+                p.converged() ? "" : ", NOT converged");
+    if (p.has_joined_rms())
+      std::printf(", in the whole %.4g (%.3f %%)", p.joined_rms(), percent * p.joined_rms());
+    std::printf("\n");
+  }
   std::printf("  seam bolts      %d on %d seams\n", result.design().seam_bolts(),
               result.design().seams_size());
-  std::printf(
-      "  seam gaps       largest %.4g (%.3f %% of the diagonal), before joining: each "
-      "patch deploys on its own\n",
-      d.max_seam_gap(), percent * d.max_seam_gap());
+  if (d.seams_joined()) {
+    std::printf(
+        "  seam gaps       largest %.4g (%.3f %% of the diagonal) after joining, %.4g "
+        "(%.3f %%) before\n",
+        d.max_seam_gap(), percent * d.max_seam_gap(), d.max_seam_gap_before_joining(),
+        percent * d.max_seam_gap_before_joining());
+    std::printf("  joining force   largest bolt %.4g %s\n", d.max_bolt_force(),
+                d.force_unit().c_str());
+  } else {
+    std::printf(
+        "  seam gaps       largest %.4g (%.3f %% of the diagonal), before joining: the "
+        "seams are not joined%s\n",
+        d.max_seam_gap(), percent * d.max_seam_gap(),
+        d.joined_with_notches().termination().empty() &&
+                d.joined_without_notches().termination().empty()
+            ? ""
+            : (" (" + d.joined_with_notches().termination() +
+               d.joined_without_notches().termination() + ")")
+                  .c_str());
+  }
+  for (const auto& [joined, what] : {std::pair{&d.joined_without_notches(), "RMS1"},
+                                     std::pair{&d.joined_with_notches(), "RMS2"}})
+    if (joined->iterations() > 0)
+      std::printf("  whole joined    %s, %d iterations, %d anchors, %.2f s%s\n", what,
+                  joined->iterations(), joined->anchors(), joined->seconds(),
+                  joined->converged() ? "" : (", NOT converged: " + joined->termination()).c_str());
   if (d.has_rms_without_notches())
     std::printf("  whole RMS1      %.4g (%.3f %% of the diagonal %.4g), no notches\n",
                 d.rms_without_notches(), percent * d.rms_without_notches(), d.diagonal());
   if (d.has_rms_with_notches())
     std::printf("  whole RMS2      %.4g (%.3f %% of the diagonal %.4g), notches\n",
                 d.rms_with_notches(), percent * d.rms_with_notches(), d.diagonal());
+  if (d.has_rms_before_joining())
+    std::printf("  patches alone   RMS %.4g (%.3f %%), each deployed on its own\n",
+                d.rms_before_joining(), percent * d.rms_before_joining());
   std::printf("  converged       %s\n", d.converged() ? "yes" : "NO");
   std::printf("  time            %.2f s\n", d.seconds());
   std::printf(

@@ -121,6 +121,8 @@ std::vector<PartBolt> seam_bolts(const std::vector<SeamJoints>& joints,
   auto part = [&](int patch) {
     return patch >= 0 && patch < static_cast<int>(part_of.size()) ? part_of[patch] : -1;
   };
+  // A rod starts half a thickness below the surface (g) or above it (h).
+  auto height = [](Family family) { return family == Family::G ? -0.5 : 0.5; };
   for (const SeamJoints& seam : joints) {
     std::array<const SeamLamella*, 2> ends{&seam.lamellas[0], &seam.lamellas[1]};
     if (ends[1]->patch < ends[0]->patch) std::swap(ends[0], ends[1]);
@@ -134,6 +136,7 @@ std::vector<PartBolt> seam_bolts(const std::vector<SeamJoints>& joints,
         bolt.member[k] = l.member;
         bolt.s[k] = std::clamp(l.forward ? joint.s : l.length - joint.s, 0.0, l.length);
       }
+      bolt.offset = height(ends[1]->family) - height(ends[0]->family);
       out.push_back(bolt);
     }
   }

@@ -105,8 +105,9 @@ struct Joint {
   int g = 0, h = 0;  // member indices in the part's families (a crossing)
   Slider end[2];     // [0] on member g, [1] on member h (a bolt: the lower, the upper lamella)
   int anchor = -1;
-  int part = 0;   // the part whose crossing it is
-  int bolt = -1;  // >= 0: a bolt between parts (index into the bolts given), not a crossing
+  int part = 0;       // the part whose crossing it is
+  int bolt = -1;      // >= 0: a bolt between parts (index into the bolts given), not a crossing
+  double offset = 1;  // end 1 lies this many thicknesses above end 0 (a crossing: h on g)
 };
 
 struct AnchorTarget {
@@ -231,6 +232,8 @@ class Deployment {
   void bind_anchors(const std::vector<Anchor>& anchors, int part);
   /// The mean rest edge length over all rods and the connection and anchor weights from it.
   void finish_rods();
+  /// Puts a part's rods and sliders where its own deployment `run` left them (DeploymentPart).
+  void start_from(int part, const DeploymentRun& run, bool lock);
   /// A joint per bolt between parts: two fixed sliders.
   void build_bolts(const std::vector<PartBolt>& bolts);
   /// The rod of a part's member (checked).
@@ -328,6 +331,8 @@ Deployment::Deployment(const std::vector<DeploymentPart>& parts, const std::vect
     within(p, [&] {
       build_connections(*parts[p].grid, static_cast<int>(p));
       bind_anchors(parts[p].anchors, static_cast<int>(p));
+      if (parts[p].start)
+        start_from(static_cast<int>(p), *parts[p].start, parts[p].lock_connections);
     });
   build_bolts(bolts);
 }
@@ -467,6 +472,59 @@ void Deployment::build_connections(const Grid& grid, int part) {
   }
 }
 
+void Deployment::start_from(int part, const DeploymentRun& run, bool lock) {
+  const int first = first_rod_[part], count = part_g_[part] + part_h_[part];
+  if (static_cast<int>(run.lamellas.size()) != count)
+    throw InvalidInput("start", "has " + std::to_string(run.lamellas.size()) +
+                                    " lamellas, the grid " + std::to_string(count));
+  for (int i = 0; i < count; ++i) {
+    Rod& rod = rods_[first + i];
+    const SimulatedLamella& l = run.lamellas[i];
+    if (l.family != rod.family || l.index != rod.index ||
+        static_cast<int>(l.centerline.size()) != rod.n + 1 ||
+        static_cast<int>(l.edge_normals.size()) != rod.n)
+      throw InvalidInput("start.lamellas[" + std::to_string(i) + "]",
+                         "is not this grid's rod (another member or resolution)");
+    for (int k = 0; k <= rod.n; ++k) rod.x[k] = l.centerline[k] * scale_;
+    // The material frames become the reference frames, with no twist on top.
+    for (int k = 0; k < rod.n; ++k) {
+      const Vec3 t = (rod.x[k + 1] - rod.x[k]).normalized();
+      Vec3 d1 = l.edge_normals[k] - l.edge_normals[k].dot(t) * t;
+      if (d1.norm() < 1e-9) d1 = t.unitOrthogonal();
+      rod.ref[k].tangent = t;
+      rod.ref[k].d1 = d1.normalized();
+      rod.theta[k] = 0;
+    }
+    rod.reference_twist.clear();
+    update_reference_twist(rod);
+  }
+  std::vector<Joint*> crossings;
+  for (Joint& joint : joints_)
+    if (joint.part == part && joint.bolt < 0) crossings.push_back(&joint);
+  if (run.connections.size() != crossings.size())
+    throw InvalidInput("start", "has " + std::to_string(run.connections.size()) +
+                                    " connections, the grid " + std::to_string(crossings.size()));
+  for (size_t i = 0; i < crossings.size(); ++i) {
+    const SimulatedConnection& c = run.connections[i];
+    for (int end = 0; end < 2; ++end) {
+      Slider& s = crossings[i]->end[end];
+      if (!s.sliding) continue;
+      const Rod& rod = rods_[s.rod];
+      double sigma = s.s_bar + (end == 0 ? c.slide_g : c.slide_h) * scale_;
+      if (lock) {
+        s.sliding = false;
+      } else {
+        // Strictly inside the notch, as every slider starts.
+        const double inset = std::min(1e-3 * rod.h, 0.1 * std::abs(s.notch));
+        sigma = std::clamp(sigma, s.lo + inset, s.hi - inset);
+      }
+      sigma = std::clamp(sigma, 0.0, rod.rest_length);
+      s.edge = std::clamp(static_cast<int>(std::floor(sigma / rod.h)), 0, rod.n - 1);
+      s.beta = sigma / rod.h - s.edge;
+    }
+  }
+}
+
 int Deployment::rod_of(int part, Family family, int member) const {
   if (part < 0 || part >= static_cast<int>(first_rod_.size())) return -1;
   const int count = family == Family::G ? part_g_[part] : part_h_[part];
@@ -481,6 +539,7 @@ void Deployment::build_bolts(const std::vector<PartBolt>& bolts) {
     Joint joint;
     joint.part = -1;
     joint.bolt = static_cast<int>(k);
+    joint.offset = b.offset;
     for (int end = 0; end < 2; ++end) {
       const int rod_index = rod_of(b.part[end], b.family[end], b.member[end]);
       if (rod_index < 0)
@@ -667,7 +726,8 @@ Deployment::Terms Deployment::build_terms() {
     const Binding bg = bind(a), bh = bind(b);
     std::vector<double*> parameters = bg.parameters;
     parameters.insert(parameters.end(), bh.parameters.begin(), bh.parameters.end());
-    rod_terms::ConnectionResidual connection{bg.edge, bh.edge, thickness_, position, direction};
+    rod_terms::ConnectionResidual connection{bg.edge, bh.edge, joint.offset * thickness_, position,
+                                             direction};
     add(pair_cost(connection), parameters);
     if (joint.anchor >= 0) {
       add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
@@ -1082,13 +1142,13 @@ std::vector<BoltState> Deployment::bolt_states(std::string* unit) {
     if (joint.bolt < 0) continue;
     const Binding a = bind(joint.end[0]), b = bind(joint.end[1]);
     double r[rod_terms::ConnectionResidual::kResiduals];
-    rod_terms::ConnectionResidual{a.edge, b.edge, thickness_, position, direction}.evaluate(
-        const_cast<const double* const*>(a.parameters.data()),
-        const_cast<const double* const*>(b.parameters.data()), r);
+    rod_terms::ConnectionResidual{a.edge, b.edge, joint.offset * thickness_, position, direction}
+        .evaluate(const_cast<const double* const*>(a.parameters.data()),
+                  const_cast<const double* const*>(b.parameters.data()), r);
     const Vec3 d1 = Vec3(r[0], r[1], r[2]) / position, d2 = Vec3(r[3], r[4], r[5]) / position;
     BoltState state;
     state.gap = d1.norm() / scale_;
-    // E = w |d1|^2 + w |d2|^2 with d1 = q_0 - q_1 + t m_0, d2 = q_1 - q_0 - t m_1: the force on
+    // E = w |d1|^2 + w |d2|^2 with d1 = q_0 - q_1 + o t m_0, d2 = q_1 - q_0 - o t m_1: the force on
     // q_0 is dE/dq_0 = 2 w (d1 - d2) (and its opposite on q_1).
     state.force = (2 * w_position_ * (d1 - d2)).norm() * to_force;
     out.push_back(state);
@@ -1131,6 +1191,7 @@ DeploymentRun Deployment::results_of(int first_rod, int last_rod,
       m1.normalize();
       lamella.normals.push_back(m1);
       lamella.widths.push_back((m2 - m2.dot(m1) * m1).normalized());
+      if (v < rod.n) lamella.edge_normals.push_back(frames[v].m1);
       const double d = distance_.distance(p);
       lamella.deviation.push_back(d);
       sum_sq += d * d;
@@ -1180,9 +1241,9 @@ DeploymentRun Deployment::results_of(int first_rod, int last_rod,
     const Rod& rb = rods_[b.rod];
     double r[rod_terms::AnchorResidual::kResiduals];
     const Binding bg = bind(a), bh = bind(b);
-    rod_terms::ConnectionResidual{bg.edge, bh.edge, thickness_, position, direction}.evaluate(
-        const_cast<const double* const*>(bg.parameters.data()),
-        const_cast<const double* const*>(bh.parameters.data()), r);
+    rod_terms::ConnectionResidual{bg.edge, bh.edge, joint.offset * thickness_, position, direction}
+        .evaluate(const_cast<const double* const*>(bg.parameters.data()),
+                  const_cast<const double* const*>(bh.parameters.data()), r);
     double& connection_energy = energy[joint.bolt >= 0 ? "bolts" : "connection"];
     for (int i = 0; i < rod_terms::ConnectionResidual::kResiduals; ++i)
       connection_energy += 0.5 * r[i] * r[i];

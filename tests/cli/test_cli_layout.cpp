@@ -159,11 +159,26 @@ TEST(CliLayout, RunWithALayoutDesignsAndDeploysEveryPatchAndMeasuresTheSeams) {
     squares += rms * rms * p["grid_vertices"].get<int>();
     vertices += p["grid_vertices"].get<int>();
   }
-  // The whole's RMS is over every patch's rod vertices.
+  // The patches alone: the RMS over every patch's rod vertices.
   EXPECT_EQ(deployment["grid_vertices"].get<int>(), vertices);
-  EXPECT_NEAR(deployment["rms_with_notches"].get<double>(), std::sqrt(squares / vertices), 1e-12);
+  EXPECT_NEAR(deployment["rms_before_joining"].get<double>(), std::sqrt(squares / vertices), 1e-12);
+  // The whole joined in one equilibrium: its RMS is the joined run's, every patch's share of it
+  // reported, within the target of 0.5 % of the diagonal.
+  EXPECT_TRUE(deployment.value("seams_joined", false));
   EXPECT_FALSE(deployment.contains("rms_without_notches"));  // --notches on
-  EXPECT_FALSE(deployment.value("seams_joined", false));
+  EXPECT_FALSE(deployment.contains("joined_without_notches"));
+  const json& joined = deployment["joined_with_notches"];
+  EXPECT_TRUE(joined["converged"].get<bool>()) << joined.dump();
+  EXPECT_EQ(deployment["rms_with_notches"], joined["rms"]);
+  EXPECT_LT(joined["rms"].get<double>(), 0.005 * deployment["diagonal"].get<double>());
+  EXPECT_GT(joined["energies"]["bolts"].get<double>(), 0);
+  double joined_squares = 0;
+  for (const json& p : deployment["patches"]) {
+    const double rms = p["joined_rms"].get<double>();
+    joined_squares += rms * rms * p["grid_vertices"].get<int>();
+  }
+  EXPECT_NEAR(joined["rms"].get<double>(), std::sqrt(joined_squares / vertices), 1e-9);
+  EXPECT_EQ(deployment["force_unit"], "Pa*unit^2");
   // Four seams; each joins two patches' boundary lamellas of the same length, with a bolt at
   // each corner that both patches' members end at, and the bolts' gaps reported one to one.
   ASSERT_EQ(design["seams"].size(), 4u);
@@ -183,14 +198,23 @@ TEST(CliLayout, RunWithALayoutDesignsAndDeploysEveryPatchAndMeasuresTheSeams) {
     const json& gaps = deployment["seams"][k];
     EXPECT_EQ(gaps["corners"], seam["corners"]);
     ASSERT_EQ(gaps["gaps"].size(), joints.size());
+    ASSERT_EQ(gaps["gaps_before_joining"].size(), joints.size());
+    ASSERT_EQ(gaps["forces"].size(), joints.size());
     for (const json& g : gaps["gaps"]) {
       EXPECT_GE(g.get<double>(), 0);
       EXPECT_LE(g.get<double>(), gaps["max_gap"].get<double>());
     }
+    for (const json& f : gaps["forces"])
+      EXPECT_LE(f.get<double>(), gaps["max_force"].get<double>());
+    // Joined, the seams are closed within 0.1 % of the diagonal, and closer than the patches
+    // alone were.
+    EXPECT_LT(gaps["max_gap"].get<double>(), 1e-3 * deployment["diagonal"].get<double>());
+    EXPECT_LT(gaps["max_gap"].get<double>(), gaps["max_gap_before_joining"].get<double>());
     largest = std::max(largest, gaps["max_gap"].get<double>());
   }
   EXPECT_EQ(design["seam_bolts"].get<int>(), bolts);
   EXPECT_EQ(deployment["max_seam_gap"].get<double>(), largest);
+  EXPECT_GT(deployment["max_bolt_force"].get<double>(), 0);
   // The whole's deployed.obj holds every patch's lamellas, named by patch ("P1-g0").
   const std::vector<std::string> objects = obj_objects(testing::read_text(out + "/deployed.obj"));
   size_t expected = 0;

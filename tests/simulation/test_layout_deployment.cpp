@@ -244,8 +244,12 @@ TEST(LayoutDeployment, TwoPatchesOfABarrelVaultJoinedAtTheirSeamCloseItInOneEqui
   const std::vector<PartBolt> bolts = seam_bolts(joints, {0, 1});
   ASSERT_EQ(bolts.size(), joints[0].joints.size());
   for (const PartBolt& b : bolts) {
-    EXPECT_EQ(b.part[0], 0);  // the first patch's lamella below
+    EXPECT_EQ(b.part[0], 0);  // the first patch's lamella first
     EXPECT_EQ(b.part[1], 1);
+    // Each lamella at its own patch's height: g half a thickness below, h above.
+    const double expected =
+        (b.family[1] == Family::G ? -0.5 : 0.5) - (b.family[0] == Family::G ? -0.5 : 0.5);
+    EXPECT_EQ(b.offset, expected);
   }
   const TriangleMesh whole_target =
       merge_meshes({&v.designs[0].target.patch.mesh, &v.designs[1].target.patch.mesh});
@@ -265,7 +269,7 @@ TEST(LayoutDeployment, TwoPatchesOfABarrelVaultJoinedAtTheirSeamCloseItInOneEqui
   EXPECT_TRUE(joined.whole.energies.count("bolts"));
   const double diagonal = bounding_box_size(v.mesh).norm();
   EXPECT_LT(joined.whole.rms, 0.005 * diagonal);
-  // Closed: at every bolt the two lamellas' points are one thickness apart, up to the bolt's
+  // Closed: at every bolt the two lamellas' points are their offset apart, up to the bolt's
   // reported gap, and far closer than 0.1 % of the diagonal.
   for (size_t k = 0; k < bolts.size(); ++k) {
     std::array<Vec3, 2> at;
@@ -279,10 +283,10 @@ TEST(LayoutDeployment, TwoPatchesOfABarrelVaultJoinedAtTheirSeamCloseItInOneEqui
     EXPECT_LT(joined.bolts[k].gap, 1e-3 * diagonal);
     // The centerline is sampled at rod vertices: the bolt's point between them is off the
     // chord by the lamella's sag over one edge, far below the thickness.
-    EXPECT_NEAR((at[0] - at[1]).norm(), d.lamella_thickness,
+    EXPECT_NEAR((at[0] - at[1]).norm(), std::abs(bolts[k].offset) * d.lamella_thickness,
                 joined.bolts[k].gap + 0.2 * d.lamella_thickness)
         << "bolt " << k;
-    EXPECT_GE(joined.bolts[k].force, 0);
+    EXPECT_GT(joined.bolts[k].force, 0);
     EXPECT_TRUE(std::isfinite(joined.bolts[k].force));
   }
   EXPECT_EQ(joined.force_unit, "Pa*unit^2");

@@ -37,6 +37,8 @@ struct DeploymentJob {
   std::string deviation_without_notches_ply;
   /// options.interior_anchors = "auto": design.json with the inner anchors added, else empty.
   std::string anchored_design;
+  /// The anchors as simulated: the design's, and the inner ones the search added.
+  std::vector<Anchor> anchors;
 };
 
 /// Simulates the design (runs without and/or with notches as options.notches says) with

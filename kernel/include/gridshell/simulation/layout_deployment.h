@@ -41,8 +41,12 @@ std::vector<Anchor> whole_anchors(const std::vector<Anchor>& anchors, int patch,
                                   const std::vector<SeamJoints>& joints);
 
 /// The seam joints as bolts between parts: `part_of[j]` is patch j's part (-1: none, its seams
-/// are skipped). End 0 is the lamella of the patch that comes first in the layout (it lies
-/// below), each end's arc length along its own lamella.
+/// are skipped). End 0 is the lamella of the patch that comes first in the layout, each end's
+/// arc length along its own lamella. Each lamella keeps the height its own patch gives it (a g
+/// member half a thickness below the surface, an h member above, as every rod starts): a bolt's
+/// offset is their difference, -1, 0 or 1 thickness. So every bolt is closed at the start, and no
+/// loop of bolts, crossings and anchors (around a corner inside the whole, or two patches
+/// anchored at one outer corner) asks for heights that cannot all hold.
 std::vector<PartBolt> seam_bolts(const std::vector<SeamJoints>& joints,
                                  const std::vector<int>& part_of);
 

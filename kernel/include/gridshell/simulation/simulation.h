@@ -137,6 +137,7 @@ struct SimulatedLamella {
   std::vector<Vec3> centerline;          ///< deployed vertices, start first
   std::vector<Vec3> normals;             ///< unit material normal (thickness direction) per vertex
   std::vector<Vec3> widths;              ///< unit width direction per vertex (tangent x normal)
+  std::vector<Vec3> edge_normals;        ///< unit material normal per rod edge (a start's frames)
   std::vector<double> deviation;         ///< distance of each vertex to the target patch
   double max_weak_curvature = 0;         ///< 1/length, bending out of the lamella's plane
   double max_strong_curvature = 0;       ///< 1/length, bending in the lamella's plane
@@ -200,21 +201,33 @@ DeploymentRun simulate_deployment(const Grid& grid, const std::vector<Anchor>& a
 struct DeploymentPart {
   const Grid* grid = nullptr;
   std::vector<Anchor> anchors;
+  /// Optional: the part's own deployment (simulate_deployment of this grid with the same
+  /// options but for the anchors) to start from instead of the geodesics: its rod vertices,
+  /// material frames and connections' slides.
+  const DeploymentRun* start = nullptr;
+  /// With a start: its sliding connections are held where they slid to (tightened after the
+  /// part deployed), not sliding any more.
+  bool lock_connections = false;
 };
 
 /// A bolt joining a lamella of one part to a lamella of another at a fixed point of each (it
-/// does not slide): end 0's lamella lies below end 1's, offset by the thickness along end 0's
-/// material normal, as a crossing's h lies on g; the two may turn about their common normal.
+/// does not slide): end 1's lamella lies `offset` thicknesses above end 0's along end 0's
+/// material normal (as a crossing's h lies one thickness on g); the two may turn about their
+/// common normal.
 struct PartBolt {
   std::array<int, 2> part{};  ///< index into the parts
   std::array<Family, 2> family{Family::G, Family::G};
   std::array<int, 2> member{};  ///< index in its part's family
   std::array<double, 2> s{};    ///< arc length from the member's start (surface = rest length)
+  /// End 1 lies this many thicknesses above end 0, along end 0's material normal: 1 as h on g
+  /// at a crossing; a seam's two lamellas keep their own patch's heights (layout_deployment.h).
+  double offset = 1;
 };
 
 /// A bolt's state at the joined equilibrium.
 struct BoltState {
-  /// |q_0 - q_1 + t m_0|: how far the bolt is from closed (the penalty's gap), in mesh units.
+  /// |q_0 - q_1 + offset t m_0|: how far the bolt is from closed (the penalty's gap), in mesh
+  /// units.
   double gap = 0;
   /// The force the bolt carries: |dE/dq_0| of its position terms, in newtons when the unit is
   /// known (SimulationOptions::unit_in_meters), else in Pa x (mesh unit)^2.
@@ -235,11 +248,12 @@ struct JoinedDeploymentRun {
 };
 
 /// Simulates several grids as one structure: each part's rods, crossings and anchors as
-/// simulate_deployment builds them, and the bolts between parts' lamellas, in one equilibrium
-/// found from the same start (every rod on its geodesic of the target, every connection and
-/// bolt closed). `target` is the whole surface (distances and normals). Throws InvalidInput as
-/// simulate_deployment does, with "parts[i]." before a part's fields, and naming "bolts[k]" for
-/// a bolt whose part or member does not exist or whose arc length is outside its lamella.
+/// simulate_deployment builds them, and the bolts between parts' lamellas, in one equilibrium,
+/// found from each part's start (its own deployment) or from the geodesics of the target (every
+/// connection and bolt closed). `target` is the whole surface (distances and normals). Throws
+/// InvalidInput as simulate_deployment does, with "parts[i]." before a part's fields ("start"
+/// for a start that is not this grid's deployment), and naming "bolts[k]" for a bolt whose part
+/// or member does not exist or whose arc length is outside its lamella.
 JoinedDeploymentRun simulate_joined(const std::vector<DeploymentPart>& parts,
                                     const std::vector<PartBolt>& bolts, const TriangleMesh& target,
                                     double lamella_width, double lamella_thickness,
