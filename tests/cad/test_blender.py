@@ -531,6 +531,10 @@ class BlenderLayoutTest(unittest.TestCase):
         self.assertEqual(parent["converged"], deployment["converged"])
         self.assertEqual(parent["max_seam_gap"], deployment["max_seam_gap"])
         self.assertGreater(parent["seam_bolts"], 0)
+        # The whole was joined: its seams closed, the bolts' force and the patches alone kept.
+        self.assertTrue(parent["seams_joined"])
+        self.assertEqual(parent["max_bolt_force"], deployment["max_bolt_force"])
+        self.assertEqual(parent["rms_before_joining"], deployment["rms_before_joining"])
         for child in parent.children:
             lamellas = [o for o in child.objects if o.type == "MESH"]
             self.assertEqual(len(lamellas), 1, child.name)

@@ -420,6 +420,10 @@ class FreeCADLayoutTest(unittest.TestCase):
         self.assertEqual(parent.Converged, deployment["converged"])
         self.assertEqual(parent.MaxSeamGap, deployment["max_seam_gap"])
         self.assertGreater(parent.SeamBolts, 0)
+        # The whole was joined: its seams closed, the bolts' force and the patches alone kept.
+        self.assertTrue(parent.SeamsJoined)
+        self.assertEqual(parent.MaxBoltForce, deployment["max_bolt_force"])
+        self.assertEqual(parent.RmsBeforeJoining, deployment["rms_before_joining"])
         for g in groups:
             lamellas = [o for o in g.Group if o.TypeId == "Mesh::Feature"]
             self.assertEqual(len(lamellas), 1, g.Label)

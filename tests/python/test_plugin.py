@@ -73,3 +73,18 @@ class BackgroundCallTest(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class JoiningNoteTest(unittest.TestCase):
+    """The status line's note on a layout run's joining, as both plugins print it."""
+
+    def test_joined_seams_give_the_patches_alone_and_the_bolts_force(self):
+        note = plugin.joining_note({"seams_joined": True, "diagonal": 50.0, "rms_before_joining": 0.25,
+                                    "max_bolt_force": 4332.0, "force_unit": "N"})
+        self.assertEqual(note, "; patches alone RMS 0.25 (0.500 %); largest bolt force 4332 N")
+
+    def test_a_failed_join_says_why_and_nothing_else_says_nothing(self):
+        failed = {"seams_joined": False, "joined_with_notches": {"converged": False,
+                                                                  "termination": "joining the patches failed: x"}}
+        self.assertEqual(plugin.joining_note(failed), " (joining the patches failed: x)")
+        self.assertEqual(plugin.joining_note({"seams_joined": False}), "")

@@ -1064,10 +1064,13 @@ test('layout: "Build all patches" (knet1, 3 × 3 members): the deployed whole, o
   assert.ok(summary.includes(`whole RMS without notches ${fmt(dep.rms_without_notches)} (${pct(dep.rms_without_notches)})`), summary);
   assert.ok(summary.includes(`seam bolts ${design.seam_bolts} on ${design.seams.length} seams`), summary);
   assert.ok(design.seam_bolts > 0);
-  assert.equal(dep.seams_joined, false);
-  assert.ok(summary.includes(`largest seam gap ${fmt(dep.max_seam_gap)} (${pct(dep.max_seam_gap)}) — before joining: the seams are not joined yet`), summary);
+  assert.equal(dep.seams_joined, true);
+  assert.ok(summary.includes(`largest seam gap ${fmt(dep.max_seam_gap)} (${pct(dep.max_seam_gap)}) after joining, ` +
+                             `${fmt(dep.max_seam_gap_before_joining)} (${pct(dep.max_seam_gap_before_joining)}) before`), summary);
+  assert.ok(summary.includes(`largest bolt force ${fmt(dep.max_bolt_force)} ${dep.force_unit}`), summary);
+  assert.ok(summary.includes(`whole joined with notches: ${dep.joined_with_notches.iterations} iterations`), summary);
   assert.equal(await ltId('layout-nonconverged').isVisible(), dep.converged === false);
-  assert.match(summary, dep.converged ? /every run of every patch converged/ : /NOT converged/);
+  assert.match(summary, dep.converged ? /every run of every patch and of the whole converged/ : /NOT converged/);
   const rows = await tableRows('layout-run');
   assert.deepEqual(rows, dep.patches.map((p) => [p.name, String(p.grid_vertices), fmt(p.rms_with_notches), fmt(p.rms_without_notches),
                                                  p.converged ? 'yes' : 'NO']));

@@ -557,9 +557,24 @@ test('layout run: the per-patch table, the whole\'s summary (seams not joined), 
   assert.match(text, /^1 of 2 patches built; 90 grid vertices$/m);
   assert.match(text, /^whole RMS with notches 0\.0337 \(0\.066 % of the diagonal\)$/m);
   assert.match(text, /^whole RMS without notches 0\.25 \(0\.489 % of the diagonal\)$/m);
-  assert.match(text, /^largest seam gap 0 \(0\.000 % of the diagonal\) — before joining: the seams are not joined yet/m);
+  assert.match(text, /^largest seam gap 0 \(0\.000 % of the diagonal\) — before joining: the seams are not joined, each patch deployed on its own$/m);
   assert.match(text, /^max normal stress 30 MPa = 50% of 60 MPa$/m);
   assert.match(text, /^every run of every patch converged$/m);
+  // Joined: the gaps after and before, the bolts' force, the joined run, the patches alone.
+  const joined = runResult();
+  Object.assign(joined.deployment, {
+    seams_joined: true, max_seam_gap: 0.0511, max_seam_gap_before_joining: 0.511, max_bolt_force: 4332, force_unit: 'Pa*unit^2',
+    rms_before_joining: 0.0255, joined_with_notches: { notches: true, rms: 0.0337, converged: true, iterations: 27, anchors: 36 },
+  });
+  const joinedText = lay.runSummary(joined);
+  assert.match(joinedText, /^largest seam gap 0\.0511 \(0\.100 % of the diagonal\) after joining, 0\.511 \(1\.000 % of the diagonal\) before$/m);
+  assert.match(joinedText, /^largest bolt force 4330 Pa\*unit\^2$/m);
+  assert.match(joinedText, /^whole joined with notches: 27 iterations, 36 anchors$/m);
+  assert.match(joinedText, /^patches alone RMS 0\.0255 \(0\.050 % of the diagonal\), each deployed on its own$/m);
+  assert.match(joinedText, /^every run of every patch and of the whole converged$/m);
+  joined.deployment.joined_with_notches.converged = false;
+  joined.deployment.joined_with_notches.termination = 'iteration limit';
+  assert.match(lay.runSummary(joined), /^whole joined with notches: 27 iterations, 36 anchors, NOT converged: iteration limit$/m);
   assert.deepEqual(lay.notConverged(run.deployment), []);
   const bad = runResult({ converged: false });
   assert.match(lay.runSummary(bad), /^NOT converged/m);

@@ -229,6 +229,10 @@ def show_build(scene, result, source, server, call_seconds, how=""):
     if diagonal > 0:
         parent["max_seam_gap_percent"] = 100 * deployment.get("max_seam_gap", 0.0) / diagonal
     parent["seams_joined"] = bool(deployment.get("seams_joined", False))
+    parent["max_bolt_force"] = deployment.get("max_bolt_force", 0.0)
+    parent["force_unit"] = deployment.get("force_unit", "")
+    if "rms_before_joining" in deployment:
+        parent["rms_before_joining"] = deployment["rms_before_joining"]
     parent["grid_vertices"] = deployment.get("grid_vertices", 0)
     parent["max_normal_stress"] = deployment.get("max_normal_stress", 0.0)
     parent["patches_built"] = len(built)
@@ -249,9 +253,10 @@ def show_build(scene, result, source, server, call_seconds, how=""):
         for what, key in (("RMS2", "rms_with_notches"), ("RMS1", "rms_without_notches")) if key in deployment
     )
     lines.append(("INFO", "gridshell: built %d of %d patches of %s; whole %s; %d seam bolts; largest seam gap "
-                  "before joining %.4g (%.3f %% of the diagonal)" % (
+                  "%s %.4g (%.3f %% of the diagonal)%s" % (
                       len(built), len(summaries), source, rms or "no RMS", parent["seam_bolts"],
-                      parent["max_seam_gap"], parent.get("max_seam_gap_percent", 0.0))))
+                      "after joining" if deployment.get("seams_joined") else "before joining (not joined)",
+                      parent["max_seam_gap"], parent.get("max_seam_gap_percent", 0.0), gs.plugin.joining_note(deployment))))
     for line in failed:
         lines.append(("WARNING", "gridshell: patch %s" % line))
     if not parent["converged"]:

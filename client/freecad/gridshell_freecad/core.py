@@ -670,6 +670,9 @@ def show_build(doc, result, source, server, call_seconds, how=""):
     _set(parent, "MaxSeamGapPercent", "App::PropertyFloat",
          100 * deployment.get("max_seam_gap", 0.0) / diagonal if diagonal > 0 else 0.0)
     _set(parent, "SeamsJoined", "App::PropertyBool", bool(deployment.get("seams_joined", False)))
+    _set(parent, "MaxBoltForce", "App::PropertyFloat", deployment.get("max_bolt_force", 0.0))
+    _set(parent, "ForceUnit", "App::PropertyString", deployment.get("force_unit", ""))
+    _set(parent, "RmsBeforeJoining", "App::PropertyFloat", deployment.get("rms_before_joining", 0.0))
     _set(parent, "GridVertices", "App::PropertyInteger", deployment.get("grid_vertices", 0))
     _set(parent, "MaxNormalStress", "App::PropertyFloat", deployment.get("max_normal_stress", 0.0))
     _set(parent, "PatchesBuilt", "App::PropertyInteger", len(built))
@@ -689,9 +692,10 @@ def show_build(doc, result, source, server, call_seconds, how=""):
     lines = [("INFO", "gridshell: layout of %s: %s, %s of the area covered" % (
         source, _patches(len(summaries)), _percent(report.get("coverage", 0.0))))]
     lines.append(("INFO", "gridshell: built %d of %d patches of %s; whole %s; %d seam bolts; largest seam gap "
-                  "before joining %.4g (%.3f %% of the diagonal)" % (
+                  "%s %.4g (%.3f %% of the diagonal)%s" % (
                       len(built), len(summaries), source, rms or "no RMS", parent.SeamBolts,
-                      parent.MaxSeamGap, parent.MaxSeamGapPercent)))
+                      "after joining" if deployment.get("seams_joined") else "before joining (not joined)",
+                      parent.MaxSeamGap, parent.MaxSeamGapPercent, gs.plugin.joining_note(deployment))))
     for line in failed:
         lines.append(("WARNING", "gridshell: patch %s" % line))
     if not parent.Converged:

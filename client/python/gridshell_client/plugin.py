@@ -270,6 +270,23 @@ def layout_of(data, where):
     )
 
 
+def joining_note(deployment):
+    """What a layout run's deployment.json says about joining its patches, for a status line:
+    the patches alone and the bolts' largest force when the seams were joined, why not when a
+    joined run failed, "" otherwise."""
+    diagonal = deployment.get("diagonal", 0.0)
+    percent = (lambda x: 100 * x / diagonal) if diagonal > 0 else (lambda x: 0.0)
+    if deployment.get("seams_joined"):
+        alone = deployment.get("rms_before_joining")
+        note = "; patches alone RMS %.4g (%.3f %%)" % (alone, percent(alone)) if alone is not None else ""
+        return note + "; largest bolt force %.4g %s" % (
+            deployment.get("max_bolt_force", 0.0), deployment.get("force_unit", ""))
+    why = [run.get("termination", "") for run in (deployment.get("joined_with_notches"),
+                                                   deployment.get("joined_without_notches")) if run]
+    why = [w for w in why if w]
+    return " (%s)" % "; ".join(why) if why else ""
+
+
 def read_layout_file(path):
     """The layout of a layout.json file (``layout_of``); ValueError saying what is wrong."""
     if not path:

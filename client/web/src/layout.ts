@@ -109,10 +109,29 @@ export interface LayoutDeployment {
   diagonal?: number;
   patches: LayoutPatchDeployment[];
   seams_joined?: boolean;
-  seams: { corners: number[]; patches: string[]; gaps: number[]; max_gap: number; rms_gap: number }[];
+  seams: { corners: number[]; patches: string[]; gaps: number[]; max_gap: number; rms_gap: number;
+           gaps_before_joining?: number[]; max_gap_before_joining?: number; forces?: number[]; max_force?: number }[];
   max_seam_gap?: number;
+  /** The patches deployed alone, each to its own patch (main mode). */
+  rms_before_joining?: number;
+  max_seam_gap_before_joining?: number;
+  max_bolt_force?: number;
+  force_unit?: string;
+  joined_with_notches?: JoinedRun;
+  joined_without_notches?: JoinedRun;
   max_normal_stress?: number;
   bending_utilization?: number;
+  seconds?: number;
+}
+
+/** The whole in one equilibrium, its seams bolted (deployment.json of a layout run). */
+export interface JoinedRun {
+  notches?: boolean;
+  rms?: number;
+  converged?: boolean;
+  iterations?: number;
+  termination?: string;
+  anchors?: number;
   seconds?: number;
 }
 
@@ -316,12 +335,27 @@ export function runSummary(run: LayoutRunResult): string {
   const lines = [`${built} of ${run.patches.length} patches built; ${d.grid_vertices ?? 0} grid vertices`];
   if (d.rms_with_notches !== undefined) lines.push(`whole RMS with notches ${ofDiagonal(d.rms_with_notches, diagonal)}`);
   if (d.rms_without_notches !== undefined) lines.push(`whole RMS without notches ${ofDiagonal(d.rms_without_notches, diagonal)}`);
+  if (d.rms_before_joining !== undefined)
+    lines.push(`patches alone RMS ${ofDiagonal(d.rms_before_joining, diagonal)}, each deployed on its own`);
   lines.push(`seam bolts ${run.design.seam_bolts} on ${run.design.seams.length} seams`);
-  lines.push(`largest seam gap ${ofDiagonal(d.max_seam_gap ?? 0, diagonal)}` +
-             (d.seams_joined ? ' after joining' : ' — before joining: the seams are not joined yet, each patch deployed on its own'));
+  const joined = [d.joined_with_notches, d.joined_without_notches].filter((j): j is JoinedRun => j !== undefined);
+  if (d.seams_joined) {
+    lines.push(`largest seam gap ${ofDiagonal(d.max_seam_gap ?? 0, diagonal)} after joining, ` +
+               `${ofDiagonal(d.max_seam_gap_before_joining ?? 0, diagonal)} before`);
+    lines.push(`largest bolt force ${formatNumber(d.max_bolt_force ?? 0)} ${d.force_unit ?? ''}`.trimEnd());
+  } else {
+    const why = joined.map((j) => j.termination).filter((t) => t).join('; ');
+    lines.push(`largest seam gap ${ofDiagonal(d.max_seam_gap ?? 0, diagonal)}` +
+               ` — before joining: the seams are not joined${why ? ` (${why})` : ''}, each patch deployed on its own`);
+  }
+  for (const j of joined)
+    if (j.iterations)
+      lines.push(`whole joined ${j.notches ? 'with' : 'without'} notches: ${j.iterations} iterations, ` +
+                 `${j.anchors ?? 0} anchors${j.converged ? '' : `, NOT converged: ${j.termination ?? ''}`}`);
   if (d.max_normal_stress !== undefined)
     lines.push(`max normal stress ${stressAgainst(d.max_normal_stress, d.options?.bending_strength ?? 0, d.bending_utilization)}`);
-  lines.push(d.converged ? 'every run of every patch converged' : 'NOT converged: a run of a patch did not converge');
+  lines.push(d.converged ? `every run of every patch${d.seams_joined ? ' and of the whole' : ''} converged`
+                         : 'NOT converged: a run of a patch or of the whole did not converge');
   if (d.seconds !== undefined) lines.push(`built in ${d.seconds.toFixed(2)} s`);
   return lines.join('\n');
 }
