@@ -5,6 +5,7 @@
 
 #include "gridshell/application/convert_deployment.h"
 #include "gridshell/foundation/errors.h"
+#include "gridshell/simulation/layout_deployment.h"
 
 namespace gridshell {
 namespace {
@@ -40,11 +41,11 @@ void fill(v1::DistanceStatistics* out, const DistanceStatistics& s, const char* 
 
 }  // namespace
 
-std::vector<SimulatedLamella> lamellas_from_proto(const v1::Deployment& deployment) {
-  const bool with = deployment.rods_size() > 0;
-  const auto& rods = with ? deployment.rods() : deployment.rods_without_notches();
-  const std::string name = with ? "deployment.rods" : "deployment.rods_without_notches";
-  if (rods.empty()) throw InvalidInput("deployment.rods", "the deployment has no lamellas");
+namespace {
+
+std::vector<SimulatedLamella> lamellas_of(
+    const google::protobuf::RepeatedPtrField<v1::Lamella>& rods, const std::string& name) {
+  if (rods.empty()) throw InvalidInput(name, "the deployment has no lamellas");
   std::vector<SimulatedLamella> out;
   for (int i = 0; i < rods.size(); ++i) {
     const std::string field = name + "[" + std::to_string(i) + "]";
@@ -58,19 +59,12 @@ std::vector<SimulatedLamella> lamellas_from_proto(const v1::Deployment& deployme
   return out;
 }
 
-CompareJob run_compare_job(const std::vector<Vec3>& scan, const v1::Design& design_message,
-                           const v1::Deployment& deployment, const CompareOptions& options,
-                           const Progress& progress) {
-  Design design;
-  try {
-    design = design_from_proto(design_message);
-  } catch (const Error& e) {
-    rethrow_within(e, "design");
-  }
-  const std::vector<SimulatedLamella> lamellas = lamellas_from_proto(deployment);
-  const std::vector<Triangle3> surface =
-      lamella_surface(lamellas, design.lamella_width, design.lamella_thickness);
-  const ScanComparison c = compare_scan(scan, surface, design.target.patch.mesh, options, progress);
+/// The scan registered to the lamellas' surface and measured against it and the target.
+CompareJob compare_job(const std::vector<Vec3>& scan, const std::vector<SimulatedLamella>& lamellas,
+                       double width, double thickness, const TriangleMesh& target,
+                       const CompareOptions& options, const Progress& progress) {
+  const std::vector<Triangle3> surface = lamella_surface(lamellas, width, thickness);
+  const ScanComparison c = compare_scan(scan, surface, target, options, progress);
   CompareJob job;
   v1::CompareReport& r = job.report;
   r.set_points_read(static_cast<int>(scan.size()));
@@ -89,6 +83,53 @@ CompareJob run_compare_job(const std::vector<Vec3>& scan, const v1::Design& desi
   fill(r.mutable_target(), c.target, "target");
   job.ply = compare_ply(scan, c);
   return job;
+}
+
+}  // namespace
+
+std::vector<SimulatedLamella> lamellas_from_proto(const v1::Deployment& deployment) {
+  const bool with = deployment.rods_size() > 0;
+  if (!with && deployment.rods_without_notches().empty())
+    throw InvalidInput("deployment.rods", "the deployment has no lamellas");
+  return lamellas_of(with ? deployment.rods() : deployment.rods_without_notches(),
+                     with ? "deployment.rods" : "deployment.rods_without_notches");
+}
+
+CompareJob run_compare_job(const std::vector<Vec3>& scan, const v1::Design& design_message,
+                           const v1::Deployment& deployment, const CompareOptions& options,
+                           const Progress& progress) {
+  Design design;
+  try {
+    design = design_from_proto(design_message);
+  } catch (const Error& e) {
+    rethrow_within(e, "design");
+  }
+  return compare_job(scan, lamellas_from_proto(deployment), design.lamella_width,
+                     design.lamella_thickness, design.target.patch.mesh, options, progress);
+}
+
+CompareJob run_compare_layout_job(const std::vector<Vec3>& scan,
+                                  const std::vector<v1::Design>& designs,
+                                  const v1::LayoutDeployment& deployment,
+                                  const CompareOptions& options, const Progress& progress) {
+  if (!deployment.seams_joined() || deployment.rods().empty())
+    throw InvalidInput("deployment.rods",
+                       "the layout run's seams were not joined, so there is no whole to compare "
+                       "with; compare a patch's folder (patches/<name>/) instead");
+  if (designs.empty()) throw InvalidInput("design.patch_designs", "no patch was designed");
+  std::vector<Design> patches;
+  for (size_t j = 0; j < designs.size(); ++j) {
+    try {
+      patches.push_back(design_from_proto(designs[j]));
+    } catch (const Error& e) {
+      rethrow_within(e, "design.patch_designs[" + std::to_string(j) + "]");
+    }
+  }
+  std::vector<const TriangleMesh*> targets;
+  for (const Design& d : patches) targets.push_back(&d.target.patch.mesh);
+  return compare_job(scan, lamellas_of(deployment.rods(), "deployment.rods"),
+                     patches.front().lamella_width, patches.front().lamella_thickness,
+                     merge_meshes(targets), options, progress);
 }
 
 }  // namespace gridshell

@@ -53,26 +53,6 @@ void add_point(ListValue* list, const Vec3& p) {
   for (int k = 0; k < 3; ++k) point->add_values()->set_number_value(p[k]);
 }
 
-void fill_lamellas(const DeploymentRun& run, google::protobuf::RepeatedPtrField<v1::Lamella>* out) {
-  for (const SimulatedLamella& l : run.lamellas) {
-    v1::Lamella* lamella = out->Add();
-    lamella->mutable_member()->set_family(l.family == Family::G ? "g" : "h");
-    lamella->mutable_member()->set_index(l.index);
-    lamella->set_boundary(l.boundary);
-    lamella->set_rest_length(l.rest_length);
-    for (const Vec3& p : l.centerline) add_point(lamella->mutable_centerline(), p);
-    for (const Vec3& n : l.normals) add_point(lamella->mutable_normals(), n);
-    for (double d : l.deviation) lamella->add_deviation(d);
-    lamella->set_max_weak_curvature(l.max_weak_curvature);
-    lamella->set_max_strong_curvature(l.max_strong_curvature);
-    lamella->set_max_twist_rate(l.max_twist_rate);
-    lamella->set_max_bending_stress(l.max_bending_stress);
-    lamella->set_max_strong_bending_stress(l.max_strong_bending_stress);
-    lamella->set_max_torsion_stress(l.max_torsion_stress);
-    lamella->set_max_normal_stress(l.max_normal_stress);
-  }
-}
-
 // The run's largest stresses and, where the material's strengths are known, how close they
 // come to them: the normal stress at a cross-section's corner against the bending strength, the
 // torsion shear stress against the shear strength.
@@ -133,6 +113,26 @@ void fill_run(const DeploymentRun& run, const v1::SimulationOptions& options,
 }
 
 }  // namespace
+
+void fill_lamellas(const DeploymentRun& run, google::protobuf::RepeatedPtrField<v1::Lamella>* out) {
+  for (const SimulatedLamella& l : run.lamellas) {
+    v1::Lamella* lamella = out->Add();
+    lamella->mutable_member()->set_family(l.family == Family::G ? "g" : "h");
+    lamella->mutable_member()->set_index(l.index);
+    lamella->set_boundary(l.boundary);
+    lamella->set_rest_length(l.rest_length);
+    for (const Vec3& p : l.centerline) add_point(lamella->mutable_centerline(), p);
+    for (const Vec3& n : l.normals) add_point(lamella->mutable_normals(), n);
+    for (double d : l.deviation) lamella->add_deviation(d);
+    lamella->set_max_weak_curvature(l.max_weak_curvature);
+    lamella->set_max_strong_curvature(l.max_strong_curvature);
+    lamella->set_max_twist_rate(l.max_twist_rate);
+    lamella->set_max_bending_stress(l.max_bending_stress);
+    lamella->set_max_strong_bending_stress(l.max_strong_bending_stress);
+    lamella->set_max_torsion_stress(l.max_torsion_stress);
+    lamella->set_max_normal_stress(l.max_normal_stress);
+  }
+}
 
 Design design_from_proto(const v1::Design& in) {
   Design design;

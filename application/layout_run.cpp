@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <string>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "gridshell/application/convert.h"
+#include "gridshell/application/convert_deployment.h"
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/layout.h"
 #include "gridshell/design/members.h"
@@ -361,7 +361,16 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
   }
   if (simulation.bending_strength() > 0 && any)
     whole.set_bending_utilization(whole.max_normal_stress() / simulation.bending_strength());
-  if (main_joined) whole.set_force_unit(main_joined->force_unit);
+  if (main_joined) {
+    whole.set_force_unit(main_joined->force_unit);
+    // The joined whole's lamellas, for `compare`: each part's, named by its patch.
+    for (size_t j = 0; j < count; ++j) {
+      if (joined.part_of[j] < 0) continue;
+      const DeploymentRun& part = main_joined->parts[joined.part_of[j]];
+      fill_lamellas(part, whole.mutable_rods());
+      for (size_t k = 0; k < part.lamellas.size(); ++k) whole.add_rod_patches(cut.patches[j].name);
+    }
+  }
 
   // Seams: before joining on the patches alone, after joining on the main joined run (its bolts
   // are the seams' joints in order, seam_bolts).

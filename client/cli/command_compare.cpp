@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "cli_support.h"
@@ -29,17 +30,23 @@ struct CompareArguments {
   int icp_points = 10000;
 };
 
-v1::Deployment read_deployment_file(const std::string& path) {
+/// A JSON file of `message`'s type; InvalidInput naming the file.
+template <typename Message>
+void read_message_file(const std::string& path, Message& message, const std::string& what) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput(path, "cannot open the deployment file");
+  if (!in) throw InvalidInput(path, "cannot open " + what);
   std::stringstream text;
   text << in.rdbuf();
-  v1::Deployment deployment;
   try {
-    from_json(text.str(), deployment);
+    from_json(text.str(), message);
   } catch (const InvalidInput& e) {
-    throw InvalidInput(path, "not a gridshell deployment file: " + std::string(e.what()));
+    throw InvalidInput(path, "not " + what + ": " + std::string(e.what()));
   }
+}
+
+v1::Deployment read_deployment_file(const std::string& path) {
+  v1::Deployment deployment;
+  read_message_file(path, deployment, "a gridshell deployment file");
   return deployment;
 }
 
@@ -52,8 +59,17 @@ int run_compare(const CompareArguments& args) {
   const std::string deployment_path =
       !args.deployment.empty() ? args.deployment
                                : (fs::path(design_path).parent_path() / "deployment.json").string();
-  const v1::Design design = read_design_file(design_path);
-  const v1::Deployment deployment = read_deployment_file(deployment_path);
+  // A layout run's folder: its joined whole against the union of its patches.
+  const std::optional<LayoutDesignFiles> layout = read_layout_design_file(design_path);
+  v1::Design design;
+  v1::Deployment deployment;
+  v1::LayoutDeployment whole;
+  if (layout) {
+    read_message_file(deployment_path, whole, "a layout run's deployment file");
+  } else {
+    design = read_design_file(design_path);
+    deployment = read_deployment_file(deployment_path);
+  }
   if (!(args.icp_points >= 100 && args.icp_points <= 10000000))
     throw InvalidInput("--icp-points", "must be between 100 and 10000000");
   const std::vector<Vec3> scan = read_point_cloud(args.scan);
@@ -64,12 +80,13 @@ int run_compare(const CompareArguments& args) {
   CompareOptions options;
   options.threads = args.threads;
   options.icp_points = args.icp_points;
-  CompareJob job = run_compare_job(scan, design, deployment, options, progress);
+  CompareJob job = layout ? run_compare_layout_job(scan, layout->patches, whole, options, progress)
+                          : run_compare_job(scan, design, deployment, options, progress);
   finish_progress();
   v1::CompareReport& r = job.report;
   r.set_scan(fs::path(args.scan).filename().string());
   r.set_design(design_path);
-  r.set_unit(deployment.options().unit());
+  r.set_unit(layout ? whole.options().unit() : deployment.options().unit());
   r.set_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
   write_files({{"compare.json", to_json(r) + "\n"}, {"compare.ply", job.ply}}, args.out);
   std::printf("compare %s -> %s\n", args.scan.c_str(), args.out.c_str());
@@ -93,7 +110,9 @@ Command add_compare_command(CLI::App& app) {
   sub->add_option("SCAN", args->scan, "point cloud: .ply (ASCII/binary), .xyz/.txt, .obj, .off")
       ->required();
   sub->add_option("--design", args->design,
-                  "folder with design.json and deployment.json (gridshell run), or a design.json")
+                  "folder with design.json and deployment.json (gridshell run, also with --layout: "
+                  "the whole), "
+                  "or a design.json")
       ->required();
   sub->add_option("--deployment", args->deployment, "deployment.json (default: beside the design)");
   sub->add_option("--out", args->out, "output folder")->required();

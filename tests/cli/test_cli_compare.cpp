@@ -187,6 +187,37 @@ TEST(Compare, RecoversRigidMotionWithNoiseOutliersAndPartialView) {
   }
 }
 
+TEST(Compare, AScanOfALayoutRunsWholeRegistersToItsJoinedLamellas) {
+  // knet1 in its automatic layout (20 patches), joined: the scan is sampled on the whole's
+  // deployed.obj (every patch's lamellas in their joined equilibrium) and moved; compare
+  // registers it to the joined lamellas of deployment.json and measures the target against the
+  // union of the patches. (The sphere in 2 x 2 patches is too symmetric for the coarse
+  // registration, issue 36.)
+  const std::string run = temp_dir() + "/layout";
+  auto r = run_cli("run '" + std::string(GRIDSHELL_TEST_DATA_DIR) +
+                   "/meshes/knet1.obj' --layout auto --members-u 3 --members-v 3 --notches on "
+                   "--quiet --out '" +
+                   run + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json deployment = json::parse(read_text(run + "/deployment.json"));
+  ASSERT_TRUE(deployment["seams_joined"].get<bool>());
+  EXPECT_EQ(deployment["rods"].size(), deployment["rod_patches"].size());
+  const auto triangles = obj_triangles(run + "/deployed.obj");
+  ASSERT_GT(triangles.size(), 1000u);
+  const json design = json::parse(read_text(run + "/patches/P1/design.json"));
+  const double sigma = 0.1 * design["options"]["lamella_thickness"].get<double>();
+  const Scan scan = synthesise(triangles, 60000, sigma, 0.05, 0.6, 3u);
+  const std::string dir = temp_dir();
+  const std::string file = testing::write_text(dir, "scan.ply", binary_ply(scan.points));
+  r = run_cli("compare '" + file + "' --design '" + run + "' --quiet --out '" + dir + "/out'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(read_text(dir + "/out/compare.json"));
+  EXPECT_NEAR(report["points_rejected"].get<double>() / scan.points.size(), 0.05, 0.01);
+  expect_recovered(scan, report, sigma);
+  // The whole is within 0.5 % of the diagonal of the target, so the scan is too.
+  EXPECT_LT(report["target"]["rms"].get<double>(), 0.005 * deployment["diagonal"].get<double>());
+}
+
 TEST(Compare, BadScansSayWhatIsWrong) {
   const std::string dir = temp_dir();
   // The scan is checked before the design is used: empty messages stand in for the design folder.

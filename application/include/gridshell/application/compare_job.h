@@ -11,6 +11,7 @@
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/design.pb.h"
 #include "gridshell/v1/fabrication.pb.h"
+#include "gridshell/v1/layout.pb.h"
 
 namespace gridshell {
 
@@ -28,5 +29,15 @@ struct CompareJob {
 CompareJob run_compare_job(const std::vector<Vec3>& scan, const v1::Design& design,
                            const v1::Deployment& deployment, const CompareOptions& options = {},
                            const Progress& progress = {});
+
+/// The same for a layout run's whole: its joined lamellas (deployment.json's `rods`) and the
+/// union of its patches' target patches (`designs`: each built patch's design.json; their
+/// cross-section is the layout's one). InvalidInput naming "deployment.rods" when the seams were
+/// not joined (no whole to compare with: a patch's folder is).
+CompareJob run_compare_layout_job(const std::vector<Vec3>& scan,
+                                  const std::vector<v1::Design>& designs,
+                                  const v1::LayoutDeployment& deployment,
+                                  const CompareOptions& options = {},
+                                  const Progress& progress = {});
 
 }  // namespace gridshell

@@ -22,4 +22,7 @@ Design design_from_proto(const v1::Design& design);
 v1::Deployment to_proto(const DeploymentRun* without_notches, const DeploymentRun* with_notches,
                         const v1::SimulationOptions& options, const std::string& design_name);
 
+/// Adds the run's lamellas (deployment.json's `rods`) to `out`.
+void fill_lamellas(const DeploymentRun& run, google::protobuf::RepeatedPtrField<v1::Lamella>* out);
+
 }  // namespace gridshell
