@@ -1074,7 +1074,7 @@ test('layout: "Build all patches" (knet1, 3 × 3 members): the deployed whole, o
   const rows = await tableRows('layout-run');
   assert.deepEqual(rows, dep.patches.map((p) => [p.name, String(p.grid_vertices), fmt(p.rms_with_notches), fmt(p.rms_without_notches),
                                                  p.converged ? 'yes' : 'NO']));
-  // Drawn: every patch's deployed lamellas on one deviation scale, over the layout.
+  // Drawn: every patch's lamellas in the joined whole on one deviation scale, over the layout.
   await canvasIs('layers', 'mesh,layout,layout-deployment');
   assert.ok(Number(await canvasData('layoutLamellas')) >= 20 * 4, await canvasData('layoutLamellas'));
   assert.ok(await ltId('deviation-legend').isVisible());

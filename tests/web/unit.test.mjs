@@ -580,10 +580,21 @@ test('layout run: the per-patch table, the whole\'s summary (seams not joined), 
   assert.match(lay.runSummary(bad), /^NOT converged/m);
   assert.deepEqual(lay.runRows(bad.deployment)[0].at(-1), 'NO');
   assert.deepEqual(lay.notConverged(bad.deployment), ['P1']);
-  assert.equal(lay.maxDeviationOf(run.patches), 0.7);
-  const drawn = lay.deployedPatches(run.patches);
+  const drawn = lay.deployedPatches(run);
+  assert.equal(lay.maxDeviationOf(drawn), 0.7);
   assert.equal(drawn.length, 1); // the patch without a result draws nothing
   assert.deepEqual([drawn[0].width, drawn[0].thickness, drawn[0].rods.length], [0.5, 0.05, 1]);
+  // Joined: the whole's rods, grouped by patch, on their own deviation scale.
+  const whole = runResult();
+  const lam = (dev) => ({ member: { family: 'g', index: 0 }, boundary: false, centerline: dev.map((_, i) => [i, 0, 0]),
+                          normals: dev.map(() => [0, 0, 1]), deviation: dev, max_bending_stress: 0, max_torsion_stress: 0, max_normal_stress: 0 });
+  Object.assign(whole.deployment, {
+    seams_joined: true, rod_patches: ['P1', 'P1', 'P2'],
+    rods: [lam([0.2, 0.3]), lam([0.9, 0.1]), lam([0.4, 0.4])],
+  });
+  const joinedDrawn = lay.deployedPatches(whole);
+  assert.deepEqual(joinedDrawn.map((g) => [g.name, g.rods.length, g.width, g.thickness]), [['P1', 2, 0.5, 0.05], ['P2', 1, 0.5, 0.05]]);
+  assert.equal(lay.maxDeviationOf(joinedDrawn), 0.9);
 });
 
 test('layout run: the files of the whole (JSON that parses back) and run.zip with each patch\'s folder', () => {

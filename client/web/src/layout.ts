@@ -119,6 +119,9 @@ export interface LayoutDeployment {
   force_unit?: string;
   joined_with_notches?: JoinedRun;
   joined_without_notches?: JoinedRun;
+  /** The joined whole's lamellas (main run), every patch's in layout order, and each one's patch. */
+  rods?: Lamella[];
+  rod_patches?: string[];
   max_normal_stress?: number;
   bending_utilization?: number;
   seconds?: number;
@@ -233,18 +236,36 @@ export function sideSegments(patches: { positions?: number[]; indices?: number[]
   return { seams, outer };
 }
 
-/** The largest finite deviation over every rod of every built patch (the one colour scale's top). */
-export function maxDeviationOf(runs: PatchRun[]): number {
+/** The largest finite deviation over the rods drawn (the one colour scale's top). */
+export function maxDeviationOf(groups: { rods: Lamella[] }[]): number {
   let m = 0;
-  for (const run of runs)
-    for (const rod of run.simulation?.deployment.rods ?? [])
+  for (const group of groups)
+    for (const rod of group.rods)
       for (const d of rod.deviation) if (Number.isFinite(d)) m = Math.max(m, d);
   return m;
 }
 
-/** What the view draws of a run: each built patch's deployed rods with its lamella's cross-section. */
-export function deployedPatches(runs: PatchRun[]): { rods: Lamella[]; width: number; thickness: number }[] {
-  return runs.filter((r) => r.design && r.simulation).map((r) => ({
+/**
+ * What the view draws of a run, each built patch's deployed rods with the lamella's
+ * cross-section: the whole joined in one equilibrium when its seams were (the deployment's
+ * `rods`, grouped by `rod_patches`), else each patch as it deployed alone.
+ */
+export function deployedPatches(run: { patches: PatchRun[]; deployment?: LayoutDeployment }):
+    { name?: string; rods: Lamella[]; width: number; thickness: number }[] {
+  const built = run.patches.filter((r) => r.design && r.simulation);
+  const d = run.deployment;
+  if (d?.seams_joined && d.rods?.length && d.rod_patches?.length === d.rods.length && built.length > 0) {
+    // One cross-section per layout: every patch's design has it.
+    const { lamella_width: width, lamella_thickness: thickness } = built[0].design!.design.options;
+    const groups = new Map<string, Lamella[]>();
+    d.rods.forEach((rod, i) => {
+      const name = d.rod_patches![i];
+      if (!groups.has(name)) groups.set(name, []);
+      groups.get(name)!.push(rod);
+    });
+    return [...groups].map(([name, rods]) => ({ name, rods, width, thickness }));
+  }
+  return built.map((r) => ({
     rods: r.simulation!.deployment.rods,
     width: r.design!.design.options.lamella_width,
     thickness: r.design!.design.options.lamella_thickness,

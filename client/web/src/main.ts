@@ -880,8 +880,8 @@ function showLayoutDeployment(): void {
   const r = state.layoutRun;
   if (!r) return;
   const bending = ui.colourBy.value === 'bending';
-  const groups = deployedPatches(r.patches);
-  const max = bending ? Math.max(0, ...groups.flatMap((g) => g.rods.map((rod) => rod.max_bending_stress))) : maxDeviationOf(r.patches);
+  const groups = deployedPatches(r);
+  const max = bending ? Math.max(0, ...groups.flatMap((g) => g.rods.map((rod) => rod.max_bending_stress))) : maxDeviationOf(groups);
   viewer.setLayoutDeployment(groups, max, bending ? (rod) => rod.max_bending_stress : (rod, i) => rod.deviation[i] ?? 0);
   showDeploymentLegend(bending, max);
 }
