@@ -23,11 +23,11 @@
 
 #include "gridshell/application/files.h"
 #include "gridshell/batch/sweep.h"
-#include "gridshell/v1/layout.pb.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/mesh_io.h"
 #include "gridshell/v1/deployment.pb.h"
 #include "gridshell/v1/design.pb.h"
+#include "gridshell/v1/layout.pb.h"
 
 namespace gridshell::sweep {
 namespace fs = std::filesystem;
@@ -104,6 +104,8 @@ bool read_results(const fs::path& folder, std::map<std::string, double>* results
     if (whole.has_rms_without_notches()) r["rms_without_notches"] = whole.rms_without_notches();
     if (whole.has_rms_with_notches()) r["rms_with_notches"] = whole.rms_with_notches();
     r["max_seam_gap"] = whole.max_seam_gap();
+    // Joined in one equilibrium: the largest force a seam bolt carries (force_unit).
+    if (whole.seams_joined()) r["max_bolt_force"] = whole.max_bolt_force();
     return true;
   }
   v1::Design design;

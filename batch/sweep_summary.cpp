@@ -33,7 +33,8 @@ const char* const kResultColumns[] = {"alpha_bar",
                                       "t2",
                                       "coverage",
                                       "patches",
-                                      "max_seam_gap"};
+                                      "max_seam_gap",
+                                      "max_bolt_force"};
 
 std::string number(double value) {
   char buffer[32];

@@ -424,6 +424,9 @@ TEST(SweepLocal, ALayoutColumnRunsSeveralPatchesPerRow) {
               deployment["rms_with_notches"].get<double>());
     EXPECT_EQ(status["results"]["max_seam_gap"].get<double>(),
               deployment["max_seam_gap"].get<double>());
+    EXPECT_TRUE(deployment["seams_joined"].get<bool>());
+    EXPECT_EQ(status["results"]["max_bolt_force"].get<double>(),
+              deployment["max_bolt_force"].get<double>());
     EXPECT_EQ(status["results"]["coverage"].get<double>(),
               design["layout"]["coverage"].get<double>());
     EXPECT_EQ(status["results"]["patches"].get<int>(),
@@ -441,6 +444,8 @@ TEST(SweepLocal, ALayoutColumnRunsSeveralPatchesPerRow) {
   EXPECT_EQ(by_id["one"][column(header, "coverage")], "");
   EXPECT_EQ(by_id["four"][column(header, "patches")], "4");
   EXPECT_NE(by_id["auto"][column(header, "max_seam_gap")], "");
+  EXPECT_NE(by_id["four"][column(header, "max_bolt_force")], "");
+  EXPECT_EQ(by_id["one"][column(header, "max_bolt_force")], "");
   // The layout's flags are checked before anything runs, naming the row and the column.
   const std::string bad = testing::write_text(dir, "bad.csv",
                                               "id,mesh,layout,max-patches\n"
