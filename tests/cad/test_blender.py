@@ -540,8 +540,12 @@ class BlenderLayoutTest(unittest.TestCase):
             self.assertEqual(len(lamellas), 1, child.name)
             self.assertIn("deviation", lamellas[0].data.color_attributes)
             name = child["patch"]
-            self.assertEqual(child["rms_with_notches"],
-                             next(p for p in deployment["patches"] if p["name"] == name)["rms_with_notches"])
+            numbers = next(p for p in deployment["patches"] if p["name"] == name)
+            self.assertEqual(child["rms_with_notches"], numbers["rms_with_notches"])  # the patch alone
+            # Drawn: the patch's lamellas in the joined whole, one deviation per box corner.
+            self.assertEqual(lamellas[0]["rms"], numbers["joined_rms"])
+            joined_rods = [r for r, p in zip(deployment["rods"], deployment["rod_patches"]) if p == name]
+            self.assertEqual(len(lamellas[0].data.vertices), 4 * sum(len(r["deviation"]) for r in joined_rods))
         # The panel's rows.
         rows = {label: value for label, value, _ in layouts.summary(bpy.context.scene)}
         self.assertEqual(rows["Built"].split()[0], str(len(built)))

@@ -429,7 +429,11 @@ class FreeCADLayoutTest(unittest.TestCase):
             self.assertEqual(len(lamellas), 1, g.Label)
             self.assertGreater(len(lamellas[0].Deviation), 0)
             numbers = next(p for p in deployment["patches"] if p["name"] == g.Patch)
-            self.assertEqual(g.RmsWithNotches, numbers["rms_with_notches"])
+            self.assertEqual(g.RmsWithNotches, numbers["rms_with_notches"])  # the patch alone
+            # Drawn: the patch's lamellas in the joined whole, one deviation per box corner.
+            self.assertEqual(lamellas[0].Rms, numbers["joined_rms"])
+            joined_rods = [r for r, p in zip(deployment["rods"], deployment["rod_patches"]) if p == g.Patch]
+            self.assertEqual(len(lamellas[0].Deviation), 4 * sum(len(r["deviation"]) for r in joined_rods))
         # Building again replaces the groups.
         core.build_layout(self.doc, self.knet1, s)
         self.assertEqual(len([o for o in parent.Group if o.TypeId == "App::DocumentObjectGroup"]), len(built))

@@ -6,6 +6,7 @@ presses Esc (Blender) or Cancel (FreeCAD) while the answer is on its way: nothin
     python3 -m unittest discover -s tests/python -t tests/python -v
 """
 
+import base64
 import threading
 import unittest
 
@@ -88,3 +89,34 @@ class JoiningNoteTest(unittest.TestCase):
                                                                   "termination": "joining the patches failed: x"}}
         self.assertEqual(plugin.joining_note(failed), " (joining the patches failed: x)")
         self.assertEqual(plugin.joining_note({"seams_joined": False}), "")
+
+
+class JoinedPatchResultsTest(unittest.TestCase):
+    """Each patch's share of the joined whole, shaped as its own result, for drawing per patch."""
+
+    def result(self, joined=True):
+        obj = ("# whole\no north-west-g0\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"
+               "o P2-g0\nv 5 0 0\nv 6 0 0\nv 6 1 0\nf 4 5 6\nf 6 5 4\n")
+        rods = [{"centerline": [[0, 0, 0], [1, 0, 0]], "deviation": [0.1, 0.2]},
+                {"centerline": [[5, 0, 0], [6, 0, 0]], "deviation": [0.3, 0.4]}]
+        return {
+            "deployment": {"seams_joined": joined, "rods": rods, "rod_patches": ["north-west", "P2"],
+                           "joined_with_notches": {"rms": 0.2},
+                           "patches": [{"name": "north-west", "joined_rms": 0.15}, {"name": "P2", "joined_rms": 0.35}]},
+            "views": [{"name": "deployed.obj", "content": base64.b64encode(obj.encode()).decode()}],
+        }
+
+    def test_each_patch_gets_its_objects_renumbered_and_its_joined_rods(self):
+        parts = plugin.joined_patch_results(self.result())
+        self.assertEqual(sorted(parts), ["P2", "north-west"])
+        p2 = parts["P2"]
+        self.assertEqual(p2["deployment"]["rods"], [self.result()["deployment"]["rods"][1]])
+        self.assertEqual(p2["deployment"]["with_notches"], {"rms": 0.35, "max_deviation": 0.4})
+        obj = gs.files_of(p2)["deployed.obj"].decode()
+        self.assertEqual(obj, "o P2\nv 5 0 0\nv 6 0 0\nv 6 1 0\nf 1 2 3\nf 3 2 1\n")
+        west = gs.files_of(parts["north-west"])["deployed.obj"].decode()
+        self.assertIn("v 1 1 0\nf 1 2 3\n", west)
+
+    def test_seams_not_joined_give_nothing(self):
+        self.assertEqual(plugin.joined_patch_results(self.result(joined=False)), {})
+        self.assertEqual(plugin.joined_patch_results({}), {})

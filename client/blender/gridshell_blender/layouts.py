@@ -192,8 +192,12 @@ def show_build(scene, result, source, server, call_seconds, how=""):
     for key in list(parent.keys()):
         del parent[key]
     per_patch = {p.get("name"): p for p in deployment.get("patches", [])}
-    # One colour scale for every patch (as the whole's deviation.ply): blue 0, red at the largest.
-    scale = max((_largest_deviation(r["simulation"]) for r in runs if r.get("simulation")), default=0.0)
+    # The whole joined at its seams, drawn per patch (each patch as it deployed alone when the
+    # seams were not joined), on one colour scale as the whole's deviation.ply: blue 0, red at
+    # the largest.
+    joined = gs.plugin.joined_patch_results(result)
+    drawn = list(joined.values()) or [r["simulation"] for r in runs if r.get("simulation")]
+    scale = max((_largest_deviation(r) for r in drawn), default=0.0)
     built, failed = [], []
     for k, summary in enumerate(summaries):
         name = summary.get("name") or "P%d" % (k + 1)
@@ -203,7 +207,8 @@ def show_build(scene, result, source, server, call_seconds, how=""):
                                         " (%s)" % summary["problem_field"] if summary.get("problem_field") else ""))
             continue
         coll = results.collection(scene, PATCH_PREFIX + name, parent)
-        results.lamella_objects(run["simulation"], coll, prefix="%s lamellas" % name, scale=scale)
+        results.lamella_objects(joined.get(name) or run["simulation"], coll, prefix="%s lamellas" % name,
+                                scale=scale)
         coll["patch"] = name
         numbers = per_patch.get(name, {})
         for key in ("rms_with_notches", "rms_without_notches", "grid_vertices", "max_normal_stress"):

@@ -628,8 +628,12 @@ def show_build(doc, result, source, server, call_seconds, how=""):
     parent = _group(doc, PATCHES, top)
     _remove_tree(doc, parent)
     per_patch = {p.get("name"): p for p in deployment.get("patches", [])}
-    # One colour scale for every patch (as the whole's deviation.ply): blue 0, red at the largest.
-    scale = max((_largest_deviation(r["simulation"]) for r in runs if r.get("simulation")), default=0.0)
+    # The whole joined at its seams, drawn per patch (each patch as it deployed alone when the
+    # seams were not joined), on one colour scale as the whole's deviation.ply: blue 0, red at
+    # the largest.
+    joined = gs.plugin.joined_patch_results(result)
+    drawn = list(joined.values()) or [r["simulation"] for r in runs if r.get("simulation")]
+    scale = max((_largest_deviation(r) for r in drawn), default=0.0)
     built, failed = [], []
     for k, summary in enumerate(summaries):
         name = summary.get("name") or "P%d" % (k + 1)
@@ -639,7 +643,8 @@ def show_build(doc, result, source, server, call_seconds, how=""):
                                         " (%s)" % summary["problem_field"] if summary.get("problem_field") else ""))
             continue
         group = _group(doc, PATCH_PREFIX + name, parent)
-        _lamella_objects(doc, run["simulation"], group, prefix="%s lamellas" % name, scale=scale)
+        _lamella_objects(doc, joined.get(name) or run["simulation"], group, prefix="%s lamellas" % name,
+                         scale=scale)
         numbers = per_patch.get(name, {})
         _set(group, "Patch", "App::PropertyString", name)
         for key, prop in (("rms_with_notches", "RmsWithNotches"), ("rms_without_notches", "RmsWithoutNotches"),

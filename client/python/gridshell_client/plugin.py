@@ -5,6 +5,7 @@ the deployed lamellas of a SimulateResult as a mesh with a deviation per vertex,
 deviation colour map of deviation.ply.
 """
 
+import base64
 import json
 import math
 import os
@@ -12,7 +13,7 @@ import re
 import threading
 import time
 
-from .client import Cancel
+from .client import Cancel, files_of
 from .errors import (
     Cancelled,
     DeadlineExceeded,
@@ -285,6 +286,54 @@ def joining_note(deployment):
                                                    deployment.get("joined_without_notches")) if run]
     why = [w for w in why if w]
     return " (%s)" % "; ".join(why) if why else ""
+
+
+def joined_patch_results(result):
+    """Each patch's lamellas in the whole joined at its seams, shaped as its own SimulateResult
+    would be (its joined rods in ``deployment``, its share of the whole's deployed.obj as the
+    view), by patch name, for drawing the whole per patch. ``{}`` when the seams were not joined
+    (each patch's own result is then what there is to draw)."""
+    deployment = result.get("deployment", {}) if isinstance(result, dict) else {}
+    rods = deployment.get("rods", [])
+    names = deployment.get("rod_patches", [])
+    views = files_of(result)
+    if not deployment.get("seams_joined") or not rods or len(names) != len(rods) or "deployed.obj" not in views:
+        return {}
+    with_notches = "joined_with_notches" in deployment
+    run = deployment.get("joined_with_notches" if with_notches else "joined_without_notches", {})
+    # The whole's deployed.obj names its objects "<patch>-<lamella>" (a patch name may hold "-":
+    # the longest name that prefixes the object wins); face indices count over the whole file.
+    patches = sorted(set(names), key=len, reverse=True)
+    owner, vertices, faces = None, {}, {}
+    where = []  # per vertex of the file: (patch, its index there)
+    for line in views["deployed.obj"].decode("utf-8").splitlines():
+        if line.startswith("o "):
+            object_name = line[2:].strip()
+            owner = next((p for p in patches if object_name.startswith(p + "-")), None)
+        elif line.startswith("v "):
+            vertices.setdefault(owner, []).append(line)
+            where.append((owner, len(vertices[owner])))
+        elif line.startswith("f ") and owner is not None:
+            faces.setdefault(owner, []).append("f " + " ".join(
+                str(where[int(v.split("/")[0]) - 1][1]) for v in line[2:].split()))
+    out = {}
+    for name in patches:
+        own = [rod for rod, patch in zip(rods, names) if patch == name]
+        obj = "\n".join(["o %s" % name] + vertices.get(name, []) + faces.get(name, [])) + "\n"
+        suffix = "" if with_notches else "_without_notches"
+        out[name] = {
+            "deployment": {
+                "rods" + suffix: own,
+                ("with_notches" if with_notches else "without_notches"): {
+                    "rms": next((p.get("joined_rms", 0.0) for p in deployment.get("patches", [])
+                                 if p.get("name") == name), 0.0),
+                    "max_deviation": max((d for rod in own for d in rod.get("deviation", [])), default=0.0),
+                },
+            },
+            "views": [{"name": "deployed%s.obj" % suffix,
+                       "content": base64.b64encode(obj.encode("utf-8")).decode("ascii")}],
+        }
+    return out
 
 
 def read_layout_file(path):
