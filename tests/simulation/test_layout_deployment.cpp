@@ -50,21 +50,6 @@ const TwoPatchVault& vault() {
   return v;
 }
 
-/// The point at arc length fraction t of a polyline.
-Vec3 point_at_fraction(const std::vector<Vec3>& points, double t) {
-  double total = 0;
-  for (size_t k = 0; k + 1 < points.size(); ++k) total += (points[k + 1] - points[k]).norm();
-  double s = std::clamp(t, 0.0, 1.0) * total;
-  for (size_t k = 0; k + 1 < points.size(); ++k) {
-    const double length = (points[k + 1] - points[k]).norm();
-    if (s <= length || k + 2 == points.size())
-      return points[k] +
-             (length > 0 ? std::clamp(s / length, 0.0, 1.0) : 0.0) * (points[k + 1] - points[k]);
-    s -= length;
-  }
-  return points.front();
-}
-
 double distance_to_polyline(const Vec3& p, const std::vector<Vec3>& line) {
   double best = 1e300;
   for (size_t k = 0; k + 1 < line.size(); ++k) {
@@ -270,26 +255,61 @@ TEST(LayoutDeployment, TwoPatchesOfABarrelVaultJoinedAtTheirSeamCloseItInOneEqui
   const double diagonal = bounding_box_size(v.mesh).norm();
   EXPECT_LT(joined.whole.rms, 0.005 * diagonal);
   // Closed: at every bolt the two lamellas' points are their offset apart, up to the bolt's
-  // reported gap, and far closer than 0.1 % of the diagonal.
+  // reported gap, and far closer than 0.1 % of the diagonal. The points are read as seam_gaps
+  // reads them (its closed-form test above), on the joined run's patches.
+  const std::vector<SeamGaps> apart = seam_gaps(joints, {&joined.parts[0], &joined.parts[1]});
+  ASSERT_EQ(apart.size(), 1u);
+  ASSERT_EQ(apart[0].gaps.size(), bolts.size());
   for (size_t k = 0; k < bolts.size(); ++k) {
-    std::array<Vec3, 2> at;
-    for (int e = 0; e < 2; ++e) {
-      const SimulatedLamella* lamella = nullptr;
-      for (const SimulatedLamella& l : joined.parts[bolts[k].part[e]].lamellas)
-        if (l.family == bolts[k].family[e] && l.index == bolts[k].member[e]) lamella = &l;
-      ASSERT_NE(lamella, nullptr);
-      at[e] = point_at_fraction(lamella->centerline, bolts[k].s[e] / lamella->rest_length);
-    }
     EXPECT_LT(joined.bolts[k].gap, 1e-3 * diagonal);
     // The centerline is sampled at rod vertices: the bolt's point between them is off the
     // chord by the lamella's sag over one edge, far below the thickness.
-    EXPECT_NEAR((at[0] - at[1]).norm(), std::abs(bolts[k].offset) * d.lamella_thickness,
+    EXPECT_NEAR(apart[0].gaps[k], std::abs(bolts[k].offset) * d.lamella_thickness,
                 joined.bolts[k].gap + 0.2 * d.lamella_thickness)
         << "bolt " << k;
     EXPECT_GT(joined.bolts[k].force, 0);
     EXPECT_TRUE(std::isfinite(joined.bolts[k].force));
   }
   EXPECT_EQ(joined.force_unit, "Pa*unit^2");
+}
+
+TEST(LayoutDeployment, BadBoltsAndStartsAreRefusedNamingTheirField) {
+  const TwoPatchVault& v = vault();
+  const Design& a = v.designs[0];
+  const Design& b = v.designs[1];
+  const std::vector<DeploymentPart> parts{{&a.grid, a.anchors}, {&b.grid, b.anchors}};
+  const TriangleMesh target = merge_meshes({&a.target.patch.mesh, &b.target.patch.mesh});
+  auto refused = [&](const std::vector<DeploymentPart>& p, const PartBolt& bolt) {
+    try {
+      simulate_joined(p, {bolt}, target, a.lamella_width, a.lamella_thickness);
+    } catch (const InvalidInput& e) {
+      return e.field();
+    }
+    return std::string("accepted");
+  };
+  PartBolt bolt;
+  bolt.part = {0, 1};
+  bolt.member = {0, 0};
+  EXPECT_EQ(refused(parts, bolt), "accepted");
+  PartBolt missing = bolt;
+  missing.member[1] = 99;
+  EXPECT_EQ(refused(parts, missing), "bolts[0]");
+  PartBolt beyond = bolt;
+  beyond.s[0] = 2 * a.grid.g[0].planar_length;
+  EXPECT_EQ(refused(parts, beyond), "bolts[0]");
+  PartBolt no_part = bolt;
+  no_part.part[1] = 2;
+  EXPECT_EQ(refused(parts, no_part), "bolts[0]");
+  // A start that is not this grid's deployment: a lamella short, or a rod of another resolution.
+  DeploymentRun own = simulate_deployment(a.grid, a.anchors, a.target.patch.mesh, a.lamella_width,
+                                          a.lamella_thickness);
+  std::vector<DeploymentPart> started = parts;
+  started[0].start = &own;
+  EXPECT_EQ(refused(started, bolt), "accepted");
+  own.lamellas[1].centerline.pop_back();
+  EXPECT_EQ(refused(started, bolt), "parts[0].start.lamellas[1]");
+  own.lamellas.pop_back();
+  EXPECT_EQ(refused(started, bolt), "parts[0].start");
 }
 
 }  // namespace
