@@ -13,12 +13,20 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <map>
+#include <memory>
 #include <numbers>
 #include <numeric>
+#include <queue>
+#include <set>
 #include <stdexcept>
 
 #include "gridshell/design/layout.h"
 #include "gridshell/foundation/errors.h"
+#include "gridshell/mesh/surface_distance.h"
 
 namespace gridshell {
 namespace {
@@ -29,30 +37,40 @@ namespace SMP = CGAL::Surface_mesh_parameterization;
 
 constexpr double kPi = std::numbers::pi;
 
-/// Checks that the mesh is a disk: one piece, one boundary loop, Euler characteristic 1.
-void check_disk(const TriangleMesh& mesh) {
-  const auto& loops = mesh.topology().boundary_loops;
+/// What the automatic layout can cover: a disk (one boundary loop), a ring or tube (two) or a
+/// closed surface without handles.
+enum class Surface { Disk, Ring, Closed };
+
+const char* surface_name(Surface s) {
+  return s == Surface::Disk ? "disk" : s == Surface::Ring ? "ring" : "closed";
+}
+
+/// Euler characteristic V - E + F of the used vertices.
+long euler_characteristic(const TriangleMesh& mesh) {
   std::vector<char> used(mesh.vertex_count(), 0);
   for (const Face& f : mesh.faces())
     for (int v : f) used[v] = 1;
   const long vertices = std::count(used.begin(), used.end(), 1);
   long boundary_edges = 0;
-  for (const auto& loop : loops) boundary_edges += static_cast<long>(loop.size());
+  for (const auto& loop : mesh.topology().boundary_loops)
+    boundary_edges += static_cast<long>(loop.size());
   const long faces = mesh.face_count();
   const long edges = (3 * faces + boundary_edges) / 2;
-  const long euler = vertices - edges + faces;
-  if (loops.empty())
-    throw Infeasible(
-        "layout",
-        "the surface is closed: automatic layouts cover a surface with one boundary "
-        "and no holes so far; cut it open or give a layout file (docs/multi-patch.md)");
-  if (loops.size() > 1 || euler != 1)
-    throw Infeasible("layout", "the surface has " + std::to_string(loops.size()) +
-                                   " boundary loops and Euler characteristic " +
-                                   std::to_string(euler) +
-                                   " (a disk has 1 and 1): automatic layouts cover a surface with "
-                                   "one boundary and no holes so far; give a layout file "
-                                   "(docs/multi-patch.md)");
+  return vertices - edges + faces;
+}
+
+Surface classify(const TriangleMesh& mesh) {
+  const size_t loops = mesh.topology().boundary_loops.size();
+  const long euler = euler_characteristic(mesh);
+  if (loops == 1 && euler == 1) return Surface::Disk;
+  if (loops == 2 && euler == 0) return Surface::Ring;
+  if (loops == 0 && euler == 2) return Surface::Closed;
+  throw Infeasible("layout", "the surface has " + std::to_string(loops) +
+                                 " boundary loops and Euler characteristic " +
+                                 std::to_string(euler) +
+                                 ": automatic layouts cover a disk (1 loop, 1), a ring or a tube "
+                                 "(2 loops, 0) and a closed surface without handles (0 loops, 2) "
+                                 "in one piece; give a layout file (docs/multi-patch.md)");
 }
 
 /// How much the boundary turns at each vertex of `loop`, seen in plan: on the plane of the
@@ -193,27 +211,233 @@ std::vector<Vec2> square_map(const TriangleMesh& mesh, const std::vector<int>& l
   return uv;
 }
 
+/// A ring cut open into a disk along the shortest edge path between its two boundary loops.
+struct RingCut {
+  TriangleMesh disk;              ///< the input's vertices, then one copy of each path vertex
+  std::vector<int> path;          ///< input vertices from the longer loop (A) to the other (B)
+  double length = 0;              ///< of the path
+  double loop_a = 0, loop_b = 0;  ///< lengths of the two loops
+  int copy(int k) const { return disk.vertex_count() - static_cast<int>(path.size()) + k; }
+};
+
+double loop_length(const TriangleMesh& mesh, const std::vector<int>& loop) {
+  double length = 0;
+  for (size_t i = 0; i < loop.size(); ++i)
+    length += (mesh.vertices()[loop[(i + 1) % loop.size()]] - mesh.vertices()[loop[i]]).norm();
+  return length;
+}
+
+RingCut cut_ring(const TriangleMesh& mesh) {
+  const int n = mesh.vertex_count();
+  RingCut out;
+  std::vector<int> loop_a = mesh.topology().boundary_loops[0],
+                   loop_b = mesh.topology().boundary_loops[1];
+  out.loop_a = loop_length(mesh, loop_a), out.loop_b = loop_length(mesh, loop_b);
+  if (out.loop_b > out.loop_a) std::swap(loop_a, loop_b), std::swap(out.loop_a, out.loop_b);
+  // Faces on each edge, and each vertex's neighbours.
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  std::vector<std::vector<int>> neighbours(n);
+  for (int f = 0; f < mesh.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.faces()[f][k], b = mesh.faces()[f][(k + 1) % 3];
+      edge_faces[{std::min(a, b), std::max(a, b)}].push_back(f);
+      neighbours[a].push_back(b), neighbours[b].push_back(a);
+    }
+  // Dijkstra from every vertex of loop A; the path ends at the nearest vertex of loop B.
+  std::vector<double> distance(n, std::numeric_limits<double>::infinity());
+  std::vector<int> previous(n, -1);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (int v : loop_a) distance[v] = 0, queue.push({0.0, v});
+  std::vector<char> in_b(n, 0);
+  for (int v : loop_b) in_b[v] = 1;
+  int end = -1;
+  while (!queue.empty()) {
+    const auto [d, v] = queue.top();
+    queue.pop();
+    if (d > distance[v]) continue;
+    if (in_b[v]) {
+      end = v;
+      break;
+    }
+    for (int w : neighbours[v]) {
+      const double next = d + (mesh.vertices()[w] - mesh.vertices()[v]).norm();
+      if (next < distance[w]) distance[w] = next, previous[w] = v, queue.push({next, w});
+    }
+  }
+  if (end < 0) throw Infeasible("layout", "the surface's two boundary loops are not connected");
+  for (int v = end; v >= 0; v = previous[v]) out.path.push_back(v);
+  std::reverse(out.path.begin(), out.path.end());
+  out.length = distance[end];
+  // Each path vertex gets a copy, which the faces on one side of the path take: the faces on
+  // the right of the path's edges (where an edge runs backwards) and those reached from them
+  // around the vertex without crossing a path edge.
+  const int m = static_cast<int>(out.path.size());
+  std::set<std::pair<int, int>> path_edges;
+  for (int k = 0; k + 1 < m; ++k)
+    path_edges.insert(
+        {std::min(out.path[k], out.path[k + 1]), std::max(out.path[k], out.path[k + 1])});
+  std::vector<Face> faces = mesh.faces();
+  const auto runs = [&](int f, int a, int b) {
+    for (int k = 0; k < 3; ++k)
+      if (mesh.faces()[f][k] == a && mesh.faces()[f][(k + 1) % 3] == b) return true;
+    return false;
+  };
+  for (int k = 0; k < m; ++k) {
+    const int v = out.path[k];
+    std::vector<int> stack;
+    for (int j : {k - 1, k + 1}) {
+      if (j < 0 || j >= m) continue;
+      const int w = out.path[j];
+      for (int f : edge_faces[{std::min(v, w), std::max(v, w)}])
+        if (runs(f, j > k ? w : v, j > k ? v : w)) stack.push_back(f);
+    }
+    std::set<int> side;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      if (!side.insert(f).second) continue;
+      for (int w : mesh.faces()[f]) {
+        if (w == v) continue;
+        const std::pair<int, int> e{std::min(v, w), std::max(v, w)};
+        if (path_edges.count(e)) continue;
+        for (int g : edge_faces[e])
+          if (g != f) stack.push_back(g);
+      }
+    }
+    for (int f : side)
+      for (int& w : faces[f])
+        if (w == v) w = n + k;
+  }
+  std::vector<Vec3> vertices = mesh.vertices();
+  for (int v : out.path) vertices.push_back(mesh.vertices()[v]);
+  out.disk = TriangleMesh(std::move(vertices), std::move(faces));
+  if (classify(out.disk) != Surface::Disk)
+    throw Infeasible("layout",
+                     "the ring could not be cut open into a disk along the shortest "
+                     "path between its boundary loops");
+  return out;
+}
+
+/// The uv map of a ring cut open, turned so that loop A runs along v = 0 from u = 0 to 1 and
+/// loop B along v = 1: u goes round the ring, v across it.
+std::vector<Vec2> ring_map(const RingCut& cut) {
+  const std::vector<int>& loop = cut.disk.topology().boundary_loops.front();
+  const int m = static_cast<int>(cut.path.size());
+  const std::array<int, 4> ends{cut.path[0], cut.copy(0), cut.path[m - 1], cut.copy(m - 1)};
+  std::array<int, 4> corners{};
+  for (int k = 0; k < 4; ++k) {
+    const auto at = std::find(loop.begin(), loop.end(), ends[k]);
+    if (at == loop.end()) throw std::logic_error("ring_map: a cut end is not on the border");
+    corners[k] = static_cast<int>(at - loop.begin());
+  }
+  std::sort(corners.begin(), corners.end());
+  std::swap(corners[1], corners[3]);  // CGAL walks the border against the loop's order
+  const std::vector<Vec2> uv = square_map(cut.disk, loop, corners);
+  const Vec2 origin = uv[ends[0]], along = uv[ends[1]] - origin;
+  const Vec2 across = ((uv[ends[2]] - origin).norm() < 1.5 ? uv[ends[2]] : uv[ends[3]]) - origin;
+  std::vector<Vec2> out(uv.size());
+  for (size_t v = 0; v < uv.size(); ++v)
+    out[v] = Vec2((uv[v] - origin).dot(along), (uv[v] - origin).dot(across));
+  return out;
+}
+
+/// A closed surface seen from its centre: the area-weighted centroid, the principal axes and
+/// the extents along them. Throws Infeasible unless every face faces away from the centre (the
+/// surface is star-shaped about it, so each ray from it meets the surface once).
+struct CubeFrame {
+  Vec3 centre = Vec3::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  ///< columns, right-handed
+  Vec3 extent = Vec3::Ones();
+};
+
+CubeFrame cube_frame(const TriangleMesh& mesh) {
+  CubeFrame out;
+  double area = 0;
+  for (const Face& f : mesh.faces()) {
+    const Vec3 &a = mesh.vertices()[f[0]], &b = mesh.vertices()[f[1]], &c = mesh.vertices()[f[2]];
+    const double w = 0.5 * (b - a).cross(c - a).norm();
+    out.centre += w * (a + b + c) / 3, area += w;
+  }
+  if (!(area > 0)) throw Infeasible("layout", "the closed surface has no area");
+  out.centre /= area;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : mesh.vertices())
+    covariance += (p - out.centre) * (p - out.centre).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  out.axes.col(0) = eigen.eigenvectors().col(2), out.axes.col(1) = eigen.eigenvectors().col(1);
+  out.axes.col(2) = out.axes.col(0).cross(out.axes.col(1));
+  out.extent = Vec3::Zero();
+  for (const Vec3& p : mesh.vertices())
+    out.extent = out.extent.cwiseMax((out.axes.transpose() * (p - out.centre)).cwiseAbs());
+  int outward = 0, inward = 0;
+  for (const Face& f : mesh.faces()) {
+    const Vec3 &a = mesh.vertices()[f[0]], &b = mesh.vertices()[f[1]], &c = mesh.vertices()[f[2]];
+    const Vec3 normal = (b - a).cross(c - a);
+    const double side = normal.dot((a + b + c) / 3 - out.centre);
+    const double scale = normal.norm() * ((a + b + c) / 3 - out.centre).norm();
+    if (side > 1e-9 * scale)
+      ++outward;
+    else if (side < -1e-9 * scale)
+      ++inward;
+  }
+  if (std::min(outward, inward) > 0 || outward + inward < mesh.face_count())
+    throw Infeasible(
+        "layout", std::to_string(std::min(outward, inward) + mesh.face_count() - outward - inward) +
+                      " faces of the closed surface do not face away from its centre: "
+                      "automatic layouts of a closed surface split it along a cube about its "
+                      "centre and need every ray from there to meet the surface once; cut it "
+                      "open or give a layout file (docs/multi-patch.md)");
+  return out;
+}
+
 }  // namespace
 
-AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options,
-                       const AutoLayoutOptions& options, const Progress& progress) {
-  check_disk(mesh);
-  progress.report("layout: square map", 0);
+namespace {
+
+/// The grids a surface is tried with, fewest patches first, and how each is laid out.
+struct Grids {
+  struct Size {
+    int columns = 0, rows = 0, patches = 0;
+  };
+  std::vector<Size> sizes;
+  std::function<PatchLayout(int columns, int rows)> layout;
+};
+
+/// For each patch count up to `max_patches`, the columns x rows grid whose patches are closest
+/// to square when the grid spans `aspect` (its length along the columns over the rows'), if
+/// they are at most twice as long one way as the other; columns at least `min_columns`.
+std::vector<Grids::Size> grid_sizes(double aspect, int max_patches, int min_columns) {
+  std::vector<Grids::Size> out;
+  for (int n = 1; n <= max_patches; ++n) {
+    Grids::Size best;
+    double best_error = 1e300;
+    for (int columns = min_columns; columns <= n; ++columns) {
+      if (n % columns) continue;
+      const int rows = n / columns;
+      const double error = std::abs(std::log(aspect * rows / columns));
+      if (error < best_error) best_error = error, best = {columns, rows, n};
+    }
+    if (best.patches > 0 && best_error <= std::log(2.0) + 1e-12) out.push_back(best);
+  }
+  return out;
+}
+
+/// A disk: four boundary vertices at the corners of a square, a grid on the square.
+Grids disk_grids(const TriangleMesh& mesh, const AutoLayoutOptions& options, AutoLayout& out) {
   const std::vector<int>& loop = mesh.topology().boundary_loops.front();
   std::array<int, 4> corners = square_corners(mesh, loop);
   // CGAL walks the border against the faces' orientation: corners in the order it meets them,
   // and each at the square's corner it was mapped to.
   std::swap(corners[1], corners[3]);
-  const std::vector<Vec2> uv = square_map(mesh, loop, corners);
-  AutoLayout out;
+  auto uv = std::make_shared<const std::vector<Vec2>>(square_map(mesh, loop, corners));
   const std::array<Vec2, 4> square{Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  out.boundary_corners.assign(4, -1);
   for (int k = 0; k < 4; ++k) {
-    int at = -1;
     for (int c : corners)
-      if ((uv[loop[c]] - square[k]).norm() < 1e-9) at = loop[c];
-    if (at < 0)
+      if (((*uv)[loop[c]] - square[k]).norm() < 1e-9) out.boundary_corners[k] = loop[c];
+    if (out.boundary_corners[k] < 0)
       throw std::logic_error("auto_layout: a corner of the square is not a chosen vertex");
-    out.boundary_corners[k] = at;
   }
   // The square's sides u (corner 0 -> 1, 3 -> 2) and v (1 -> 2, 0 -> 3): their lengths on the
   // surface, averaged over opposite sides, give the patches' best shape.
@@ -226,22 +450,157 @@ AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch
   };
   const double length_u = 0.5 * (arc_between(0, 1) + arc_between(2, 3));
   const double length_v = 0.5 * (arc_between(1, 2) + arc_between(3, 0));
-  const double aspect = length_v > 0 ? length_u / length_v : 1.0;
-  // For each patch count, the grid whose patches are closest to square (in side length).
-  std::vector<std::pair<int, int>> grids;
-  for (int n = 1; n <= options.max_patches; ++n) {
-    std::pair<int, int> best{0, 0};
-    double best_error = 1e300;
-    for (int columns = 1; columns <= n; ++columns) {
-      if (n % columns) continue;
-      const int rows = n / columns;
-      const double error = std::abs(std::log(aspect * rows / columns));
-      if (error < best_error) best_error = error, best = {columns, rows};
-    }
-    // Patches at most twice as long one way as the other.
-    if (best_error <= std::log(2.0) + 1e-12) grids.push_back(best);
-  }
-  if (grids.empty()) grids.push_back({1, 1});
+  Grids grids;
+  grids.sizes = grid_sizes(length_v > 0 ? length_u / length_v : 1.0, options.max_patches, 1);
+  if (grids.sizes.empty()) grids.sizes.push_back({1, 1, 1});
+  const std::vector<int> square_corner = out.boundary_corners;
+  grids.layout = [&mesh, uv, square_corner](int columns, int rows) {
+    PatchLayout layout;
+    for (int j = 0; j <= rows; ++j)
+      for (int i = 0; i <= columns; ++i) {
+        LayoutCorner c;
+        const bool corner = (i == 0 || i == columns) && (j == 0 || j == rows);
+        if (corner) {
+          c.vertex = square_corner[i == 0 ? (j == 0 ? 0 : 3) : (j == 0 ? 1 : 2)];
+        } else {
+          c.point = point_at(mesh, *uv,
+                             Vec2(static_cast<double>(i) / columns, static_cast<double>(j) / rows));
+        }
+        layout.corners.push_back(c);
+      }
+    for (int j = 0; j < rows; ++j)
+      for (int i = 0; i < columns; ++i) {
+        const int a = j * (columns + 1) + i;
+        layout.patches.push_back({"", {a, a + 1, a + columns + 2, a + columns + 1}});
+      }
+    return layout;
+  };
+  return grids;
+}
+
+/// A ring or a tube: cut open between its loops into a disk, mapped onto a square whose two
+/// cut sides are the same points; a grid of columns around the ring (at least 3) and rows
+/// across it, the last column joining the first.
+Grids ring_grids(const TriangleMesh& mesh, const AutoLayoutOptions& options, AutoLayout& out) {
+  auto cut = std::make_shared<const RingCut>(cut_ring(mesh));
+  auto uv = std::make_shared<const std::vector<Vec2>>(ring_map(*cut));
+  const int a = cut->path.front(), b = cut->path.back();
+  out.boundary_corners = {a, a, b, b};
+  for (int v : cut->path) out.cut_path.push_back(mesh.vertices()[v]);
+  const Vec3 &from = mesh.vertices()[a], &to = mesh.vertices()[b];
+  char text[480];
+  std::snprintf(text, sizeof text,
+                "a ring (2 boundary loops, %.6g and %.6g long): cut open for its map along the "
+                "shortest edge path between them (%zu points, %.6g long, from (%.6g, %.6g, %.6g) "
+                "to (%.6g, %.6g, %.6g)); the patches go round it, the first column's seam starts "
+                "at the cut",
+                cut->loop_a, cut->loop_b, cut->path.size(), cut->length, from.x(), from.y(),
+                from.z(), to.x(), to.y(), to.z());
+  out.cut = text;
+  Grids grids;
+  const double across = cut->length > 0 ? cut->length : 1.0;
+  grids.sizes = grid_sizes(0.5 * (cut->loop_a + cut->loop_b) / across, options.max_patches, 3);
+  if (grids.sizes.empty() && options.max_patches >= 3) grids.sizes.push_back({3, 1, 3});
+  grids.layout = [cut, uv, a, b](int columns, int rows) {
+    PatchLayout layout;
+    for (int j = 0; j <= rows; ++j)
+      for (int i = 0; i < columns; ++i) {
+        LayoutCorner c;
+        if (i == 0 && (j == 0 || j == rows)) {
+          c.vertex = j == 0 ? a : b;
+        } else {
+          c.point = point_at(cut->disk, *uv,
+                             Vec2(static_cast<double>(i) / columns, static_cast<double>(j) / rows));
+        }
+        layout.corners.push_back(c);
+      }
+    for (int j = 0; j < rows; ++j)
+      for (int i = 0; i < columns; ++i) {
+        const int next = (i + 1) % columns;
+        layout.patches.push_back({"",
+                                  {j * columns + i, j * columns + next, (j + 1) * columns + next,
+                                   (j + 1) * columns + i}});
+      }
+    return layout;
+  };
+  return grids;
+}
+
+/// A closed surface: split along a cube about its centre (its axes the principal directions,
+/// stretched to the extents), each face of the cube a k x k grid of patches; the corners are
+/// where the rays from the centre through the grid's points (equal angles) meet the surface.
+Grids closed_grids(const TriangleMesh& mesh, const AutoLayoutOptions& options, AutoLayout& out) {
+  const CubeFrame frame = cube_frame(mesh);
+  auto surface = std::make_shared<const SurfaceDistance>(mesh);
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "a closed surface: split along the edges of a cube about its centre (%.6g, "
+                "%.6g, %.6g), its axes the principal directions; 6 faces of k x k patches",
+                frame.centre.x(), frame.centre.y(), frame.centre.z());
+  out.cut = text;
+  Grids grids;
+  for (int k = 1; 6 * k * k <= options.max_patches; ++k) grids.sizes.push_back({k, k, 6 * k * k});
+  grids.layout = [frame, surface, &mesh](int k, int) {
+    PatchLayout layout;
+    std::map<std::array<int, 3>, int> index;
+    const auto corner = [&](std::array<int, 3> at) {
+      const auto found = index.find(at);
+      if (found != index.end()) return found->second;
+      Vec3 direction = Vec3::Zero();
+      for (int axis = 0; axis < 3; ++axis) {
+        const double t = 2.0 * at[axis] / k - 1;
+        direction += std::tan(kPi / 4 * t) * frame.extent[axis] * frame.axes.col(axis);
+      }
+      const std::optional<Vec3> hit = surface->first_hit(frame.centre, direction);
+      if (!hit)
+        throw Infeasible("layout",
+                         "a ray from the closed surface's centre misses it (the "
+                         "mesh has a gap)");
+      LayoutCorner c;
+      c.point = *hit;
+      layout.corners.push_back(c);
+      (void)mesh;
+      return index[at] = static_cast<int>(layout.corners.size()) - 1;
+    };
+    for (int axis = 0; axis < 3; ++axis)
+      for (int sign : {1, -1}) {
+        // On the face whose outward normal is sign * axis, (u, v) with u x v outward.
+        int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        if (sign < 0) std::swap(u, v);
+        for (int j = 0; j < k; ++j)
+          for (int i = 0; i < k; ++i) {
+            std::array<int, 4> quad{};
+            const std::array<std::pair<int, int>, 4> steps{
+                {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}}};
+            for (int q = 0; q < 4; ++q) {
+              std::array<int, 3> at{};
+              at[axis] = sign > 0 ? k : 0;
+              at[u] = steps[q].first, at[v] = steps[q].second;
+              quad[q] = corner(at);
+            }
+            layout.patches.push_back({"", quad});
+          }
+      }
+    return layout;
+  };
+  return grids;
+}
+
+}  // namespace
+
+AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options,
+                       const AutoLayoutOptions& options, const Progress& progress) {
+  const Surface surface = classify(mesh);
+  progress.report("layout: square map", 0);
+  AutoLayout out;
+  out.surface = surface_name(surface);
+  const Grids grids = surface == Surface::Disk   ? disk_grids(mesh, options, out)
+                      : surface == Surface::Ring ? ring_grids(mesh, options, out)
+                                                 : closed_grids(mesh, options, out);
+  if (grids.sizes.empty())
+    throw InvalidInput("max_patches", "a " + out.surface + " needs at least " +
+                                          std::string(surface == Surface::Ring ? "3" : "6") +
+                                          " patches");
   std::vector<PatchLayout> layouts;
   bool chosen = false;
   size_t checked = 0;
@@ -261,13 +620,12 @@ AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch
     }
     trial.seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int patches = trial.columns * trial.rows;
     const bool better =
         !chosen || trial.coverage > out.result.coverage() + 1e-12 ||
-        (trial.coverage > out.result.coverage() - 1e-12 && patches < out.columns * out.rows);
+        (trial.coverage > out.result.coverage() - 1e-12 && trial.patches < out.patches);
     if (better) {
       out.result = std::move(result);
-      out.columns = trial.columns, out.rows = trial.rows;
+      out.columns = trial.columns, out.rows = trial.rows, out.patches = trial.patches;
       chosen = true;
     }
     return trial.coverage >= options.coverage_goal;
@@ -277,34 +635,16 @@ AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch
   // patch). A grid whose bound reaches the goal is checked in full; the first that covers the
   // goal is kept.
   bool reached = false;
-  for (size_t t = 0; t < grids.size() && !reached; ++t) {
-    const auto [columns, rows] = grids[t];
+  for (size_t t = 0; t < grids.sizes.size() && !reached; ++t) {
+    const auto [columns, rows, patches] = grids.sizes[t];
     progress.report("layout: cut " + std::to_string(columns) + " x " + std::to_string(rows),
-                    static_cast<double>(t) / grids.size());
+                    static_cast<double>(t) / grids.sizes.size());
     const auto start = std::chrono::steady_clock::now();
-    PatchLayout layout;
-    for (int j = 0; j <= rows; ++j)
-      for (int i = 0; i <= columns; ++i) {
-        LayoutCorner c;
-        const bool corner = (i == 0 || i == columns) && (j == 0 || j == rows);
-        if (corner) {
-          const int k = i == 0 ? (j == 0 ? 0 : 3) : (j == 0 ? 1 : 2);
-          c.vertex = out.boundary_corners[k];
-        } else {
-          c.point = point_at(mesh, uv,
-                             Vec2(static_cast<double>(i) / columns, static_cast<double>(j) / rows));
-        }
-        layout.corners.push_back(c);
-      }
-    for (int j = 0; j < rows; ++j)
-      for (int i = 0; i < columns; ++i) {
-        const int a = j * (columns + 1) + i;
-        layout.patches.push_back({"", {a, a + 1, a + columns + 2, a + columns + 1}});
-      }
+    PatchLayout layout = grids.layout(columns, rows);
     const LayoutResult cut =
         cut_layout(mesh, layout, patch_options, progress.checker(), LayoutChecks::CutOnly);
     AutoLayoutTrial trial;
-    trial.columns = columns, trial.rows = rows;
+    trial.columns = columns, trial.rows = rows, trial.patches = patches;
     trial.cut_coverage = cut.coverage();
     trial.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     out.trials.push_back(trial);

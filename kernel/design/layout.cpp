@@ -11,6 +11,8 @@
 #include <set>
 #include <sstream>
 
+#include "gridshell/design/cladding.h"
+#include "gridshell/design/distance_map.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/surface_distance.h"
@@ -208,7 +210,7 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
           }
           result.target =
               target_patch_from_cut(std::move(cut), input_corners, patch_options, inner);
-          const TargetPatch& t = *result.target;
+          TargetPatch& t = *result.target;
           // As for a single patch, an eta above eta_max is left where the injectivity bound holds
           // (smooth_until_coverable runs otherwise): only without smoothing does it fail.
           if (!patch_options.smooth && t.smoothing.eta_after > patch_options.coverability.eta_max) {
@@ -225,6 +227,19 @@ LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
                 result.problem = Infeasible(field, msg.str());
                 break;
               }
+          }
+          // A patch is only covered if it can be designed: a feasible planar angle on its
+          // distance maps (the design's, as the automatic corners' search checks it). The maps
+          // stay with the patch for its design.
+          if (!result.problem) {
+            const GeodesicSolver solver(t.patch.mesh, patch_options.geodesic);
+            auto maps = std::make_shared<DistanceMaps>(compute_distance_maps(
+                t.patch, solver, patch_options.auto_corners.maps, inner.checker()));
+            const AlphaRange range = feasible_alpha_range(
+                *maps, side_lengths(t.patch), patch_options.auto_corners.cladding, inner.checker());
+            result.alpha_range = std::array<double, 2>{range.min, range.max};
+            t.maps = std::move(maps);
+            t.maps_options = patch_options.auto_corners.maps;
           }
         } catch (const Cancelled&) {
           throw;

@@ -76,6 +76,26 @@ SurfacePoint SurfaceDistance::closest(const Vec3& point) const {
   return result;
 }
 
+std::optional<Vec3> SurfaceDistance::first_hit(const Vec3& origin, const Vec3& direction) const {
+  const Kernel::Ray_3 ray(to_point(origin),
+                          Kernel::Vector_3(direction.x(), direction.y(), direction.z()));
+  const auto hit = impl_->tree.first_intersection(ray);
+  if (!hit) return std::nullopt;
+  // A point, or a segment where the ray runs within a face: its end nearest the origin.
+  Point at;
+  if (const Point* p = boost::get<Point>(&hit->first)) {
+    at = *p;
+  } else if (const Kernel::Segment_3* s = boost::get<Kernel::Segment_3>(&hit->first)) {
+    at = CGAL::squared_distance(s->source(), ray.source()) <=
+                 CGAL::squared_distance(s->target(), ray.source())
+             ? s->source()
+             : s->target();
+  } else {
+    return std::nullopt;
+  }
+  return Vec3(at.x(), at.y(), at.z());
+}
+
 Vec3 SurfaceDistance::normal_at_closest(const Vec3& point) const {
   const SurfacePoint p = closest(point);
   const Face& f = impl_->mesh.faces()[p.face];

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Automatic layouts (kernel/design/auto_layout.cpp) against closed forms: a flat disk is covered
 // by the polygon of the layout's boundary corners (a regular 12-gon for 3 x 3 patches, the first
-// grid to reach 95 %), a four-sided surface by one patch, and surfaces that are not disks are
-// refused saying why.
+// grid to reach 95 %), a four-sided surface by one patch, an annulus by radial patches round it,
+// a closed sphere by the six faces of a cube, and surfaces it cannot lay out are refused saying
+// why.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -108,20 +109,158 @@ TEST(AutoLayout, AFourSidedSurfaceIsOnePatchAtItsCorners) {
   EXPECT_EQ(corners, (std::vector<int>{0, n, n * (n + 1), n * (n + 1) + n}));
 }
 
-TEST(AutoLayout, SurfacesThatAreNotDisksAreRefusedSayingWhy) {
+/// Signed area of a polygon in the plane z = 0.
+double plane_area(const std::vector<Vec3>& polygon) {
+  double twice = 0;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec3 &a = polygon[i], &b = polygon[(i + 1) % polygon.size()];
+    twice += a.x() * b.y() - a.y() * b.x();
+  }
+  return 0.5 * twice;
+}
+
+TEST(AutoLayout, AnAnnulusIsCutOpenAndCoveredByRadialPatchesRoundIt) {
+  // Flat annulus 5 <= r <= 10, 8 rings of 96 sectors. Cut open along a radial edge path, it is
+  // laid out in columns round the ring: the seams are radial (a column's outer and inner corners
+  // at the same polar angle), the inner sides follow the hole and the outer ones are chords, so
+  // the patches cover the polygon of the outer corners minus the hole. 14 columns are the first
+  // to reach 95 % (closed form for corners on the circle: 1 - (1 - 14 sin(2 pi / 14) / 2 pi) /
+  // (1 - 1/4) = 95.6 %).
+  const int sectors = 96;
+  const TriangleMesh mesh = testing::annulus(5, 10, 8, sectors);
+  const AutoLayout a = auto_layout(mesh);
+  EXPECT_EQ(a.surface, "ring");
+  EXPECT_EQ(a.columns, 14);
+  EXPECT_EQ(a.rows, 1);
+  EXPECT_EQ(a.patches, 14);
+  ASSERT_EQ(a.result.patches.size(), 14u);
+  for (const LayoutPatch& p : a.result.patches) EXPECT_FALSE(p.problem) << p.name;
+  // The cut: the shortest edge path from the outer loop to the inner one is one radial line.
+  ASSERT_GE(a.cut_path.size(), 2u);
+  EXPECT_NEAR(a.cut_path.front().norm(), 10, 1e-12);
+  EXPECT_NEAR(a.cut_path.back().norm(), 5, 1e-12);
+  double cut_length = 0;
+  for (size_t k = 1; k < a.cut_path.size(); ++k)
+    cut_length += (a.cut_path[k] - a.cut_path[k - 1]).norm();
+  EXPECT_NEAR(cut_length, 5, 1e-12);
+  EXPECT_NE(a.cut.find("cut open"), std::string::npos) << a.cut;
+  // Corners: column i's outer (row 0) and inner (row 1) corner at one polar angle, the columns
+  // going once round.
+  ASSERT_EQ(a.result.corners.size(), 28u);
+  std::vector<Vec3> outer;
+  for (int i = 0; i < 14; ++i) {
+    const Vec3 &o = a.result.corners[i], &in = a.result.corners[14 + i];
+    EXPECT_NEAR(std::atan2(o.y(), o.x()), std::atan2(in.y(), in.x()), 1e-9) << "column " << i;
+    outer.push_back(o);
+  }
+  // Every side between two columns is a shared seam, every other side lies on a loop.
+  int shared = 0;
+  for (const LayoutSeam& seam : a.result.seams) {
+    if (!seam.shared()) continue;
+    ++shared;
+    EXPECT_LE(seam.mismatch, 1e-9);
+  }
+  EXPECT_EQ(shared, 14);
+  // Covered: the outer corners' polygon minus the hole (the inner 96-gon), to rounding.
+  const double hole = 25 * sectors / 2.0 * std::sin(2 * kPi / sectors);
+  EXPECT_NEAR(a.result.covered_area, std::abs(plane_area(outer)) - hole,
+              1e-6 * a.result.input_area);
+  EXPECT_GE(a.result.coverage(), 0.95);
+  // Fewer columns were only cut: their bounds missed the goal.
+  for (const AutoLayoutTrial& t : a.trials) {
+    EXPECT_GE(t.columns, 3);
+    if (t.columns < 14) {
+      EXPECT_LT(t.cut_coverage, 0.95) << t.columns;
+    }
+  }
+}
+
+TEST(AutoLayout, AClosedSphereIsSplitAlongACubeIntoSixPatchesCoveringAll) {
+  // The cube's edges seen from the centre are great circle arcs on a sphere, the shortest
+  // geodesics between its corners: the six patches cover the whole sphere, each a geodesic
+  // quadrilateral with angles 120 degrees and area 4 pi R^2 / 6 (Gauss-Bonnet), on this
+  // polyhedron (edges about 1.5) to 3 degrees and 2 %; the three angles at a corner inside a
+  // face sum to 2 pi exactly.
+  const double radius = 10;
+  const TriangleMesh sphere = testing::icosphere(3, radius);
+  const AutoLayout a = auto_layout(sphere);
+  EXPECT_EQ(a.surface, "closed");
+  EXPECT_EQ(a.patches, 6);
+  ASSERT_EQ(a.result.patches.size(), 6u);
+  for (const LayoutPatch& p : a.result.patches) {
+    ASSERT_FALSE(p.problem) << p.name << ": " << p.problem->what();
+    ASSERT_TRUE(p.target);
+    for (double angle : p.target->corner_angles) EXPECT_NEAR(angle, 2 * kPi / 3, 0.05) << p.name;
+    EXPECT_NEAR(p.target->area, a.result.input_area / 6, 0.02 * a.result.input_area / 6);
+  }
+  std::vector<double> around(a.result.corners.size(), 0.0);
+  for (size_t j = 0; j < a.result.patches.size(); ++j)
+    for (int k = 0; k < 4; ++k)
+      around[a.result.layout.patches[j].corners[k]] += a.result.patches[j].target->corner_angles[k];
+  for (double sum : around) EXPECT_NEAR(sum, 2 * kPi, 1e-9);
+  EXPECT_NEAR(a.result.coverage(), 1.0, 1e-9);
+  EXPECT_NEAR(a.result.input_area, 4 * kPi * radius * radius, 0.01 * a.result.input_area);
+  ASSERT_EQ(a.result.corners.size(), 8u);
+  for (const Vec3& c : a.result.corners) EXPECT_NEAR(c.norm(), radius, 0.02 * radius);
+  ASSERT_EQ(a.result.seams.size(), 12u);
+  for (const LayoutSeam& seam : a.result.seams) {
+    EXPECT_TRUE(seam.shared());
+    EXPECT_LE(seam.mismatch, 1e-9);
+  }
+  EXPECT_NE(a.cut.find("cube"), std::string::npos) << a.cut;
+}
+
+/// The infeasibility message auto_layout gives for `mesh` ("" if it lays it out).
+std::string refusal(const TriangleMesh& mesh) {
   try {
-    auto_layout(testing::annulus(5, 10, 4, 48));
-    FAIL() << "an annulus was laid out";
+    auto_layout(mesh);
   } catch (const Infeasible& e) {
     EXPECT_EQ(e.field(), "layout");
-    EXPECT_NE(std::string(e.message()).find("2 boundary loops"), std::string::npos) << e.what();
+    return e.message();
   }
-  try {
-    auto_layout(testing::icosphere(2, 10));
-    FAIL() << "a sphere was laid out";
-  } catch (const Infeasible& e) {
-    EXPECT_NE(std::string(e.message()).find("closed"), std::string::npos) << e.what();
+  return "";
+}
+
+TEST(AutoLayout, SurfacesItCannotLayOutAreRefusedSayingWhy) {
+  // A square with two holes: three boundary loops.
+  const TriangleMesh square =
+      testing::grid_mesh(24, 24, [](double u, double v) { return Vec3(10 * u, 10 * v, 0); });
+  std::vector<Face> faces;
+  for (const Face& f : square.faces()) {
+    const Vec3 c =
+        (square.vertices()[f[0]] + square.vertices()[f[1]] + square.vertices()[f[2]]) / 3;
+    const bool hole =
+        c.y() > 4 && c.y() < 6 && ((c.x() > 2 && c.x() < 4) || (c.x() > 6 && c.x() < 8));
+    if (!hole) faces.push_back(f);
   }
+  const std::string holes = refusal(TriangleMesh(square.vertices(), faces));
+  EXPECT_NE(holes.find("3 boundary loops"), std::string::npos) << holes;
+  // A torus: closed with a handle.
+  const int nu = 48, nv = 24;
+  std::vector<Vec3> vertices;
+  std::vector<Face> torus_faces;
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
+      vertices.push_back(
+          Vec3((3 + std::cos(v)) * std::cos(u), (3 + std::cos(v)) * std::sin(u), std::sin(v)));
+    }
+  const auto id = [&](int i, int j) { return (j % nv) * nu + (i % nu); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      torus_faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      torus_faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  const std::string torus = refusal(TriangleMesh(vertices, torus_faces));
+  EXPECT_NE(torus.find("0 boundary loops and Euler characteristic 0"), std::string::npos) << torus;
+  // A sphere whose cap above z = 5 is pressed in (mirrored at z = 5): closed, but the crater's
+  // faces face its centre, so rays from there would meet the surface three times.
+  const TriangleMesh sphere = testing::icosphere(3, 10);
+  std::vector<Vec3> dented = sphere.vertices();
+  for (Vec3& p : dented)
+    if (p.z() > 5) p.z() = 10 - p.z();
+  const std::string crater = refusal(TriangleMesh(dented, sphere.faces()));
+  EXPECT_NE(crater.find("do not face away from its centre"), std::string::npos) << crater;
 }
 
 }  // namespace

@@ -53,8 +53,11 @@ struct LayoutPatch {
   std::string name;
   std::optional<TargetPatch> target;  ///< the cut (and smoothed) patch, when it could be cut
   /// Its first problem: an error from the patch stage (the field within the patch: "corners[1]")
-  /// or eta above eta_max. Empty when the patch meets the checks.
+  /// or eta above eta_max, or no feasible planar angle. Empty when the patch meets the checks.
   std::optional<Error> problem;
+  /// The feasible planar angle range (radians) on the patch's distance maps, which stay in
+  /// `target` for its design (full checks of a patch that passes the others).
+  std::optional<std::array<double, 2>> alpha_range;
 };
 
 struct LayoutResult {
@@ -73,9 +76,12 @@ struct LayoutResult {
 /// "layout.corners[i]", "layout.patches[j].corners[k]", ...: indices out of range, a patch with
 /// a corner twice, a name taken twice, a side used by three patches) and Infeasible
 /// ("layout.patches[j]") when two patches lie on the same side of a seam (they overlap). A patch
-/// that cannot be cut or misses a criterion is reported in its LayoutPatch, not thrown.
+/// that cannot be cut or misses a criterion is reported in its LayoutPatch, not thrown. The
+/// criteria: corners, coverability after smoothing, sides that stay shortest geodesics, and a
+/// feasible planar angle ᾱ on the patch's distance maps (options.auto_corners.maps and
+/// .cladding: patch_options() sets the design's), which are kept for its design.
 /// `checks` CutOnly: each patch is cut and its corners checked for convexity only (no
-/// coverability, smoothing or side check): its coverage is an upper bound of the full checks'.
+/// coverability, smoothing, side or ᾱ check): its coverage is an upper bound of the full checks'.
 enum class LayoutChecks { Full, CutOnly };
 LayoutResult cut_layout(const TriangleMesh& mesh, const PatchLayout& layout,
                         const TargetPatchOptions& options = {}, const Progress& progress = {},
@@ -140,6 +146,7 @@ struct AutoLayoutOptions {
 /// One layout tried: a columns x rows grid of patches.
 struct AutoLayoutTrial {
   int columns = 0, rows = 0;
+  int patches = 0;  ///< columns x rows, 6 x columns x rows on a closed surface
   /// Of the patches cut alone (LayoutChecks::CutOnly): an upper bound of `coverage`.
   double cut_coverage = 0;
   bool checked = false;  ///< its patches were checked in full (coverage below is theirs)
@@ -151,9 +158,17 @@ struct AutoLayoutTrial {
 
 struct AutoLayout {
   LayoutResult result;  ///< the layout chosen, cut and checked (result.layout is the layout)
+  /// "disk", "ring" (two boundary loops: a ring, a tube, a half-tunnel with a hole) or
+  /// "closed" (without handles).
+  std::string surface;
   int columns = 0, rows = 0;
-  /// The input's boundary vertices at the four corners of the parameter square, in order.
-  std::array<int, 4> boundary_corners{};
+  int patches = 0;  ///< of the layout chosen
+  /// The input's vertices at the four corners of the parameter square, in order (a ring: the
+  /// cut's ends, each twice; none on a closed surface).
+  std::vector<int> boundary_corners;
+  /// Where the surface was cut open or split to be mapped (plain text), "" for a disk.
+  std::string cut;
+  std::vector<Vec3> cut_path;           ///< a ring's cut, from its longer loop to the other
   std::vector<AutoLayoutTrial> trials;  ///< in the order tried
 };
 
@@ -172,9 +187,18 @@ struct AutoLayout {
 /// upper bound of their coverage), and one whose bound reaches options.coverage_goal is checked
 /// in full; the first that covers the goal is chosen. If none does, those with the largest bounds
 /// are checked until no bound left is above the best coverage found, which is chosen (the fewer
-/// patches on a tie). Throws
-/// Infeasible (field "layout") for a surface that is not a disk: closed, with holes or in
-/// several pieces.
+/// patches on a tie).
+///
+/// A ring (two boundary loops, Euler characteristic 0: an annulus, a tube, a vault with an
+/// opening) is cut open along the shortest edge path between its loops into a disk, mapped onto
+/// the square with the cut's two sides at u = 0 and u = 1 (the same points, by arc length), and
+/// laid out in at least 3 columns round it and rows across it, the last column joining the first.
+/// A closed surface without handles is split along a cube about its area centroid (axes the
+/// principal directions, stretched to the extents): 6 k x k patches whose corners are where the
+/// rays from the centroid through the cube faces' grid points (at equal angles) meet the
+/// surface; it must be star-shaped about its centroid (every face facing away from it).
+/// Throws Infeasible (field "layout") for any other surface (more holes, handles, several
+/// pieces), and for a closed surface that is not star-shaped, saying why.
 AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options = {},
                        const AutoLayoutOptions& options = {}, const Progress& progress = {});
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 
 #include "gridshell/mesh/mesh.h"
 #include "gridshell/mesh/surface_point.h"
@@ -27,6 +28,8 @@ class SurfaceDistance {
   /// Unit surface normal at the closest point: area-weighted vertex normals interpolated with
   /// the barycentric weights.
   Vec3 normal_at_closest(const Vec3& point) const;
+  /// Where the ray from `origin` along `direction` first meets the surface (none if it misses).
+  std::optional<Vec3> first_hit(const Vec3& origin, const Vec3& direction) const;
 
  private:
   struct Impl;
