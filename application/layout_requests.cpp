@@ -108,11 +108,17 @@ RequestedLayout cut_requested_layout(const v1::Layout& layout,
   v1::LayoutReport::Automatic& report = out.automatic.emplace();
   report.set_columns(found.columns);
   report.set_rows(found.rows);
+  report.set_patches(found.patches);
+  report.set_surface(found.surface);
+  report.set_cut(found.cut);
+  for (const Vec3& p : found.cut_path)
+    for (int k = 0; k < 3; ++k) report.add_cut_path(p[k]);
   for (int v : found.boundary_corners) report.add_boundary_corners(sent_vertex(load, v));
   for (const AutoLayoutTrial& t : found.trials) {
     v1::LayoutReport::Automatic::Trial& m = *report.add_trials();
     m.set_columns(t.columns);
     m.set_rows(t.rows);
+    m.set_patches(t.patches);
     m.set_coverage(t.coverage);
     m.set_cut_coverage(t.cut_coverage);
     m.set_checked(t.checked);

@@ -51,6 +51,8 @@ double max_normal_stress(const DeploymentRun& run) {
 struct JoinedWhole {
   std::vector<int> part_of;  ///< per patch: its part in the joined runs, -1 if none
   int anchors = 0;           ///< the anchors that hold the whole
+  /// When no anchor lies on an outer side (a closed surface): the patch the whole stands on.
+  std::string held_by;
   std::optional<JoinedDeploymentRun> without_notches, with_notches;
   std::string problem;  ///< why joining failed ("" if it did not)
 };
@@ -76,6 +78,24 @@ JoinedWhole join_patches(const LayoutResult& cut, const std::vector<std::optiona
     out.anchors += static_cast<int>(parts.back().anchors.size());
     targets.push_back(&designs[j]->target.patch.mesh);
     if (!first) first = &*designs[j];
+  }
+  // A closed surface has no outer side, so every patch anchor lies on a seam: the whole stands on
+  // its lowest patch (z up, as the kit's ground plane), held at all of that patch's anchors.
+  if (out.anchors == 0 && !parts.empty()) {
+    int lowest = -1;
+    double lowest_z = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < cut.patches.size(); ++j) {
+      if (out.part_of[j] < 0 || jobs[j]->anchors.empty()) continue;
+      double z = 0;
+      for (const Anchor& a : jobs[j]->anchors) z += a.position.z();
+      z /= static_cast<double>(jobs[j]->anchors.size());
+      if (z < lowest_z) lowest_z = z, lowest = static_cast<int>(j);
+    }
+    if (lowest >= 0) {
+      parts[out.part_of[lowest]].anchors = jobs[lowest]->anchors;
+      out.anchors = static_cast<int>(jobs[lowest]->anchors.size());
+      out.held_by = cut.patches[lowest].name;
+    }
   }
   const std::vector<PartBolt> bolts = seam_bolts(joints, out.part_of);
   if (bolts.empty() || !first) return out;
@@ -336,6 +356,7 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
     field->set_termination(w.termination);
     field->set_gradient_norm(w.gradient_norm);
     field->set_anchors(joined.anchors);
+    field->set_held_by(joined.held_by);
     field->set_max_normal_stress(max_normal_stress(w));
     if (simulation.bending_strength() > 0)
       field->set_bending_utilization(field->max_normal_stress() / simulation.bending_strength());

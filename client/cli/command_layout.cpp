@@ -81,19 +81,22 @@ void write_layout_as_given(v1::LayoutReport& report, const InputMesh& input) {
 void print_automatic_layout(const v1::LayoutReport& report) {
   if (!report.has_automatic()) return;
   const v1::LayoutReport::Automatic& a = report.automatic();
+  // A closed surface's grid is per face of its cube: 6 x columns x rows patches.
+  const char* per = a.surface() == "closed" ? "6 x " : "";
   std::string tried;
   for (const auto& t : a.trials()) {
     char buffer[96];
     if (t.checked())
-      std::snprintf(buffer, sizeof buffer, "%s%d x %d %.1f %%", tried.empty() ? "" : ", ",
+      std::snprintf(buffer, sizeof buffer, "%s%s%d x %d %.1f %%", tried.empty() ? "" : ", ", per,
                     t.columns(), t.rows(), 100 * t.coverage());
     else  // cut only: its bound missed the goal
-      std::snprintf(buffer, sizeof buffer, "%s%d x %d <= %.1f %%", tried.empty() ? "" : ", ",
+      std::snprintf(buffer, sizeof buffer, "%s%s%d x %d <= %.1f %%", tried.empty() ? "" : ", ", per,
                     t.columns(), t.rows(), 100 * t.cut_coverage());
     tried += buffer;
   }
-  std::printf("  automatic       %d x %d patches in %.2f s; tried %s\n", a.columns(), a.rows(),
-              a.seconds(), tried.c_str());
+  std::printf("  automatic       %s%d x %d patches in %.2f s; tried %s\n", per, a.columns(),
+              a.rows(), a.seconds(), tried.c_str());
+  if (!a.cut().empty()) std::printf("  surface         %s\n", a.cut().c_str());
 }
 
 const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport& r) {

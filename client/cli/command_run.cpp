@@ -143,8 +143,12 @@ int run_layout(const RunArguments& args) {
   for (const auto& [joined, what] : {std::pair{&d.joined_without_notches(), "RMS1"},
                                      std::pair{&d.joined_with_notches(), "RMS2"}})
     if (joined->iterations() > 0)
-      std::printf("  whole joined    %s, %d iterations, %d anchors, %.2f s%s\n", what,
-                  joined->iterations(), joined->anchors(), joined->seconds(),
+      std::printf("  whole joined    %s, %d iterations, %d anchors%s, %.2f s%s\n", what,
+                  joined->iterations(), joined->anchors(),
+                  joined->held_by().empty()
+                      ? ""
+                      : (" (closed: it stands on " + joined->held_by() + ")").c_str(),
+                  joined->seconds(),
                   joined->converged() ? "" : (", NOT converged: " + joined->termination()).c_str());
   if (d.has_rms_without_notches())
     std::printf("  whole RMS1      %.4g (%.3f %% of the diagonal %.4g), no notches\n",

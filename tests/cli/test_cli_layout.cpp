@@ -8,8 +8,10 @@
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <sstream>
 
+#include "gridshell/mesh/mesh_io.h"
 #include "support.h"
 
 namespace gridshell {
@@ -363,6 +365,76 @@ TEST(CliLayout, RunWithAnAutomaticLayoutBuildsEveryPatchOfASharedMesh) {
   for (size_t k = 0; k < design["seams"].size(); ++k)
     EXPECT_EQ(deployment["seams"][k]["gaps"].size(), design["seams"][k]["joints"].size());
   EXPECT_GT(deployment["rms_with_notches"].get<double>(), 0);
+}
+
+TEST(CliLayout, RunWithAnAutomaticLayoutBuildsAClosedSphereOnItsLowestPatchAndATube) {
+  const std::string dir = testing::temp_dir();
+  // A closed sphere (R = 10, 642 vertices): six patches of a cube, joined at all twelve seams;
+  // no side is outer, so the whole stands on its lowest patch, held at that patch's anchors.
+  save_obj(testing::icosphere(3, 10), dir + "/sphere.obj");
+  auto r = run_cli("run '" + dir + "/sphere.obj' --layout auto --notches on --quiet --out '" + dir +
+                   "/sphere'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json layout = json::parse(testing::read_text(dir + "/sphere/layout.json"));
+  EXPECT_EQ(layout["automatic"]["surface"], "closed");
+  EXPECT_EQ(layout["automatic"]["patches"], 6);
+  EXPECT_NE(layout["automatic"]["cut"].get<std::string>().find("cube"), std::string::npos);
+  EXPECT_NEAR(layout["coverage"].get<double>(), 1.0, 1e-9);
+  json deployment = json::parse(testing::read_text(dir + "/sphere/deployment.json"));
+  EXPECT_TRUE(deployment["converged"].get<bool>());
+  EXPECT_TRUE(deployment["seams_joined"].get<bool>());
+  // The patch it stands on: the one whose corners lie lowest.
+  const json& corners = layout["layout"]["corners"];
+  std::string lowest;
+  double lowest_z = 1e300;
+  for (const json& patch : layout["layout"]["patches"]) {
+    double z = 0;
+    for (const json& c : patch["corners"]) z += corners[c.get<int>()]["point"][2].get<double>();
+    if (z < lowest_z) lowest_z = z, lowest = patch["name"];
+  }
+  const json& joined = deployment["joined_with_notches"];
+  EXPECT_EQ(joined["held_by"], lowest);
+  EXPECT_GT(joined["anchors"].get<int>(), 0);
+  const double diagonal = deployment["diagonal"].get<double>();
+  EXPECT_LE(deployment["rms_with_notches"].get<double>(), 0.005 * diagonal);
+  EXPECT_LE(deployment["max_seam_gap"].get<double>(), 0.001 * diagonal);
+  EXPECT_NE(r.out.find("stands on " + lowest), std::string::npos) << r.out;
+
+  // A tube (radius 5, 20 long, open at both ends): a ring cut open along a straight line, three
+  // patches round it, developable, so it is covered whole; held at its two rims.
+  const int around = 64, along = 24;
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  for (int j = 0; j <= along; ++j)
+    for (int i = 0; i < around; ++i) {
+      const double phi = 2 * std::numbers::pi * i / around;
+      vertices.emplace_back(5 * std::cos(phi), 5 * std::sin(phi), 20.0 * j / along);
+    }
+  const auto at = [&](int i, int j) { return j * around + i % around; };
+  for (int j = 0; j < along; ++j)
+    for (int i = 0; i < around; ++i) {
+      faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  save_obj(TriangleMesh(vertices, faces), dir + "/tube.obj");
+  r = run_cli("run '" + dir + "/tube.obj' --layout auto --notches on --quiet --out '" + dir +
+              "/tube'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  layout = json::parse(testing::read_text(dir + "/tube/layout.json"));
+  EXPECT_EQ(layout["automatic"]["surface"], "ring");
+  EXPECT_EQ(layout["automatic"]["patches"], 3);
+  EXPECT_NEAR(layout["coverage"].get<double>(), 1.0, 1e-6);
+  // The cut runs straight up the tube, 20 long.
+  const json& path = layout["automatic"]["cut_path"];
+  ASSERT_GE(path.size(), 6u);
+  EXPECT_NEAR(path[2].get<double>(), 0, 1e-12);
+  EXPECT_NEAR(path[path.size() - 1].get<double>(), 20, 1e-12);
+  deployment = json::parse(testing::read_text(dir + "/tube/deployment.json"));
+  EXPECT_TRUE(deployment["converged"].get<bool>());
+  EXPECT_EQ(deployment["joined_with_notches"].value("held_by", ""), "");
+  EXPECT_LE(deployment["rms_with_notches"].get<double>(),
+            0.005 * deployment["diagonal"].get<double>());
+  EXPECT_LE(deployment["max_seam_gap"].get<double>(), 0.001 * deployment["diagonal"].get<double>());
 }
 
 }  // namespace
