@@ -76,6 +76,18 @@ if __name__ == "__main__":
     unittest.main()
 
 
+class AutomaticGridTest(unittest.TestCase):
+    """An automatic layout's grid, as both plugins show it, says what kind of surface it covers."""
+
+    def test_a_disk_a_ring_and_a_closed_surface(self):
+        self.assertEqual(plugin.automatic_grid({"columns": 3, "rows": 2}), "3 x 2")
+        self.assertEqual(plugin.automatic_grid({"columns": 3, "rows": 2, "surface": "disk"}), "3 x 2")
+        self.assertEqual(plugin.automatic_grid({"columns": 14, "rows": 1, "surface": "ring"}),
+                         "14 x 1 round the ring")
+        self.assertEqual(plugin.automatic_grid({"columns": 2, "rows": 2, "surface": "closed"}),
+                         "6 faces x 2 x 2")
+
+
 class JoiningNoteTest(unittest.TestCase):
     """The status line's note on a layout run's joining, as both plugins print it."""
 

@@ -523,6 +523,16 @@ test('layout: the summary, the patches\' table, what is not covered and the tria
                                            'outside the patches: 10 (5.00 %) — between the outer patch sides and the boundary']);
   assert.deepEqual(lay.trialRows(r), [['1 × 1', '1', '43.8 %', '0', '0.005'], ['2 × 1', '2', '75.0 %', '1: P2: corner angle', '0.011']]);
   assert.deepEqual(lay.trialRows({ ...r, automatic: undefined }), []); // a layout file: no trials
+  // A ring is laid out round it, a closed surface on the six faces of a cube; a trial only cut
+  // shows the bound of its coverage.
+  const closed = { ...r, automatic: { ...r.automatic, surface: 'closed', columns: 1, rows: 1, patches: 6,
+                                        cut: 'a closed surface: split along the edges of a cube',
+                                        trials: [{ columns: 1, rows: 1, patches: 6, coverage: 1, checked: true, failing: 0, seconds: 0.07 },
+                                                 { columns: 2, rows: 2, patches: 24, coverage: 0, cut_coverage: 0.5, checked: false, failing: 0, seconds: 0.1 }] } };
+  assert.equal(lay.layoutSummary(closed).split('\n').slice(2).join('\n'),
+               'automatic: 6 faces × 1 × 1 grid, 2 trials in 0.25 s\nsurface: a closed surface: split along the edges of a cube');
+  assert.deepEqual(lay.trialRows(closed), [['6 faces × 1 × 1', '6', '100.0 %', '0', '0.070'], ['6 faces × 2 × 2', '24', '≤ 50.0 %', '0', '0.100']]);
+  assert.equal(lay.automaticGrid('ring', 14, 1), '14 × 1 round the ring');
   assert.equal(lay.percent(0.9537766652778353), '95.4 %');
   assert.equal(lay.ofDiagonal(0.0337, 50), '0.0337 (0.067 % of the diagonal)');
   assert.equal(lay.ofDiagonal(undefined, 50), '—');

@@ -148,7 +148,9 @@ def show_layout(scene, result, source, server, call_seconds, how=""):
     coll["max_seam_mismatch"] = max((s.get("mismatch", 0.0) for s in seams), default=0.0)
     automatic = report.get("automatic")
     if automatic:
-        coll["automatic_grid"] = "%d x %d" % (automatic.get("columns", 0), automatic.get("rows", 0))
+        coll["automatic_grid"] = gs.plugin.automatic_grid(automatic)
+        coll["automatic_surface"] = automatic.get("surface", "disk")
+        coll["automatic_cut"] = automatic.get("cut", "")
         coll["automatic_trials"] = len(automatic.get("trials", []))
     coll["layout_call_seconds"] = call_seconds
 
@@ -159,6 +161,8 @@ def show_layout(scene, result, source, server, call_seconds, how=""):
     grid = " (%s)" % coll["automatic_grid"] if automatic else ""
     lines = [("INFO", "gridshell: layout of %s: %s%s, %s of the area covered (%.6g of %.6g)" % (
         source, _patches(len(summaries)), grid, _percent(coll["coverage"]), coll["covered_area"], coll["input_area"]))]
+    if automatic and automatic.get("cut"):
+        lines.append(("INFO", "gridshell: surface: %s" % automatic["cut"]))
     for u in uncovered:
         lines.append(("INFO", "gridshell: not covered: %s, area %.6g: %s" % (
             u.get("where", ""), u.get("area", 0.0), u.get("reason", ""))))

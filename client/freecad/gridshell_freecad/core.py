@@ -584,8 +584,9 @@ def show_layout(doc, result, source, server, call_seconds, how="", report_view=T
         "%s: %s" % (x.get("name", ""), x.get("problem", "")) for x in failing])
     _set(group, "Seams", "App::PropertyInteger", len(seams))
     _set(group, "MaxSeamMismatch", "App::PropertyFloat", max((x.get("mismatch", 0.0) for x in seams), default=0.0))
-    _set(group, "AutomaticGrid", "App::PropertyString",
-         "%d x %d" % (automatic.get("columns", 0), automatic.get("rows", 0)) if automatic else "")
+    _set(group, "AutomaticGrid", "App::PropertyString", gs.plugin.automatic_grid(automatic) if automatic else "")
+    _set(group, "AutomaticSurface", "App::PropertyString", automatic.get("surface", "disk") if automatic else "")
+    _set(group, "AutomaticCut", "App::PropertyString", automatic.get("cut", "") if automatic else "")
     _set(group, "LayoutCallSeconds", "App::PropertyFloat", call_seconds)
     _set(group, "LayoutJson", "App::PropertyString", json.dumps(report.get("layout", {})), hidden=True)
     doc.recompute()
@@ -593,6 +594,8 @@ def show_layout(doc, result, source, server, call_seconds, how="", report_view=T
     grid = " (%s)" % group.AutomaticGrid if automatic else ""
     lines = [("INFO", "gridshell: layout of %s: %s%s, %s of the area covered (%.6g of %.6g)" % (
         source, _patches(len(summaries)), grid, _percent(group.Coverage), group.CoveredArea, group.InputArea))]
+    if group.AutomaticCut:
+        lines.append(("INFO", "gridshell: surface: %s" % group.AutomaticCut))
     for u in uncovered:
         lines.append(("INFO", "gridshell: not covered: %s, area %.6g: %s" % (
             u.get("where", ""), u.get("area", 0.0), u.get("reason", ""))))

@@ -271,6 +271,18 @@ def layout_of(data, where):
     )
 
 
+def automatic_grid(automatic):
+    """An automatic layout's grid as both plugins show it: "3 x 2" on a disk, "14 x 1 round the
+    ring" on a ring or tube, "6 faces x 1 x 1" on a closed surface (split along a cube)."""
+    grid = "%d x %d" % (automatic.get("columns", 0), automatic.get("rows", 0))
+    surface = automatic.get("surface", "disk")
+    if surface == "ring":
+        return grid + " round the ring"
+    if surface == "closed":
+        return "6 faces x " + grid
+    return grid
+
+
 def joining_note(deployment):
     """What a layout run's deployment.json says about joining its patches, for a status line:
     the patches alone and the bolts' largest force when the seams were joined, why not when a
