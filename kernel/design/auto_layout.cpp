@@ -4,6 +4,7 @@
 #define CGAL_EIGEN3_ENABLED 1  // CGAL's parameterization solves with Eigen
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_parameterization/Barycentric_mapping_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/Error_code.h>
 #include <CGAL/Surface_mesh_parameterization/Mean_value_coordinates_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/Square_border_parameterizer_3.h>
@@ -133,7 +134,7 @@ std::array<int, 4> square_corners(const TriangleMesh& mesh, const std::vector<in
   };
   const int start =
       sharpest_near(static_cast<int>(std::max_element(turn.begin(), turn.end()) - turn.begin()));
-  std::array<int, 4> corners{start, 0, 0, 0};
+  std::array<int, 4> corners{start, 0, 0, 0}, quarter{start, 0, 0, 0};
   for (int q = 1; q < 4; ++q) {
     const double ideal = q * perimeter / 4;
     int nearest = -1, sharpest = -1;
@@ -148,7 +149,18 @@ std::array<int, 4> square_corners(const TriangleMesh& mesh, const std::vector<in
       if (turn[at] > kPi / 6 && (sharpest < 0 || turn[at] > turn[sharpest])) sharpest = at;
     }
     corners[q] = sharpest >= 0 ? sharpest_near(sharpest) : nearest;
+    quarter[q] = nearest;
   }
+  // A corner moved to the sharpest vertex near it may pass its neighbour (a cusp between two
+  // windows took both on a public net's boundary, and the square's border then failed): the
+  // corners must follow one another round the loop, else the quarter point is taken.
+  const auto offset = [&](int at) {
+    const double along = arc[at] - arc[start];
+    return along < 0 ? along + perimeter : along;
+  };
+  for (int q = 1; q < 4; ++q)
+    if (offset(corners[q]) <= offset(corners[q - 1]) || corners[q] == start)
+      corners[q] = quarter[q];
   return corners;
 }
 
@@ -189,6 +201,9 @@ std::vector<Vec2> square_map(const TriangleMesh& mesh, const std::vector<int>& l
       throw Infeasible("layout",
                        "the surface could not be mapped onto a square (a face is not "
                        "manifold for CGAL)");
+  // Vertices on no face (a loader's welded duplicates) would leave the map's system singular.
+  for (CgalMesh::Vertex_index v : handle)
+    if (cgal.is_isolated(v)) cgal.remove_vertex(v);
   // A border halfedge of the loop; the corners run along the border in CGAL's direction.
   CgalMesh::Halfedge_index border;
   for (CgalMesh::Halfedge_index h : cgal.halfedges())
@@ -197,17 +212,31 @@ std::vector<Vec2> square_map(const TriangleMesh& mesh, const std::vector<int>& l
       break;
     }
   using Border = SMP::Square_border_arc_length_parameterizer_3<CgalMesh>;
-  using Parameterizer = SMP::Mean_value_coordinates_parameterizer_3<CgalMesh, Border>;
   const Border border_map(handle[loop[corners[0]]], handle[loop[corners[1]]],
                           handle[loop[corners[2]]], handle[loop[corners[3]]]);
   auto uv_map = cgal.add_property_map<CgalMesh::Vertex_index, Kernel::Point_2>("v:uv").first;
-  const SMP::Error_code status = SMP::parameterize(cgal, Parameterizer(border_map), border, uv_map);
-  if (status != SMP::OK)
+  std::vector<Vec2> uv(mesh.vertex_count(), Vec2::Zero());
+  const auto read = [&](SMP::Error_code status) {
+    if (status != SMP::OK) return false;
+    for (int v = 0; v < mesh.vertex_count(); ++v) {
+      if (cgal.is_removed(handle[v])) continue;
+      uv[v] = Vec2(uv_map[handle[v]].x(), uv_map[handle[v]].y());
+      if (!uv[v].allFinite()) return false;
+    }
+    return true;
+  };
+  // Mean value coordinates follow the surface's shape; where its weights break down (faces of
+  // no area: a net's collapsed pole gave "Cannot solve linear system") the uniform Tutte map,
+  // which depends on the connectivity only, is one to one all the same.
+  if (read(SMP::parameterize(
+          cgal, SMP::Mean_value_coordinates_parameterizer_3<CgalMesh, Border>(border_map), border,
+          uv_map)))
+    return uv;
+  const SMP::Error_code status = SMP::parameterize(
+      cgal, SMP::Barycentric_mapping_parameterizer_3<CgalMesh, Border>(border_map), border, uv_map);
+  if (!read(status))
     throw Infeasible("layout", std::string("the surface could not be mapped onto a square: ") +
                                    SMP::get_error_message(status));
-  std::vector<Vec2> uv(mesh.vertex_count(), Vec2::Zero());
-  for (int v = 0; v < mesh.vertex_count(); ++v)
-    uv[v] = Vec2(uv_map[handle[v]].x(), uv_map[handle[v]].y());
   return uv;
 }
 

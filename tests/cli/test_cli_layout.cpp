@@ -437,5 +437,33 @@ TEST(CliLayout, RunWithAnAutomaticLayoutBuildsAClosedSphereOnItsLowestPatchAndAT
   EXPECT_LE(deployment["max_seam_gap"].get<double>(), 0.001 * deployment["diagonal"].get<double>());
 }
 
+TEST(CliLayout, PublicMeshesAreCoveredAndARingOfThemRunsWhole) {
+  // Two meshes of WWmore/DOS (tests/data/meshes/README.md) nobody here made: an architectural
+  // shell (a disk) and a geodesic net with two boundary loops (a ring). Every patch meets the
+  // checks (a feasible planar angle included), 95 % of each is covered.
+  const std::string dir = testing::temp_dir();
+  for (const char* name : {"botanic-garden-bubble-0", "gnet1"}) {
+    const auto r = run_cli("layout '" + testing::test_mesh_path(std::string(name) + ".obj") +
+                           "' --layout auto --quiet --out '" + dir + "/" + name + "'");
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    const json layout = json::parse(testing::read_text(dir + "/" + name + "/layout.json"));
+    EXPECT_GE(layout["coverage"].get<double>(), 0.95) << name;
+    for (const json& p : layout["patches"]) EXPECT_TRUE(p["ok"].get<bool>()) << name << p;
+    EXPECT_EQ(layout["automatic"]["surface"], std::string(name) == "gnet1" ? "ring" : "disk");
+  }
+  // The ring built whole from its layout: joined at every seam round it, within the targets.
+  const auto r = run_cli("run '" + testing::test_mesh_path("gnet1.obj") + "' --layout '" + dir +
+                         "/gnet1/layout.json' --notches on --quiet --out '" + dir + "/run'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json deployment = json::parse(testing::read_text(dir + "/run/deployment.json"));
+  EXPECT_TRUE(deployment["converged"].get<bool>());
+  EXPECT_TRUE(deployment["seams_joined"].get<bool>());
+  const double diagonal = deployment["diagonal"].get<double>();
+  EXPECT_LE(deployment["rms_with_notches"].get<double>(), 0.005 * diagonal);
+  EXPECT_LE(deployment["max_seam_gap"].get<double>(), 0.001 * diagonal);
+  EXPECT_LT(deployment["max_seam_gap"].get<double>(),
+            deployment["max_seam_gap_before_joining"].get<double>());
+}
+
 }  // namespace
 }  // namespace gridshell
