@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Fabricate requests -> kernel (kernel/fabrication) -> kit and files (see gridshell/fabricate.h).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/fabricate.h"
 #include "gridshell/application/options.h"
+#include "gridshell/design/layout.h"
 #include "gridshell/fabrication/kit.h"
 #include "gridshell/fabrication/kit_export.h"
 #include "gridshell/fabrication/layout_kit.h"
@@ -245,7 +247,7 @@ v1::FabricateResult layout_fabricate(const v1::FabricateRequest& request,
   for (int k = 0; k < request.patches_size(); ++k)
     designs.push_back(checked_design(request.patches(k), "patches[" + std::to_string(k) + "]"));
   std::vector<LayoutKitPatch> patches;
-  for (size_t k = 0; k < designs.size(); ++k) patches.push_back({names[k], &designs[k]});
+  for (size_t k = 0; k < designs.size(); ++k) patches.push_back({names[k], &designs[k], {}});
   std::vector<KitSeam> seams;
   for (int i = 0; i < layout.seams_size(); ++i) {
     const v1::SeamDesign& m = layout.seams(i);
@@ -269,6 +271,35 @@ v1::FabricateResult layout_fabricate(const v1::FabricateRequest& request,
     }
     seams.push_back(std::move(seam));
   }
+  // The supports: the anchors that hold the whole, as its simulation has them.
+  {
+    std::vector<SeamMember> members;
+    for (int i = 0; i < layout.seams_size(); ++i)
+      for (int k = 0; k < 2; ++k) {
+        const std::string field =
+            "layout.seams[" + std::to_string(i) + "].lamellas[" + std::to_string(k) + "]";
+        const auto at = std::find(names.begin(), names.end(), layout.seams(i).patches(k));
+        const std::string& lamella = layout.seams(i).lamellas(k);
+        if (at == names.end())
+          throw InvalidInput(
+              "layout.seams[" + std::to_string(i) + "].patches[" + std::to_string(k) + "]",
+              "'" + layout.seams(i).patches(k) + "' is not a designed patch");
+        const auto parsed = parse_layout_part_name(lamella, *at);
+        if (!parsed)
+          throw InvalidInput(field, "'" + lamella + "' is not a lamella of patch " + *at +
+                                        " (expected " + *at + "-g<i> or " + *at + "-h<i>)");
+        SeamMember m;
+        m.patch = static_cast<int>(at - names.begin());
+        m.family = parsed->first;
+        m.member = parsed->second;
+        members.push_back(m);
+      }
+    std::vector<const std::vector<Anchor>*> anchors;
+    std::vector<const Grid*> grids;
+    for (const Design& d : designs) anchors.push_back(&d.anchors), grids.push_back(&d.grid);
+    const WholeAnchors held = whole_anchors(anchors, grids, members);
+    for (size_t k = 0; k < patches.size(); ++k) patches[k].supports = held.patches[k];
+  }
   const LayoutKit kit = make_layout_kit(patches, seams, kernel_options(options), progress);
   record_resolved(kit.kit.options, options);
   v1::FabricateResult out;
@@ -282,18 +313,10 @@ v1::FabricateResult layout_fabricate(const v1::FabricateRequest& request,
   const double mm = kit.kit.options.millimetres_per_unit;
   kj.set_lamella_width(designs.front().lamella_width * mm);
   const auto [scale, unit] = support_unit(options, mm);
-  std::string supports;
-  for (size_t k = 0; k < designs.size(); ++k) {
-    // Each patch's table, its anchors named by patch ("P2-A3"), under one header.
-    std::istringstream lines(supports_csv(designs[k], scale, unit));
-    std::string line;
-    std::getline(lines, line);
-    if (k == 0) supports += line + "\n";
-    while (std::getline(lines, line)) supports += names[k] + "-" + line + "\n";
+  for (size_t k = 0; k < designs.size(); ++k)
     add_file(out, "assembly-" + names[k] + ".svg",
              assembly_svg(designs[k], kit.patch_kits[k], options.unit(), names[k]));
-  }
-  add_file(out, "supports.csv", supports);
+  add_file(out, "supports.csv", layout_supports_csv(patches, scale, unit));
   add_file(out, "bom.csv", layout_bom_csv(patches, kit, options.material()));
   add_file(out, "joining.svg", joining_svg(patches, seams));
   add_file(out, "kit.json", to_json(out.kit()) + "\n");

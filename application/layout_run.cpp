@@ -15,6 +15,7 @@
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/layout.h"
 #include "gridshell/design/members.h"
+#include "gridshell/fabrication/layout_kit.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/foundation/parallel.h"
 #include "gridshell/simulation/deployment_export.h"
@@ -25,11 +26,6 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-/// A member's part name: the patch, its family and its index ("P2-g7"), as the kit names it.
-std::string part_name(const std::string& patch, Family family, int index) {
-  return patch + "-" + (family == Family::G ? "g" : "h") + std::to_string(index);
 }
 
 /// A Progress that reports as `progress` does, each stage prefixed with the patch's name.
@@ -70,32 +66,21 @@ JoinedWhole join_patches(const LayoutResult& cut, const std::vector<std::optiona
   std::vector<DeploymentPart> parts;
   std::vector<const TriangleMesh*> targets;
   const Design* first = nullptr;
+  // The anchors that hold the whole (a closed one stands on its lowest patch), as the kit's
+  // supports are.
+  std::vector<const std::vector<Anchor>*> patch_anchors(cut.patches.size(), nullptr);
+  std::vector<const Grid*> grids(cut.patches.size(), nullptr);
+  for (size_t j = 0; j < cut.patches.size(); ++j)
+    if (designs[j] && jobs[j]) patch_anchors[j] = &jobs[j]->anchors, grids[j] = &designs[j]->grid;
+  const WholeAnchors held = whole_anchors(patch_anchors, grids, seam_members(joints));
+  if (held.held_by >= 0) out.held_by = cut.patches[held.held_by].name;
   for (size_t j = 0; j < cut.patches.size(); ++j) {
     if (!designs[j] || !jobs[j]) continue;
     out.part_of[j] = static_cast<int>(parts.size());
-    parts.push_back({&designs[j]->grid, whole_anchors(jobs[j]->anchors, static_cast<int>(j),
-                                                      designs[j]->grid, joints)});
+    parts.push_back({&designs[j]->grid, held.patches[j]});
     out.anchors += static_cast<int>(parts.back().anchors.size());
     targets.push_back(&designs[j]->target.patch.mesh);
     if (!first) first = &*designs[j];
-  }
-  // A closed surface has no outer side, so every patch anchor lies on a seam: the whole stands on
-  // its lowest patch (z up, as the kit's ground plane), held at all of that patch's anchors.
-  if (out.anchors == 0 && !parts.empty()) {
-    int lowest = -1;
-    double lowest_z = std::numeric_limits<double>::infinity();
-    for (size_t j = 0; j < cut.patches.size(); ++j) {
-      if (out.part_of[j] < 0 || jobs[j]->anchors.empty()) continue;
-      double z = 0;
-      for (const Anchor& a : jobs[j]->anchors) z += a.position.z();
-      z /= static_cast<double>(jobs[j]->anchors.size());
-      if (z < lowest_z) lowest_z = z, lowest = static_cast<int>(j);
-    }
-    if (lowest >= 0) {
-      parts[out.part_of[lowest]].anchors = jobs[lowest]->anchors;
-      out.anchors = static_cast<int>(jobs[lowest]->anchors.size());
-      out.held_by = cut.patches[lowest].name;
-    }
   }
   const std::vector<PartBolt> bolts = seam_bolts(joints, out.part_of);
   if (bolts.empty() || !first) return out;
@@ -267,7 +252,7 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
     m.add_corners(s.corners[1]);
     for (const SeamLamella& l : seam.lamellas) {
       m.add_patches(cut.patches[l.patch].name);
-      m.add_lamellas(part_name(cut.patches[l.patch].name, l.family, l.member));
+      m.add_lamellas(layout_part_name(cut.patches[l.patch].name, l.family, l.member));
     }
     m.set_length(s.length);
     m.set_length_difference(seam.length_difference);
@@ -278,7 +263,7 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
       for (const SeamLamella& l : seam.lamellas)
         b.add_lamella_s(l.forward ? joint.s : l.length - joint.s);
       for (const auto& [patch, family, member] : joint.ends)
-        b.add_members(part_name(cut.patches[patch].name, family, member));
+        b.add_members(layout_part_name(cut.patches[patch].name, family, member));
       ++bolts;
     }
   }

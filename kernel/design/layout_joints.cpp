@@ -3,6 +3,8 @@
 // lamella along a shared seam, and a bolt wherever a member of either patch ends on it.
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 #include "gridshell/design/design.h"
 #include "gridshell/design/layout.h"
@@ -101,6 +103,54 @@ std::vector<SeamJoints> seam_joints(const LayoutResult& layout,
     for (SeamJoint& joint : joints.joints) joint.point = point_at(seam.points, joint.s);
     out.push_back(std::move(joints));
   }
+  return out;
+}
+
+std::vector<SeamMember> seam_members(const std::vector<SeamJoints>& joints) {
+  std::vector<SeamMember> out;
+  for (const SeamJoints& seam : joints)
+    for (const SeamLamella& l : seam.lamellas) out.push_back({l.patch, l.family, l.member});
+  return out;
+}
+
+WholeAnchors whole_anchors(const std::vector<const std::vector<Anchor>*>& anchors,
+                           const std::vector<const Grid*>& grids,
+                           const std::vector<SeamMember>& seams) {
+  if (anchors.size() != grids.size())
+    throw std::invalid_argument("whole_anchors: one grid per patch's anchors");
+  WholeAnchors out;
+  out.patches.resize(anchors.size());
+  size_t kept = 0;
+  for (size_t j = 0; j < anchors.size(); ++j) {
+    if (!anchors[j] || !grids[j]) continue;
+    const Grid& grid = *grids[j];
+    const auto on_seam = [&](Family family, int member) {
+      for (const SeamMember& s : seams)
+        if (s.patch == static_cast<int>(j) && s.family == family && s.member == member) return true;
+      return false;
+    };
+    const auto boundary = [](const std::vector<Member>& members, int index) {
+      return index >= 0 && index < static_cast<int>(members.size()) && members[index].boundary;
+    };
+    for (const Anchor& a : *anchors[j]) {
+      const bool on_g = boundary(grid.g, a.g), on_h = boundary(grid.h, a.h);
+      const bool inside = (!on_g || on_seam(Family::G, a.g)) && (!on_h || on_seam(Family::H, a.h));
+      // Inner anchors (on no boundary member) hold the whole too.
+      if ((on_g || on_h) && inside) continue;
+      out.patches[j].push_back(a);
+    }
+    kept += out.patches[j].size();
+  }
+  if (kept > 0) return out;
+  double lowest_z = std::numeric_limits<double>::infinity();
+  for (size_t j = 0; j < anchors.size(); ++j) {
+    if (!anchors[j] || !grids[j] || anchors[j]->empty()) continue;
+    double z = 0;
+    for (const Anchor& a : *anchors[j]) z += a.position.z();
+    z /= static_cast<double>(anchors[j]->size());
+    if (z < lowest_z) lowest_z = z, out.held_by = static_cast<int>(j);
+  }
+  if (out.held_by >= 0) out.patches[out.held_by] = *anchors[out.held_by];
   return out;
 }
 

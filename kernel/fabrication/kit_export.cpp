@@ -372,27 +372,35 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
   return out;
 }
 
-std::string supports_csv(const Design& design, double scale, const std::string& unit) {
-  // Ground plane: the lowest point of the boundary members (z up).
+double ground_height(const Design& design) {
   double ground = 1e300;
   for (const auto* family : {&design.grid.g, &design.grid.h})
     for (const Member& m : *family)
       if (m.boundary)
         for (const Vec3& p : m.surface) ground = std::min(ground, p.z());
-  if (ground == 1e300) ground = 0;
-  const std::string u = unit;
-  std::string out =
-      "id,kind,g,h,side,x_" + u + ",y_" + u + ",z_" + u + ",nx,ny,nz,tilt_deg,height_" + u + "\n";
-  for (size_t i = 0; i < design.anchors.size(); ++i) {
-    const Anchor& a = design.anchors[i];
-    const char* kind = a.corner ? "corner" : a.side >= 0 ? "boundary" : "inner";
-    const Vec3 n = a.normal.normalized();
-    const double tilt = std::acos(std::clamp(n.z(), -1.0, 1.0)) * 180 / std::numbers::pi;
-    out +=
-        format("A%zu,%s,%d,%d,%d,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.3f,%.6f\n", i + 1, kind, a.g, a.h,
-               a.side, a.position.x() * scale, a.position.y() * scale, a.position.z() * scale,
-               n.x(), n.y(), n.z(), tilt, (a.position.z() - ground) * scale);
-  }
+  return ground == 1e300 ? 0 : ground;
+}
+
+std::string supports_header(const std::string& u) {
+  return "id,kind,g,h,side,x_" + u + ",y_" + u + ",z_" + u + ",nx,ny,nz,tilt_deg,height_" + u +
+         "\n";
+}
+
+std::string support_row(const std::string& id, const Anchor& a, double ground, double scale) {
+  const char* kind = a.corner ? "corner" : a.side >= 0 ? "boundary" : "inner";
+  const Vec3 n = a.normal.normalized();
+  const double tilt = std::acos(std::clamp(n.z(), -1.0, 1.0)) * 180 / std::numbers::pi;
+  return format("%s,%s,%d,%d,%d,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.3f,%.6f\n", id.c_str(), kind, a.g,
+                a.h, a.side, a.position.x() * scale, a.position.y() * scale, a.position.z() * scale,
+                n.x(), n.y(), n.z(), tilt, (a.position.z() - ground) * scale);
+}
+
+std::string supports_csv(const Design& design, double scale, const std::string& unit) {
+  // Ground plane: the lowest point of the boundary members (z up).
+  const double ground = ground_height(design);
+  std::string out = supports_header(unit);
+  for (size_t i = 0; i < design.anchors.size(); ++i)
+    out += support_row("A" + std::to_string(i + 1), design.anchors[i], ground, scale);
   return out;
 }
 

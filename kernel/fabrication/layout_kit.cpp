@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <set>
 
+#include "gridshell/fabrication/kit_export.h"
 #include "gridshell/foundation/errors.h"
 
 namespace gridshell {
@@ -21,10 +23,27 @@ struct Position {
 };
 
 std::string lamella(const std::string& patch, Family family, int index) {
-  return patch + "-" + (family == Family::G ? "g" : "h") + std::to_string(index);
+  return layout_part_name(patch, family, index);
 }
 
 }  // namespace
+
+std::string layout_part_name(const std::string& patch, Family family, int index) {
+  return patch + "-" + (family == Family::G ? "g" : "h") + std::to_string(index);
+}
+
+std::optional<std::pair<Family, int>> parse_layout_part_name(const std::string& name,
+                                                             const std::string& patch) {
+  const std::string prefix = patch + "-";
+  if (name.size() < prefix.size() + 2 || name.compare(0, prefix.size(), prefix) != 0)
+    return std::nullopt;
+  const char family = name[prefix.size()];
+  const std::string index = name.substr(prefix.size() + 1);
+  if ((family != 'g' && family != 'h') || index.size() > 8 ||
+      !std::all_of(index.begin(), index.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return std::nullopt;
+  return std::pair{family == 'g' ? Family::G : Family::H, std::stoi(index)};
+}
 
 LayoutKit make_layout_kit(const std::vector<LayoutKitPatch>& patches,
                           const std::vector<KitSeam>& seams, const FabricationOptions& options,
@@ -139,6 +158,22 @@ LayoutKit make_layout_kit(const std::vector<LayoutKitPatch>& patches,
   return out;
 }
 
+std::string layout_supports_csv(const std::vector<LayoutKitPatch>& patches, double scale,
+                                const std::string& unit) {
+  double ground = 1e300;
+  for (const LayoutKitPatch& p : patches) ground = std::min(ground, ground_height(*p.design));
+  std::string out = supports_header(unit);
+  for (const LayoutKitPatch& p : patches)
+    for (const Anchor& a : p.supports) {
+      // Numbered as on the patch's assembly sheet: its place among the design's anchors.
+      size_t number = 0;
+      for (size_t i = 0; i < p.design->anchors.size(); ++i)
+        if (p.design->anchors[i].g == a.g && p.design->anchors[i].h == a.h) number = i + 1;
+      out += support_row(p.name + "-A" + std::to_string(number), a, ground, scale);
+    }
+  return out;
+}
+
 std::string layout_bom_csv(const std::vector<LayoutKitPatch>& patches, const LayoutKit& kit,
                            const std::string& material) {
   const FabricationOptions& o = kit.kit.options;
@@ -192,8 +227,10 @@ std::string layout_bom_csv(const std::vector<LayoutKitPatch>& patches, const Lay
                 o.hole_diameter, o.hole_diameter - o.kerf);
   out += line;
   size_t anchors = 0;
-  for (const LayoutKitPatch& p : patches) anchors += p.design->anchors.size();
-  std::snprintf(line, sizeof line, "supports,%zu,pcs,\"one per anchor (supports.csv)\"\n", anchors);
+  for (const LayoutKitPatch& p : patches) anchors += p.supports.size();
+  std::snprintf(line, sizeof line,
+                "supports,%zu,pcs,\"one per anchor that holds the whole (supports.csv)\"\n",
+                anchors);
   out += line;
   return out;
 }

@@ -93,28 +93,6 @@ DeploymentRun combine_runs(const std::vector<const DeploymentRun*>& runs) {
   return whole;
 }
 
-std::vector<Anchor> whole_anchors(const std::vector<Anchor>& anchors, int patch, const Grid& grid,
-                                  const std::vector<SeamJoints>& joints) {
-  auto on_seam = [&](Family family, int member) {
-    for (const SeamJoints& seam : joints)
-      for (const SeamLamella& l : seam.lamellas)
-        if (l.patch == patch && l.family == family && l.member == member) return true;
-    return false;
-  };
-  auto boundary = [](const std::vector<Member>& members, int index) {
-    return index >= 0 && index < static_cast<int>(members.size()) && members[index].boundary;
-  };
-  std::vector<Anchor> out;
-  for (const Anchor& a : anchors) {
-    const bool on_g = boundary(grid.g, a.g), on_h = boundary(grid.h, a.h);
-    const bool inside = (!on_g || on_seam(Family::G, a.g)) && (!on_h || on_seam(Family::H, a.h));
-    // Inner anchors (on no boundary member) hold the whole too.
-    if ((on_g || on_h) && inside) continue;
-    out.push_back(a);
-  }
-  return out;
-}
-
 std::vector<PartBolt> seam_bolts(const std::vector<SeamJoints>& joints,
                                  const std::vector<int>& part_of) {
   std::vector<PartBolt> out;

@@ -266,7 +266,8 @@ TEST(CliLayout, FabricateARunOfALayoutGivesOneKitForAllItsPatches) {
   EXPECT_NE(bom.find(std::to_string(seam_holes) + " holes added"), std::string::npos) << bom;
   EXPECT_NE(testing::read_text(dir + "/kit/joining.svg").find("4. Deploy"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir + "/kit/sheets/sheet-01.dxf"));
-  // supports.csv: every patch's anchors under one header, named by patch.
+  // supports.csv: the anchors that hold the whole (none on a seam), named by patch and by their
+  // number on its assembly sheet, under one header: as many as held the joined whole.
   std::istringstream supports(testing::read_text(dir + "/kit/supports.csv"));
   std::string line;
   std::getline(supports, line);
@@ -278,7 +279,10 @@ TEST(CliLayout, FabricateARunOfALayoutGivesOneKitForAllItsPatches) {
                 line.rfind("north-west-A", 0) == 0 || line.rfind("P4-A", 0) == 0)
         << line;
   }
-  EXPECT_GE(anchors, 16);
+  const json deployment = json::parse(testing::read_text(dir + "/run/deployment.json"));
+  EXPECT_EQ(anchors, deployment["joined_with_notches"]["anchors"].get<int>());
+  EXPECT_GE(anchors, 8);
+  EXPECT_NE(bom.find("supports," + std::to_string(anchors) + ","), std::string::npos) << bom;
 }
 
 TEST(CliLayout, RunWithALayoutRefusesCornersTooAndNamesABadPatchName) {
@@ -399,6 +403,20 @@ TEST(CliLayout, RunWithAnAutomaticLayoutBuildsAClosedSphereOnItsLowestPatchAndAT
   EXPECT_LE(deployment["rms_with_notches"].get<double>(), 0.005 * diagonal);
   EXPECT_LE(deployment["max_seam_gap"].get<double>(), 0.001 * diagonal);
   EXPECT_NE(r.out.find("stands on " + lowest), std::string::npos) << r.out;
+  // Its kit's supports are that patch's anchors, as in the joined run.
+  r = run_cli("fabricate '" + dir +
+              "/sphere/design.json' --unit 0.1 --sheet 3000x1000 --quiet --out '" + dir +
+              "/sphere-kit'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::istringstream supports(testing::read_text(dir + "/sphere-kit/supports.csv"));
+  std::string line;
+  std::getline(supports, line);
+  int rows = 0;
+  while (std::getline(supports, line)) {
+    ++rows;
+    EXPECT_EQ(line.rfind(lowest + "-A", 0), 0u) << line;
+  }
+  EXPECT_EQ(rows, joined["anchors"].get<int>());
 
   // A tube (radius 5, 20 long, open at both ends): a ring cut open along a straight line, three
   // patches round it, developable, so it is covered whole; held at its two rims.

@@ -53,7 +53,7 @@ const Vault& vault() {
     for (const Design& d : out.designs) pointers.push_back(&d);
     out.joints = seam_joints(out.layout, pointers);
     for (size_t j = 0; j < out.designs.size(); ++j)
-      out.patches.push_back({out.layout.patches[j].name, &out.designs[j]});
+      out.patches.push_back({out.layout.patches[j].name, &out.designs[j], out.designs[j].anchors});
     for (const SeamJoints& s : out.joints) {
       KitSeam seam;
       for (int k = 0; k < 2; ++k) seam.patches[k] = out.layout.patches[s.lamellas[k].patch].name;

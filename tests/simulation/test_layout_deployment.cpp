@@ -202,9 +202,13 @@ TEST(LayoutDeployment, TwoPatchesOfABarrelVaultJoinedAtTheirSeamCloseItInOneEqui
   ASSERT_EQ(joints.size(), 1u);
   // The anchors that hold the whole: none on the seam, every other one kept.
   std::vector<DeploymentPart> parts;
+  const WholeAnchors held =
+      whole_anchors({&v.designs[0].anchors, &v.designs[1].anchors},
+                    {&v.designs[0].grid, &v.designs[1].grid}, seam_members(joints));
+  EXPECT_EQ(held.held_by, -1);  // outer sides hold it
   for (int j = 0; j < 2; ++j) {
     const Design& d = v.designs[j];
-    const std::vector<Anchor> kept = whole_anchors(d.anchors, j, d.grid, joints);
+    const std::vector<Anchor>& kept = held.patches[j];
     int on_seam = 0;
     for (const Anchor& a : d.anchors) {
       const bool seam_g = joints[0].lamellas[j].family == Family::G &&

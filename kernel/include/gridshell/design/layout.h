@@ -15,7 +15,9 @@
 #include <tuple>
 #include <vector>
 
+#include "gridshell/design/anchors.h"
 #include "gridshell/design/family.h"
+#include "gridshell/design/grid.h"
 #include "gridshell/design/target_patch.h"
 
 namespace gridshell {
@@ -131,6 +133,33 @@ struct SeamJoints {
 /// this layout's cut patch).
 std::vector<SeamJoints> seam_joints(const LayoutResult& layout,
                                     const std::vector<const Design*>& designs);
+
+/// A patch's boundary lamella that runs along a shared seam: (patch, family, member index).
+struct SeamMember {
+  int patch = 0;
+  Family family = Family::G;
+  int member = 0;
+};
+
+/// The boundary lamellas of every seam in `joints`.
+std::vector<SeamMember> seam_members(const std::vector<SeamJoints>& joints);
+
+/// The anchors that hold the whole of a layout joined at its seams (docs/multi-patch.md,
+/// "Simulation of the whole"), per patch.
+struct WholeAnchors {
+  std::vector<std::vector<Anchor>> patches;  ///< per patch, in layout order
+  int held_by = -1;  ///< the patch a closed whole stands on; -1 when outer sides hold it
+};
+
+/// A seam lies inside the whole, so an anchor whose boundary members all run along seams
+/// (`seams`) is dropped; anchors on an outer side (a corner: on either of its sides) and inner
+/// anchors stay. A closed surface has no outer side, so none would stay: the whole then stands
+/// on its lowest patch (the smallest mean anchor height, z up as the kit's ground plane), held
+/// at all of that patch's anchors. `anchors[j]` and `grids[j]` are patch j's (null: no design,
+/// no anchors). The simulation of the whole and the kit's supports both use this.
+WholeAnchors whole_anchors(const std::vector<const std::vector<Anchor>*>& anchors,
+                           const std::vector<const Grid*>& grids,
+                           const std::vector<SeamMember>& seams);
 
 // Automatic layouts (docs/multi-patch.md, "Automatic layouts")
 // -------------------------------------

@@ -71,6 +71,13 @@ std::string assembly_svg(const Design& design, const Kit& kit, const std::string
 /// in the design's unit scaled by `scale` (1 = the design's own unit), named `unit`.
 std::string supports_csv(const Design& design, double scale, const std::string& unit);
 
+/// The ground plane of a design: the height (z) of the lowest point of its boundary members.
+double ground_height(const Design& design);
+
+/// supports.csv's header and one row: anchor `a` named `id`, its height above `ground` (z).
+std::string supports_header(const std::string& unit);
+std::string support_row(const std::string& id, const Anchor& a, double ground, double scale);
+
 /// Bill of materials: lamellas per family (count, total length), sheets, bolts, nuts, washers,
 /// material.
 std::string bom_csv(const Design& design, const Kit& kit, const std::string& material);

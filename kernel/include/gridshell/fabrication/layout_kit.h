@@ -7,7 +7,9 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gridshell/fabrication/kit.h"
@@ -15,9 +17,18 @@
 namespace gridshell {
 
 /// A designed patch of a layout.
+/// A layout's part name: the patch's name, its family and the member's index ("P2-g7").
+std::string layout_part_name(const std::string& patch, Family family, int index);
+/// The family and member index of `patch`'s part `name` (none if it is not one of its parts).
+std::optional<std::pair<Family, int>> parse_layout_part_name(const std::string& name,
+                                                             const std::string& patch);
+
 struct LayoutKitPatch {
   std::string name;  ///< "P1"
   const Design* design = nullptr;
+  /// Its anchors that hold the whole (whole_anchors: none on a seam; a closed whole's lowest
+  /// patch all of its own), the supports to build.
+  std::vector<Anchor> supports;
 };
 
 /// A bolt through the two boundary lamellas of a seam (see SeamJoint).
@@ -71,6 +82,12 @@ std::vector<JoiningStep> joining_order(const std::vector<LayoutKitPatch>& patche
 /// the middle of its seams, and the order of work as numbered steps.
 std::string joining_svg(const std::vector<LayoutKitPatch>& patches,
                         const std::vector<KitSeam>& seams);
+
+/// supports.csv of a layout's kit: each patch's supports named by patch and by their number on
+/// its assembly sheet ("P2-A3"), heights above the whole's ground plane (the lowest boundary
+/// point of all patches).
+std::string layout_supports_csv(const std::vector<LayoutKitPatch>& patches, double scale,
+                                const std::string& unit);
 
 /// bom.csv of a layout's kit: lamellas per family over all patches, sheets, bolts by grip, nuts,
 /// washers, holes, slots and supports.

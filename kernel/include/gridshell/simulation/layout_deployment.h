@@ -33,13 +33,6 @@ std::vector<SeamGaps> seam_gaps(const std::vector<SeamJoints>& joints,
 /// iterations and seconds added up; converged only if every run did. Null runs are skipped.
 DeploymentRun combine_runs(const std::vector<const DeploymentRun*>& runs);
 
-/// The anchors of a patch that hold the whole (docs/multi-patch.md, "Simulation of the whole"):
-/// a seam lies inside the whole, so an anchor whose boundary members are all seam lamellas of
-/// `patch` (in `joints`) is dropped; anchors on an outer side (a corner: on either of its
-/// sides) and inner anchors stay. `grid` is the patch's grid.
-std::vector<Anchor> whole_anchors(const std::vector<Anchor>& anchors, int patch, const Grid& grid,
-                                  const std::vector<SeamJoints>& joints);
-
 /// The seam joints as bolts between parts: `part_of[j]` is patch j's part (-1: none, its seams
 /// are skipped). End 0 is the lamella of the patch that comes first in the layout, each end's
 /// arc length along its own lamella. Each lamella keeps the height its own patch gives it (a g
