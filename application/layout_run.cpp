@@ -14,6 +14,7 @@
 #include "gridshell/application/convert_deployment.h"
 #include "gridshell/application/deployment_job.h"
 #include "gridshell/application/layout.h"
+#include "gridshell/application/patch_cache.h"
 #include "gridshell/design/members.h"
 #include "gridshell/fabrication/layout_kit.h"
 #include "gridshell/foundation/errors.h"
@@ -199,7 +200,16 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
         const Progress step = parallel.threads == 1 ? patch_progress(progress, patch.name) : inner;
         try {
           const auto design_start = std::chrono::steady_clock::now();
-          designs[j] = design_grid(*patch.target, options, step);
+          // Each patch's work (its maps from the layout's planar-angle check) is kept in the
+          // daemon's cache: a redesign of this patch alone (Design with layout_patch) skips the
+          // cut and the maps.
+          PatchWork work = prepare_patch_work(*patch.target, options, step);
+          if (settings.patch_cache) work.members = member_memo_for(work);
+          auto shared = std::make_shared<const PatchWork>(std::move(work));
+          designs[j] = design_on_patch(*shared, options, step);
+          if (settings.patch_cache)
+            settings.patch_cache->put(
+                layout_patch_key(in.mesh, cut.layout, static_cast<int>(j), in.options), shared);
           design_results[j] = design_result(*designs[j], in.record, input + " " + patch.name,
                                             in.mesh.vertex_count(), seconds_since(design_start));
           jobs[j] = run_deployment_job(design_results[j].design(), simulation, "design.json", step,

@@ -39,21 +39,19 @@ class Hasher {
 
 }  // namespace
 
-PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
-                   const DesignOptions& options) {
-  Hasher h;
+namespace {
+
+void hash_mesh(Hasher& h, const TriangleMesh& mesh) {
   h.integer(mesh.vertex_count());
   for (const Vec3& p : mesh.vertices())
     for (int k = 0; k < 3; ++k) h.number(p[k]);
   h.integer(mesh.face_count());
   for (const Face& f : mesh.faces())
     for (int v : f) h.integer(v);
-  h.integer(static_cast<int>(corners.kind));  // only the kind's own fields are set
-  if (corners.kind == CornerSpec::Kind::Vertices)
-    for (int v : corners.vertices) h.integer(v);
-  if (corners.kind == CornerSpec::Kind::Points)
-    for (const Vec3& p : corners.points)
-      for (int k = 0; k < 3; ++k) h.number(p[k]);
+}
+
+/// The options every patch's work depends on (not those of the automatic corners' search).
+void hash_patch_options(Hasher& h, const DesignOptions& options) {
   const TargetPatchOptions& patch = options.patch;
   h.integer(static_cast<int>(patch.geodesic.method));
   h.number(patch.cut.snap_fraction);
@@ -63,6 +61,31 @@ PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
   h.integer(patch.coverability.member_distance_samples);
   h.integer(patch.smooth);
   h.integer(options.maps.resolution);
+}
+
+PatchKey finish(const Hasher& h, const TriangleMesh& mesh) {
+  PatchKey key;
+  key.hash[0] = h.a();
+  key.hash[1] = h.b();
+  key.vertices = mesh.vertex_count();
+  key.faces = mesh.face_count();
+  return key;
+}
+
+}  // namespace
+
+PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
+                   const DesignOptions& options) {
+  Hasher h;
+  hash_mesh(h, mesh);
+  h.integer(static_cast<int>(corners.kind));  // only the kind's own fields are set
+  if (corners.kind == CornerSpec::Kind::Vertices)
+    for (int v : corners.vertices) h.integer(v);
+  if (corners.kind == CornerSpec::Kind::Points)
+    for (const Vec3& p : corners.points)
+      for (int k = 0; k < 3; ++k) h.number(p[k]);
+  const TargetPatchOptions& patch = options.patch;
+  hash_patch_options(h, options);
   if (corners.kind == CornerSpec::Kind::Auto) {  // the search checks the planar angle too
     h.number(patch.auto_corners.min_corner_angle);
     h.number(patch.auto_corners.max_corner_angle);
@@ -74,12 +97,37 @@ PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
   }
   h.integer(options.maps.max_vertices);
   h.integer(patch.coverability.max_vertices);
-  PatchKey key;
-  key.hash[0] = h.a();
-  key.hash[1] = h.b();
-  key.vertices = mesh.vertex_count();
-  key.faces = mesh.face_count();
-  return key;
+  return finish(h, mesh);
+}
+
+PatchKey layout_patch_key(const TriangleMesh& mesh, const PatchLayout& layout, int patch,
+                          const DesignOptions& options) {
+  Hasher h;
+  h.word(0x4C41594F5554ull);  // "LAYOUT": never a single patch's key
+  hash_mesh(h, mesh);
+  h.integer(static_cast<long long>(layout.corners.size()));
+  for (const LayoutCorner& c : layout.corners) {
+    h.integer(c.vertex);
+    if (c.vertex < 0)
+      for (int k = 0; k < 3; ++k) h.number(c.point[k]);
+  }
+  h.integer(static_cast<long long>(layout.patches.size()));
+  for (size_t j = 0; j < layout.patches.size(); ++j) {
+    const std::string name =
+        layout.patches[j].name.empty() ? "P" + std::to_string(j + 1) : layout.patches[j].name;
+    h.integer(static_cast<long long>(name.size()));
+    for (char c : name) h.integer(static_cast<unsigned char>(c));
+    for (int c : layout.patches[j].corners) h.integer(c);
+  }
+  h.integer(patch);
+  hash_patch_options(h, options);
+  // The layout's checks look for a feasible planar angle on the maps.
+  h.number(options.cladding.k_min);
+  h.number(options.cladding.k_max);
+  h.number(options.cladding.min_planar_angle);
+  h.integer(options.maps.max_vertices);
+  h.integer(options.patch.coverability.max_vertices);
+  return finish(h, mesh);
 }
 
 namespace {
@@ -117,6 +165,12 @@ std::size_t memory_bytes(const PatchWork& work) {
   bytes += 96 * work.target.stage_seconds.size();  // map nodes with their strings
   if (work.members) bytes += heap(sizeof(MemberMemo)) + work.members->max_bytes();  // its bound
   return bytes;
+}
+
+std::shared_ptr<MemberMemo> member_memo_for(const PatchWork& work) {
+  const std::size_t maps =
+      (work.maps.g.distances.size() + work.maps.h.distances.size()) * sizeof(double);
+  return std::make_shared<MemberMemo>((2u << 20) + (memory_bytes(work) - maps) / 4);
 }
 
 PatchCache::PatchCache(std::size_t max_bytes) { stats_.max_bytes = max_bytes; }
@@ -170,20 +224,31 @@ std::shared_ptr<const PatchWork> PatchCache::get(const PatchKey& key,
     std::lock_guard lock(mutex_);
     computing_.erase(key);
     promise.set_value(work);
-    if (bytes > stats_.max_bytes || index_.count(key)) return work;
-    lru_.push_front({key, work, bytes});
-    index_[key] = lru_.begin();
-    stats_.bytes += bytes;
-    while (stats_.bytes > stats_.max_bytes && !lru_.empty()) {
-      const Entry& last = lru_.back();
-      stats_.bytes -= last.bytes;
-      index_.erase(last.key);
-      lru_.pop_back();
-      ++stats_.evictions;
-    }
-    stats_.entries = lru_.size();
+    insert_locked(key, work, bytes);
     return work;
   }
+}
+
+void PatchCache::insert_locked(const PatchKey& key, std::shared_ptr<const PatchWork> work,
+                               std::size_t bytes) {
+  if (bytes > stats_.max_bytes || index_.count(key)) return;
+  lru_.push_front({key, std::move(work), bytes});
+  index_[key] = lru_.begin();
+  stats_.bytes += bytes;
+  while (stats_.bytes > stats_.max_bytes && !lru_.empty()) {
+    const Entry& last = lru_.back();
+    stats_.bytes -= last.bytes;
+    index_.erase(last.key);
+    lru_.pop_back();
+    ++stats_.evictions;
+  }
+  stats_.entries = lru_.size();
+}
+
+void PatchCache::put(const PatchKey& key, std::shared_ptr<const PatchWork> work) {
+  const std::size_t bytes = memory_bytes(*work);
+  std::lock_guard lock(mutex_);
+  insert_locked(key, std::move(work), bytes);
 }
 
 PatchCache::Stats PatchCache::stats() const {

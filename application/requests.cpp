@@ -14,6 +14,7 @@
 
 #include "gridshell/application/convert.h"
 #include "gridshell/application/files.h"
+#include "gridshell/application/layout.h"
 #include "gridshell/application/options.h"
 #include "gridshell/application/patch_cache.h"
 #include "gridshell/application/patch_routing_key.h"
@@ -461,6 +462,45 @@ v1::PatchResult run_patch(const v1::PatchRequest& request, const Progress& progr
 
 namespace {
 
+/// The patch work of a layout's patch: from the cache, else the layout cut (every patch's work
+/// kept in the cache, so that a redesign of any other patch of it skips the cut too).
+std::shared_ptr<const PatchWork> layout_patch_work(const RunSettings& settings,
+                                                   const DesignInputs& in, const Progress& progress,
+                                                   bool* cached, double* patch_seconds) {
+  const PatchLayout& layout = *in.layout;
+  auto compute = [&] {
+    const auto start = std::chrono::steady_clock::now();
+    const LayoutResult cut = cut_layout(in.mesh, layout, patch_options(in.options), progress);
+    *patch_seconds = seconds_since(start);
+    std::optional<PatchWork> wanted;
+    for (size_t j = 0; j < cut.patches.size(); ++j) {
+      const LayoutPatch& p = cut.patches[j];
+      const bool asked = static_cast<int>(j) == in.layout_patch;
+      if (!p.target || p.problem) {
+        if (!asked) continue;
+        const Error problem = p.problem ? *p.problem : Infeasible("", "the patch could not be cut");
+        throw Error(problem.code(), "layout_patch.patch",
+                    p.name + ": " + (problem.field().empty() ? "" : problem.field() + ": ") +
+                        problem.message(),
+                    problem.reason());
+      }
+      PatchWork work = prepare_patch_work(*p.target, in.options, progress);
+      if (settings.patch_cache) work.members = member_memo_for(work);
+      if (asked) {
+        wanted = std::move(work);
+      } else if (settings.patch_cache) {
+        settings.patch_cache->put(
+            layout_patch_key(in.mesh, layout, static_cast<int>(j), in.options),
+            std::make_shared<const PatchWork>(std::move(work)));
+      }
+    }
+    return std::move(*wanted);
+  };
+  if (!settings.patch_cache) return std::make_shared<const PatchWork>(compute());
+  return settings.patch_cache->get(layout_patch_key(in.mesh, layout, in.layout_patch, in.options),
+                                   compute, cached, progress);
+}
+
 /// The patch work of a design: from (or into) the cache when there is one. `patch_seconds` is
 /// the patch stage's time (0 from the cache).
 std::shared_ptr<const PatchWork> patch_work(const RunSettings& settings, const DesignInputs& in,
@@ -472,17 +512,11 @@ std::shared_ptr<const PatchWork> patch_work(const RunSettings& settings, const D
         make_target_patch(in.mesh, in.corners, patch_options(in.options), progress);
     *patch_seconds = seconds_since(start);
     PatchWork work = prepare_patch_work(std::move(target), in.options, progress);
-    if (settings.patch_cache) {
-      // Room for the members of a few designs: 2 MiB (a design's members are a few hundred
-      // KB on the examples) plus a quarter of the patch mesh's bytes, since members grow with
-      // the mesh, not with the maps; counted with the entry from the start.
-      const std::size_t maps =
-          (work.maps.g.distances.size() + work.maps.h.distances.size()) * sizeof(double);
-      work.members = std::make_shared<MemberMemo>((2u << 20) + (memory_bytes(work) - maps) / 4);
-    }
+    if (settings.patch_cache) work.members = member_memo_for(work);
     return work;
   };
   *cached = false;
+  if (in.layout) return layout_patch_work(settings, in, progress, cached, patch_seconds);
   if (!settings.patch_cache) return std::make_shared<const PatchWork>(compute());
   return settings.patch_cache->get(patch_key(in.mesh, in.corners, in.options), compute, cached,
                                    progress);
@@ -568,9 +602,32 @@ v1::DesignResult design_result(const Design& design, v1::DesignOptions record,
 DesignInputs prepare_design(const v1::DesignRequest& request) {
   DesignInputs in;
   in.mesh = to_mesh(request.mesh(), &in.load);
-  in.corners = to_corner_spec(request.corners(), in.load);
+  if (request.has_layout_patch()) {
+    const v1::Corners& c = request.corners();
+    if (c.vertices_size() > 0 || c.points_size() > 0)
+      throw InvalidInput("corners", "give corners or a layout_patch, not both");
+    try {
+      in.layout = layout_from_proto(request.layout_patch().layout(), in.load);
+    } catch (const Error& e) {
+      rethrow_within(e, "layout_patch");
+    }
+    std::string names;
+    for (size_t j = 0; j < in.layout->patches.size(); ++j) {
+      std::string& name = in.layout->patches[j].name;
+      if (name.empty()) name = "P" + std::to_string(j + 1);
+      if (name == request.layout_patch().patch()) in.layout_patch = static_cast<int>(j);
+      names += (j ? ", " : "") + name;
+    }
+    if (in.layout_patch < 0)
+      throw InvalidInput(
+          "layout_patch.patch",
+          "'" + request.layout_patch().patch() + "' is not a patch of the layout (" + names + ")");
+  } else {
+    in.corners = to_corner_spec(request.corners(), in.load);
+  }
   prepare_design_options(request.options(), in);
-  in.record.set_corners(corner_label(request.corners()));
+  in.record.set_corners(in.layout ? "layout patch " + request.layout_patch().patch()
+                                  : corner_label(request.corners()));
   return in;
 }
 

@@ -176,6 +176,20 @@ class ClientTest(unittest.TestCase):
         with self.assertRaises(gs.InvalidInput) as caught:
             self.client.layout(knet, automatic={"coverage_goal": 2})
         self.assertEqual(caught.exception.field, "automatic.coverage_goal")
+        # One patch of the layout designed alone, with the run's cross-section: its design in the
+        # run (this daemon keeps no cache, so it cuts the layout again).
+        p2 = run["patches"][1]["design"]["design"]
+        options = {"members_u": 3, "members_v": 3,
+                   "lamella_width": p2["options"]["lamella_width"]}
+        alone = self.client.design(knet, options=options,
+                                   layout_patch=(cut["report"]["layout"], "P2"))["design"]
+        self.assertEqual(alone["alpha_bar"], p2["alpha_bar"])
+        self.assertEqual(alone["crossings"], p2["crossings"])
+        with self.assertRaises(gs.InvalidInput) as caught:
+            self.client.design(knet, layout_patch=(cut["report"]["layout"], "P99"))
+        self.assertEqual(caught.exception.field, "layout_patch.patch")
+        with self.assertRaises(ValueError):
+            self.client.design(knet, corners=[0, 1, 2, 3], layout_patch=(cut["report"]["layout"], "P2"))
 
     def test_invalid_input_names_the_field(self):
         positions, indices, corners = square_grid()

@@ -110,5 +110,82 @@ TEST(LayoutRemote, ACancelledRunLayoutStopsAndTheDaemonServesOn) {
   EXPECT_TRUE(testing::call_patch(*stub, testing::patch_request("plane")).status.ok());
 }
 
+/// A RunLayout call's result (no result: the status).
+std::optional<v1::LayoutRunResult> run_layout(v1::Gridshell::Stub& stub,
+                                              const v1::LayoutRunRequest& request) {
+  grpc::ClientContext context;
+  auto reader = stub.RunLayout(&context, request);
+  v1::RunLayoutEvent event;
+  std::optional<v1::LayoutRunResult> out;
+  while (reader->Read(&event))
+    if (event.has_result()) out = event.result();
+  const grpc::Status status = reader->Finish();
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  return out;
+}
+
+TEST(LayoutRemote, ARedesignOfOnePatchOfALayoutSkipsTheCutAndTheMaps) {
+  TestDaemon daemon;
+  auto stub = daemon.stub();
+  // The sphere's 2 x 2 layout built whole: the daemon keeps every patch's work.
+  v1::LayoutRunRequest run;
+  *run.mutable_mesh() = testing::patch_request("sphere").mesh();
+  from_json(testing::sphere_layout_json(), *run.mutable_layout());
+  run.mutable_design()->set_members_u(4);
+  run.mutable_design()->set_members_v(4);
+  run.mutable_simulation()->set_notches("on");
+  const std::optional<v1::LayoutRunResult> built = run_layout(*stub, run);
+  ASSERT_TRUE(built);
+  ASSERT_EQ(built->patches_size(), 4);
+  const v1::Design& p2 = built->patches(1).design().design();
+  // P2 designed alone with the same options and the layout's cross-section: from the cache, the
+  // same design as within the layout.
+  v1::DesignRequest request;
+  *request.mutable_mesh() = run.mesh();
+  *request.mutable_layout_patch()->mutable_layout() = built->layout().report().layout();
+  request.mutable_layout_patch()->set_patch("P2");
+  *request.mutable_options() = run.design();
+  request.mutable_options()->set_lamella_width(p2.options().lamella_width());
+  auto again = testing::call_design(*stub, request);
+  ASSERT_TRUE(again.status.ok()) << again.status.error_message();
+  EXPECT_TRUE(again.result->report().distance_maps_cached());
+  const v1::Design& alone = again.result->design();
+  EXPECT_EQ(alone.alpha_bar(), p2.alpha_bar());
+  ASSERT_EQ(alone.crossings_size(), p2.crossings_size());
+  for (int k = 0; k < p2.crossings_size(); ++k)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(alone.crossings(k).surface_point(c), p2.crossings(k).surface_point(c)) << k;
+  // A redesign with other counts and alpha: cached too, and a different grid.
+  request.mutable_options()->set_members_u(6);
+  request.mutable_options()->set_alpha("max");
+  auto other = testing::call_design(*stub, request);
+  ASSERT_TRUE(other.status.ok()) << other.status.error_message();
+  EXPECT_TRUE(other.result->report().distance_maps_cached());
+  EXPECT_NE(other.result->design().crossings_size(), p2.crossings_size());
+  EXPECT_GT(other.result->design().alpha_bar(), p2.alpha_bar());
+  // Another layout (the same with corners as given): a miss cuts it once, then every other patch
+  // of it is cached.
+  request.mutable_layout_patch()->set_patch("P4");
+  request.mutable_options()->set_eta_max(1.002);  // other patch options: another key
+  auto cold = testing::call_design(*stub, request);
+  ASSERT_TRUE(cold.status.ok()) << cold.status.error_message();
+  EXPECT_FALSE(cold.result->report().distance_maps_cached());
+  request.mutable_layout_patch()->set_patch("P1");
+  auto warm = testing::call_design(*stub, request);
+  ASSERT_TRUE(warm.status.ok()) << warm.status.error_message();
+  EXPECT_TRUE(warm.result->report().distance_maps_cached());
+  // Bad requests name their field.
+  request.mutable_layout_patch()->set_patch("P9");
+  auto bad = testing::call_design(*stub, request);
+  EXPECT_EQ(bad.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad.status.error_message().find("layout_patch.patch"), std::string::npos)
+      << bad.status.error_message();
+  request.mutable_layout_patch()->set_patch("P1");
+  request.mutable_corners()->add_vertices(0);
+  bad = testing::call_design(*stub, request);
+  EXPECT_EQ(bad.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad.status.error_message().find("corners"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace gridshell

@@ -361,7 +361,7 @@ class Client:
         """Cut, check and smooth the target patch (``PatchResult``)."""
         return self.call("patch", _with(mesh=mesh, corners=_corners(corners), options=options), **call)
 
-    def design(self, mesh, corners=None, options=None, files=False, **call):
+    def design(self, mesh, corners=None, options=None, files=False, layout_patch=None, **call):
         """Patch stage, then the grid design (``DesignResult``: design, report, views).
 
         mesh     a ``Mesh`` message: ``mesh_arrays(...)``, ``mesh_file(...)``, ``mesh_example(...)``
@@ -370,8 +370,15 @@ class Client:
                  lamella_width, lamella_thickness, resolution, geodesic_method, eta_max,
                  interior_anchors, ... (``options()`` describes each: type, default, range)
         files    also return design.json and report.json in ``views``, the CLI's bytes
+        layout_patch  (layout, patch name) or a ``LayoutPatch`` dict: design that patch of a
+                 layout instead (corners None); the daemon keeps every patch's work of a layout
+                 it cut or ran, so a redesign skips the cut and the maps
         """
         request = _with(mesh=mesh, corners=_corners(corners), options=options)
+        if layout_patch is not None:
+            if corners is not None:
+                raise ValueError("give corners or layout_patch, not both")
+            request["layout_patch"] = _layout_patch(layout_patch)
         if files:
             request["files"] = True
         return self.call("design", request, **call)
@@ -392,9 +399,15 @@ class Client:
             request["files"] = True
         return self.call("simulate", request, **call)
 
-    def run(self, mesh, corners=None, design_options=None, simulation=None, files=False, **call):
-        """Patch, design and simulation in one call (``RunResult``: design, simulation)."""
+    def run(self, mesh, corners=None, design_options=None, simulation=None, files=False,
+            layout_patch=None, **call):
+        """Patch, design and simulation in one call (``RunResult``: design, simulation);
+        ``layout_patch`` as for ``design``."""
         design = _with(mesh=mesh, corners=_corners(corners), options=design_options)
+        if layout_patch is not None:
+            if corners is not None:
+                raise ValueError("give corners or layout_patch, not both")
+            design["layout_patch"] = _layout_patch(layout_patch)
         if files:
             design["files"] = True
         return self.call("run", _with(design=design, simulation=simulation), **call)
@@ -699,6 +712,14 @@ def _remaining(deadline):
 def _with(**fields):
     """A request dict of the fields that are given (None = left out: the API's default)."""
     return {k: v for k, v in fields.items() if v is not None}
+
+
+def _layout_patch(value):
+    """(layout, name) -> a LayoutPatch dict; a dict as is."""
+    if isinstance(value, dict):
+        return value
+    layout, name = value
+    return {"layout": layout, "patch": str(name)}
 
 
 def _corners(corners):

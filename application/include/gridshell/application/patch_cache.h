@@ -15,6 +15,7 @@
 #include <mutex>
 
 #include "gridshell/design/design.h"
+#include "gridshell/design/layout.h"
 
 namespace gridshell {
 
@@ -31,6 +32,17 @@ struct PatchKey {
 /// depends on are hashed: geodesic engine, patch cut, coverability and smoothing, map resolution).
 PatchKey patch_key(const TriangleMesh& mesh, const CornerSpec& corners,
                    const DesignOptions& options);
+
+/// The key of patch `patch` (index) of a layout on `mesh`, cut with these options: its corners
+/// (vertices as loaded, points) and its patches (names, "" as "P<k>"), the patch options and
+/// those the layout's planar angle check uses. Never equal to a single patch's key.
+PatchKey layout_patch_key(const TriangleMesh& mesh, const PatchLayout& layout, int patch,
+                          const DesignOptions& options);
+
+/// A member memo for work the cache keeps: room for the members of a few designs, 2 MiB (a
+/// design's members are a few hundred KB on the examples) plus a quarter of the patch mesh's
+/// bytes, since members grow with the mesh, not with the maps; counted with the entry.
+std::shared_ptr<MemberMemo> member_memo_for(const PatchWork& work);
 
 /// Bytes a PatchWork holds (the patch mesh with its topology, the maps, the reports, and the
 /// bound of its member memo, which fills as designs on the patch are made): what the cache counts
@@ -54,6 +66,10 @@ class PatchCache {
   std::shared_ptr<const PatchWork> get(const PatchKey& key, const std::function<PatchWork()>& make,
                                        bool* hit, const Progress& progress = {});
 
+  /// Keeps `work` for `key` (computed elsewhere: a layout's cut makes every patch's work at
+  /// once), unless the key is kept already or the work alone exceeds the bound.
+  void put(const PatchKey& key, std::shared_ptr<const PatchWork> work);
+
   struct Stats {
     std::size_t entries = 0;
     std::size_t bytes = 0;
@@ -68,6 +84,7 @@ class PatchCache {
     std::shared_ptr<const PatchWork> work;
     std::size_t bytes = 0;
   };
+  void insert_locked(const PatchKey& key, std::shared_ptr<const PatchWork> work, std::size_t bytes);
   mutable std::mutex mutex_;
   std::list<Entry> lru_;  // most recent first
   std::map<PatchKey, std::list<Entry>::iterator> index_;

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "gridshell/design/design.h"
+#include "gridshell/design/layout.h"
 #include "gridshell/design/target_patch.h"
 #include "gridshell/foundation/progress.h"
 #include "gridshell/geodesic/geodesic.h"
@@ -116,6 +117,10 @@ struct DesignInputs {
   DesignOptions options;
   v1::DesignOptions record;  ///< the options as recorded in design.json (completed after the run)
   int suggest = 3;           ///< ranked feasible suggestions to compute when infeasible
+  /// DesignRequest.layout_patch: the layout (mesh vertices as loaded) and the index of the patch
+  /// designed alone; `corners` is unused then.
+  std::optional<PatchLayout> layout;
+  int layout_patch = -1;
 };
 
 /// Checks every field; throws InvalidInput naming the first bad one.
