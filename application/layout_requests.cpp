@@ -77,6 +77,28 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
   return layout_result(layout, in.mesh, mesh_label(request.mesh()));
 }
 
+void apply_patch_design(const v1::Layout::Patch& patch, const std::string& field,
+                        DesignOptions& options, v1::DesignOptions& record) {
+  if (patch.has_alpha()) {
+    try {
+      parse_alpha(patch.alpha(), options);
+    } catch (const Error& e) {
+      throw InvalidInput(field + ".alpha", e.message());
+    }
+    record.set_alpha(patch.alpha());
+  }
+  for (const auto& [name, value, count, set] :
+       {std::tuple{"members_u", patch.members_u(), &options.members_g,
+                   &v1::DesignOptions::set_members_u},
+        std::tuple{"members_v", patch.members_v(), &options.members_h,
+                   &v1::DesignOptions::set_members_v}}) {
+    if (value == 0) continue;
+    *count = static_cast<int>(
+        check_option(option_spec("design", name), value, field + "." + std::string(name)));
+    (record.*set)(value);
+  }
+}
+
 AutoLayoutOptions prepare_auto_layout_options(const v1::AutoLayoutOptions& options,
                                               const std::string& prefix) {
   AutoLayoutOptions out;
@@ -183,6 +205,10 @@ v1::LayoutResult layout_result(const RequestedLayout& requested, const TriangleM
     for (double a : t.corner_angles) s.add_corner_angles(a);
     for (double l : t.boundary_lengths) s.add_side_lengths(l);
     s.set_eta(t.coverability.gap.eta);
+    if (p.alpha_range && !p.problem) {
+      s.add_alpha_range((*p.alpha_range)[0]);
+      s.add_alpha_range((*p.alpha_range)[1]);
+    }
     *mesh = to_proto(t.patch.mesh, p.name);
   }
   // What is not covered, and why.

@@ -150,6 +150,13 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
   } catch (const Error& e) {
     rethrow_within(e, "design");
   }
+  // Each patch's own design choices (Layout.Patch.alpha, members_u, members_v), checked too.
+  for (int j = 0; j < request.layout().patches_size(); ++j) {
+    DesignOptions scratch = in.options;
+    v1::DesignOptions record = in.record;
+    apply_patch_design(request.layout().patches(j), "layout.patches[" + std::to_string(j) + "]",
+                       scratch, record);
+  }
   in.mesh = to_mesh(request.mesh(), &in.load);
   in.options.maps.threads = in.options.grid.threads = settings.threads;
   in.options.patch.coverability.threads = settings.threads;
@@ -206,11 +213,17 @@ v1::LayoutRunResult run_layout_run(const v1::LayoutRunRequest& request, const Pr
           PatchWork work = prepare_patch_work(*patch.target, options, step);
           if (settings.patch_cache) work.members = member_memo_for(work);
           auto shared = std::make_shared<const PatchWork>(std::move(work));
-          designs[j] = design_on_patch(*shared, options, step);
+          // The patch's own choices over the common options.
+          DesignOptions own = options;
+          v1::DesignOptions record = in.record;
+          if (static_cast<int>(j) < request.layout().patches_size())
+            apply_patch_design(request.layout().patches(static_cast<int>(j)),
+                               "layout.patches[" + std::to_string(j) + "]", own, record);
+          designs[j] = design_on_patch(*shared, own, step);
           if (settings.patch_cache)
             settings.patch_cache->put(
                 layout_patch_key(in.mesh, cut.layout, static_cast<int>(j), in.options), shared);
-          design_results[j] = design_result(*designs[j], in.record, input + " " + patch.name,
+          design_results[j] = design_result(*designs[j], record, input + " " + patch.name,
                                             in.mesh.vertex_count(), seconds_since(design_start));
           jobs[j] = run_deployment_job(design_results[j].design(), simulation, "design.json", step,
                                        inner_threads);

@@ -626,6 +626,10 @@ DesignInputs prepare_design(const v1::DesignRequest& request) {
     in.corners = to_corner_spec(request.corners(), in.load);
   }
   prepare_design_options(request.options(), in);
+  if (in.layout)  // the patch's own design choices in the layout, over the request's options
+    apply_patch_design(request.layout_patch().layout().patches(in.layout_patch),
+                       "layout_patch.layout.patches[" + std::to_string(in.layout_patch) + "]",
+                       in.options, in.record);
   in.record.set_corners(in.layout ? "layout patch " + request.layout_patch().patch()
                                   : corner_label(request.corners()));
   return in;

@@ -483,5 +483,46 @@ TEST(CliLayout, PublicMeshesAreCoveredAndARingOfThemRunsWhole) {
             deployment["max_seam_gap_before_joining"].get<double>());
 }
 
+TEST(CliLayout, APatchsOwnAlphaAndCountsInTheLayoutOverrideTheRunsOptions) {
+  // layout.json says P2 takes the largest feasible planar angle and 5 inner g-members; the others
+  // take the run's options (the smallest angle, 4 x 4).
+  const std::string dir = testing::temp_dir();
+  json layout = json::parse(testing::sphere_layout_json());
+  layout["patches"][1]["alpha"] = "max";
+  layout["patches"][1]["members_u"] = 5;
+  const std::string file = testing::write_text(dir, "layout.json", layout.dump());
+  auto r = run_cli("run example:sphere --layout '" + file +
+                   "' --members-u 4 --members-v 4 --notches on --quiet --out '" + dir + "/run'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto design = [&](const char* name) {
+    return json::parse(testing::read_text(dir + "/run/patches/" + name + "/design.json"));
+  };
+  const auto inner = [](const json& d, const char* family) {
+    int n = 0;
+    for (const json& m : d["members"]) n += m["family"] == family && !m.value("boundary", false);
+    return n;
+  };
+  const json p2 = design("P2"), p1 = design("P1");
+  EXPECT_EQ(p2["alpha_bar"].get<double>(), p2["alpha_bar_range"][1].get<double>());
+  EXPECT_EQ(p2["options"]["alpha"], "max");
+  EXPECT_EQ(p2["options"]["members_u"], 5);
+  EXPECT_EQ(inner(p2, "g"), 5);
+  EXPECT_EQ(inner(p2, "h"), 4);
+  EXPECT_EQ(p1["alpha_bar"].get<double>(), p1["alpha_bar_range"][0].get<double>());
+  EXPECT_EQ(inner(p1, "g"), 4);
+  // The layout's report gives each patch's feasible range, which the designs chose from.
+  const json cut = json::parse(testing::read_text(dir + "/run/layout.json"));
+  ASSERT_EQ(cut["patches"][1]["alpha_range"].size(), 2u);
+  EXPECT_NEAR(cut["patches"][1]["alpha_range"][1].get<double>(),
+              p2["alpha_bar_range"][1].get<double>(), 1e-6);
+  // A bad choice is refused before any work, naming its field.
+  layout["patches"][1]["alpha"] = "wide";
+  testing::write_text(dir, "layout.json", layout.dump());
+  r = run_cli("run example:sphere --layout '" + file + "' --quiet --out '" + dir + "/bad'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("layout.patches[1].alpha"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad/design.json"));
+}
+
 }  // namespace
 }  // namespace gridshell

@@ -163,6 +163,15 @@ TEST(LayoutRemote, ARedesignOfOnePatchOfALayoutSkipsTheCutAndTheMaps) {
   EXPECT_TRUE(other.result->report().distance_maps_cached());
   EXPECT_NE(other.result->design().crossings_size(), p2.crossings_size());
   EXPECT_GT(other.result->design().alpha_bar(), p2.alpha_bar());
+  // The patch's own choice in the layout overrides the request's options (the page's per-patch
+  // slider): the same key, so cached too.
+  v1::DesignRequest own = request;
+  own.mutable_options()->set_alpha("min");
+  own.mutable_layout_patch()->mutable_layout()->mutable_patches(1)->set_alpha("max");
+  auto chosen = testing::call_design(*stub, own);
+  ASSERT_TRUE(chosen.status.ok()) << chosen.status.error_message();
+  EXPECT_TRUE(chosen.result->report().distance_maps_cached());
+  EXPECT_EQ(chosen.result->design().alpha_bar(), chosen.result->design().alpha_bar_range(1));
   // Another layout (the same with corners as given): a miss cuts it once, then every other patch
   // of it is cached.
   request.mutable_layout_patch()->set_patch("P4");

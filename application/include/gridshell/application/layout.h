@@ -24,6 +24,12 @@ v1::LayoutResult run_layout(const v1::LayoutRequest& request, const Progress& pr
 /// the sent indices); InvalidInput names "layout.corners[i]" / "layout.patches[j].corners".
 PatchLayout layout_from_proto(const v1::Layout& layout, const LoadReport& load);
 
+/// A layout patch's own design choices (alpha, members_u, members_v: Layout.Patch) over the
+/// run's `options` and `record`; InvalidInput names "<field>.alpha" ... (`field`:
+/// "layout.patches[j]").
+void apply_patch_design(const v1::Layout::Patch& patch, const std::string& field,
+                        DesignOptions& options, v1::DesignOptions& record);
+
 /// The automatic layout's options checked (fields "<prefix>.max_patches" ...), defaults filled.
 AutoLayoutOptions prepare_auto_layout_options(const v1::AutoLayoutOptions& options,
                                               const std::string& prefix = "automatic");
