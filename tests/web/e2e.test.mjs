@@ -1124,6 +1124,24 @@ test('layout: a layout file (the sphere example in 2 × 2 patches) is cut as giv
   for (const name of ['kit/kit.json', 'kit/joining.svg', 'kit/bom.csv', 'kit/assembly-north-west.svg', 'kit/sheets/sheet-01.dxf'])
     assert.ok(kit[name], `${name} in ${Object.keys(kit).join(' ')}`);
   assert.match(await ltText('layout-summary'), /kit: \d+ lamellas on \d+ sheet/);
+  // One patch's own ᾱ: P2 at the top of its feasible range, redesigned alone from the daemon's
+  // cache (the build kept every patch's work), then the whole built again with that choice.
+  assert.ok(await ltId('layout-patch-box').isVisible());
+  await ltId('layout-patch').selectOption('P2');
+  await ltId('layout-patch-alpha').evaluate((e) => { e.value = '1000'; e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change')); });
+  await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-patch-info]').dataset.ready === '1'), 30000, 'P2 redesigned');
+  const info = await ltText('layout-patch-info');
+  assert.match(info, /^P2: ᾱ [\d.]+°, \d+ × \d+ inner members, \d+ crossings — \d+ ms, patch work cached; Build all patches/);
+  const shown = /–([\d.]+)°\)$/.exec(await ltText('layout-patch-alpha-value'));
+  assert.ok(shown, await ltText('layout-patch-alpha-value'));
+  const alphaBar = Number(await lt.evaluate(() => document.querySelector('[data-testid=layout-patch-info]').dataset.alphaBar));
+  assert.ok(Math.abs(alphaBar * 180 / Math.PI - Number(shown[1])) < 0.01, `${alphaBar} rad against the range's top ${shown[1]}°`);
+  await ltId('layout-build').click();
+  await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-summary]').dataset.ready === '1'), 60000, 'built again');
+  const runFiles = unzipSync(new Uint8Array((await ltDownload('layout-download-run-zip')).bytes));
+  const p2 = JSON.parse(new TextDecoder().decode(runFiles['run/patches/P2/design.json']));
+  assert.equal(p2.alpha_bar, alphaBar);
+  assert.equal(JSON.parse(new TextDecoder().decode(runFiles['run/layout.json'])).layout.patches[1].alpha, String(alphaBar));
   const bad = { ...layout, patches: layout.patches.map((p, i) => (i === 1 ? { corners: [1, 2, 5, 12] } : p)) };
   allowHttpErrors = true;
   try {

@@ -533,6 +533,27 @@ test('layout: the summary, the patches\' table, what is not covered and the tria
                'automatic: 6 faces × 1 × 1 grid, 2 trials in 0.25 s\nsurface: a closed surface: split along the edges of a cube');
   assert.deepEqual(lay.trialRows(closed), [['6 faces × 1 × 1', '6', '100.0 %', '0', '0.070'], ['6 faces × 2 × 2', '24', '≤ 50.0 %', '0', '0.100']]);
   assert.equal(lay.automaticGrid('ring', 14, 1), '14 × 1 round the ring');
+});
+
+test('layout: one patch\'s own ᾱ on a slider over its feasible range, and the line after its redesign', () => {
+  const range = [0.5, 0.9];
+  assert.equal(lay.patchAlpha(range, 0), 0.5);
+  assert.ok(Math.abs(lay.patchAlpha(range, 0.25) - 0.6) < 1e-15);
+  assert.equal(lay.patchAlpha(range, 2), 0.9); // clamped
+  assert.equal(lay.patchAlpha(undefined, 0.5), null);
+  assert.equal(lay.patchSliderPosition(range, undefined), 0);
+  assert.equal(lay.patchSliderPosition(range, 'max'), 1);
+  assert.ok(Math.abs(lay.patchSliderPosition(range, '0.8') - 0.75) < 1e-12);
+  assert.equal(lay.patchSliderPosition(range, 'wide'), 0);
+  const member = (family, boundary) => ({ family, index: 0, boundary, surface: [] });
+  const result = {
+    design: { alpha_bar: Math.PI / 3, members: [member('g', true), member('g', false), member('g', false), member('h', false), member('h', true)],
+              crossings: [{}, {}, {}] },
+    report: { distance_maps_cached: true },
+  };
+  assert.equal(lay.patchDesignLine('P2', result, 31.4), 'P2: ᾱ 60.00°, 2 × 1 inner members, 3 crossings — 31 ms, patch work cached');
+  assert.equal(lay.patchDesignLine('P2', { ...result, report: { distance_maps_cached: false } }, 800),
+               'P2: ᾱ 60.00°, 2 × 1 inner members, 3 crossings — 800 ms');
   assert.equal(lay.percent(0.9537766652778353), '95.4 %');
   assert.equal(lay.ofDiagonal(0.0337, 50), '0.0337 (0.067 % of the diagonal)');
   assert.equal(lay.ofDiagonal(undefined, 50), '—');

@@ -103,9 +103,11 @@ export function maxDeviation(dep: Deployment): number {
  * option's error goes next to its own control (`design.NAME`, `simulation.NAME`) when
  * `hasSlot` says the page has one, else under its section.
  */
-export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate' | 'layout' | 'build' | 'layout kit',
+export function errorSlot(call: 'load' | 'patch' | 'design' | 'simulate' | 'fabricate' | 'layout' | 'build' | 'layout kit' | 'patch design',
                           field: string, hasSlot: (slot: string) => boolean = () => false): string {
   if (call === 'fabricate') return 'fabricate';
+  // One patch of a layout redesigned: its options next to theirs, the rest under the patch's controls.
+  if (call === 'patch design') return field.startsWith('options.') ? layoutErrorSlot(field, hasSlot) : 'layout_patch';
   if (call === 'layout kit') return 'layout'; // the whole's Fabricate: under the layout section
   if (call === 'layout' || call === 'build') return layoutErrorSlot(field, hasSlot);
   const name = /^options\.([A-Za-z0-9_]+)/.exec(field)?.[1];

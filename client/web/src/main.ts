@@ -22,8 +22,8 @@ import { OptionsForm, optionKey, tooltip } from './form';
 import { fabricateRequest, kitSummary, kitZip, type FabricateResult } from './kit';
 import {
   cssColour, deployedPatches, layoutFabricateRequest, layoutFiles, layoutFromJson, layoutSummary, maxDeviationOf,
-  notConverged, patchColour, patchRows, runFiles, runProgress, runRows, runSummary, runZip, sideSegments, trialRows,
-  uncoveredLines, type LayoutMode, type LayoutResult, type LayoutRunResult,
+  notConverged, patchAlpha, patchColour, patchDesignLine, patchRows, patchSliderPosition, runFiles, runProgress, runRows,
+  runSummary, runZip, sideSegments, trialRows, uncoveredLines, type LayoutMode, type LayoutResult, type LayoutRunResult,
 } from './layout';
 import type { Rgb } from './colormap';
 import { appendSuggestions } from './suggestions';
@@ -101,6 +101,13 @@ const ui = {
   layoutSummary: el('layout-summary'),
   layoutRun: el<HTMLTableElement>('layout-run'),
   layoutDownloads: el('layout-downloads'),
+  layoutPatchBox: el('layout-patch-box'),
+  layoutPatch: el<HTMLSelectElement>('layout-patch'),
+  layoutPatchAlpha: el<HTMLInputElement>('layout-patch-alpha'),
+  layoutPatchAlphaValue: el('layout-patch-alpha-value'),
+  layoutPatchU: el<HTMLInputElement>('layout-patch-u'),
+  layoutPatchV: el<HTMLInputElement>('layout-patch-v'),
+  layoutPatchInfo: el('layout-patch-info'),
 };
 
 const viewer = new Viewer(el<HTMLCanvasElement>('viewer'));
@@ -132,7 +139,7 @@ const state: State = {
 
 // ---- calls: one at a time, cancellable ----------------------------------------------------------
 
-type CallKind = 'load' | 'patch' | 'design' | 'simulate' | 'fabricate' | 'layout' | 'build' | 'layout kit';
+type CallKind = 'load' | 'patch' | 'design' | 'simulate' | 'fabricate' | 'layout' | 'build' | 'layout kit' | 'patch design';
 const LAYOUT_CALLS: ReadonlySet<CallKind> = new Set<CallKind>(['layout', 'build', 'layout kit']);
 let current: { kind: CallKind; controller: AbortController; byUser: boolean } | null = null;
 
@@ -197,7 +204,7 @@ function errorSlotElement(key: string): HTMLElement | null {
 function clearErrors(kind: CallKind): void {
   ui.error.hidden = true;
   ui.error.textContent = '';
-  const slots = kind === 'simulate' ? ['simulation'] : kind === 'load' ? ['mesh', 'corners', 'options', 'design.alpha']
+  const slots = kind === 'patch design' ? ['layout_patch'] : kind === 'simulate' ? ['simulation'] : kind === 'load' ? ['mesh', 'corners', 'options', 'design.alpha']
     : kind === 'patch' ? ['corners', 'options', 'design.alpha'] : LAYOUT_CALLS.has(kind) ? ['mesh', 'layout', 'options', 'simulation']
     : ['options', 'design.alpha'];
   for (const s of slots) {
@@ -206,7 +213,7 @@ function clearErrors(kind: CallKind): void {
   }
   // Next to each control: the daemon's error goes, the description's own check stays.
   if (kind === 'layout' || kind === 'build') for (const group of ['design', 'simulation', 'layout']) form?.clearErrors(group);
-  else if (kind !== 'fabricate' && kind !== 'layout kit') form?.clearErrors(kind === 'simulate' ? 'simulation' : 'design');
+  else if (kind !== 'fabricate' && kind !== 'layout kit' && kind !== 'patch design') form?.clearErrors(kind === 'simulate' ? 'simulation' : 'design');
 }
 
 function showError(kind: CallKind, e: unknown): void {
@@ -775,6 +782,9 @@ function clearLayout(): void {
   ui.layoutPatches.hidden = true;
   ui.layoutUncovered.textContent = '';
   ui.layoutTrialsBox.hidden = true;
+  ui.layoutPatchBox.hidden = true;
+  ui.layoutPatchInfo.textContent = '';
+  delete ui.layoutPatchInfo.dataset['ready'];
   setLayoutDownloads([]);
   const slot = errorSlotElement('layout');
   if (slot) slot.textContent = '';
@@ -818,12 +828,85 @@ function showLayout(result: LayoutResult): void {
   ui.layoutTrialsBox.hidden = trials.length === 0;
   if (trials.length) fillTable(ui.layoutTrials, ['grid', 'patches', 'coverage', 'failing', 's'], trials, [1, 2, 4]);
   ui.layoutBuild.disabled = !r.patches.some((p) => p.ok);
+  // One patch's own ᾱ and counts: the patches that meet the checks.
+  const chosen = ui.layoutPatch.value;
+  ui.layoutPatch.replaceChildren(...r.patches.filter((p) => p.ok).map((p) => new Option(p.name, p.name)));
+  if (chosen && r.patches.some((p) => p.ok && p.name === chosen)) ui.layoutPatch.value = chosen;
+  ui.layoutPatchBox.hidden = ui.layoutPatch.options.length === 0;
+  showPatchChoices();
   setLayoutDownloads(layoutFiles(result));
   const svg = result.views.find((f) => f.name === 'layout.svg');
   if (svg) plan.show(blobUrl(svg));
 }
 
 ui.layoutAuto.addEventListener('click', () => void computeLayout({ automatic: form?.requestOptions('layout') ?? {} }));
+
+/** The selected patch's index in the layout shown, or -1. */
+function selectedPatch(): number {
+  return state.layout ? state.layout.report.layout.patches.findIndex((p, i) => (p.name || `P${i + 1}`) === ui.layoutPatch.value) : -1;
+}
+
+/** The selected patch's own choices (from the layout) on its controls. */
+function showPatchChoices(): void {
+  const i = selectedPatch();
+  if (!state.layout || i < 0) return;
+  const patch = state.layout.report.layout.patches[i]!;
+  const range = state.layout.report.patches[i]?.alpha_range;
+  ui.layoutPatchAlpha.disabled = !range;
+  ui.layoutPatchAlpha.value = String(Math.round(1000 * patchSliderPosition(range, patch.alpha)));
+  ui.layoutPatchU.value = String(patch.members_u ?? 0);
+  ui.layoutPatchV.value = String(patch.members_v ?? 0);
+  showPatchAlpha();
+}
+
+function showPatchAlpha(): void {
+  const i = selectedPatch();
+  const range = i >= 0 ? state.layout?.report.patches[i]?.alpha_range : undefined;
+  const alpha = patchAlpha(range, Number(ui.layoutPatchAlpha.value) / 1000);
+  ui.layoutPatchAlphaValue.textContent = alpha === null ? '—'
+    : `${(alpha * 180 / Math.PI).toFixed(2)}° (${(range![0]! * 180 / Math.PI).toFixed(2)}°–${(range![1]! * 180 / Math.PI).toFixed(2)}°)`;
+}
+
+/**
+ * The selected patch's ᾱ and counts into the layout, then that patch redesigned alone (Design with
+ * layout_patch: the daemon keeps each patch's work, so this skips the cut and the maps). Built, it
+ * takes the run's cross-section; Build all patches then simulates the whole with the choices.
+ */
+async function redesignPatch(): Promise<void> {
+  const i = selectedPatch();
+  const layout = state.layout;
+  if (!layout || i < 0 || !state.mesh) return;
+  if (current?.kind === 'build') {
+    ui.layoutPatchInfo.textContent = 'the layout is being built: change the patch when it is done';
+    return;
+  }
+  const patch = layout.report.layout.patches[i]!;
+  const alpha = patchAlpha(layout.report.patches[i]?.alpha_range, Number(ui.layoutPatchAlpha.value) / 1000);
+  if (alpha !== null) patch.alpha = String(alpha);
+  const u = Math.max(0, Math.round(Number(ui.layoutPatchU.value) || 0)), v = Math.max(0, Math.round(Number(ui.layoutPatchV.value) || 0));
+  if (u > 0) patch.members_u = u; else delete patch.members_u;
+  if (v > 0) patch.members_v = v; else delete patch.members_v;
+  const options: Record<string, unknown> = { ...(form?.requestOptions('design') ?? {}) };
+  const built = state.layoutRun?.patches.find((p) => p.design?.design)?.design?.design;
+  if (built) options['lamella_width'] = built.options.lamella_width; // the layout's cross-section
+  const name = ui.layoutPatch.value;
+  delete ui.layoutPatchInfo.dataset['ready'];
+  const t0 = performance.now();
+  const result = await run<DesignResult>('patch design', 'design', {
+    mesh: state.mesh, layout_patch: { layout: layout.report.layout, patch: name }, options,
+  });
+  if (!result) return;
+  ui.layoutPatchInfo.textContent = `${patchDesignLine(name, result, performance.now() - t0)}` +
+    (state.layoutRun ? '; Build all patches to simulate the whole with it' : '');
+  ui.layoutPatchInfo.dataset['ready'] = '1';
+  ui.layoutPatchInfo.dataset['alphaBar'] = String(result.design.alpha_bar);
+}
+
+ui.layoutPatch.addEventListener('change', showPatchChoices);
+ui.layoutPatchAlpha.addEventListener('input', showPatchAlpha);
+ui.layoutPatchAlpha.addEventListener('change', () => void redesignPatch());
+ui.layoutPatchU.addEventListener('change', () => void redesignPatch());
+ui.layoutPatchV.addEventListener('change', () => void redesignPatch());
 
 ui.layoutFile.addEventListener('change', () => {
   const f = ui.layoutFile.files?.[0];
