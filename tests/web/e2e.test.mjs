@@ -1142,6 +1142,19 @@ test('layout: a layout file (the sphere example in 2 × 2 patches) is cut as giv
   const p2 = JSON.parse(new TextDecoder().decode(runFiles['run/patches/P2/design.json']));
   assert.equal(p2.alpha_bar, alphaBar);
   assert.equal(JSON.parse(new TextDecoder().decode(runFiles['run/layout.json'])).layout.patches[1].alpha, String(alphaBar));
+  // Drag a corner: the middle one (4, shared by all four patches) to a clicked vertex. The layout
+  // is cut again and every patch at it follows; P2 keeps its own ᾱ.
+  await ltId('layout-corner').selectOption('4');
+  const view = await ltId('viewer').boundingBox();
+  await lt.mouse.click(view.x + view.width * 0.54, view.y + view.height * 0.48);
+  await until(() => lt.evaluate(() => document.querySelector('[data-testid=layout-info]').dataset.ready === '1'), 30000, 'the layout cut again');
+  assert.match(await ltText('layout-info'), /\n4 patches \(4 ok\), 4 seams \(largest mismatch 0\), 9 corners$/);
+  const moved = JSON.parse(new TextDecoder().decode((await ltDownload('layout-download-layout-json')).bytes)).layout;
+  assert.equal(typeof moved.corners[4].vertex, 'number');
+  assert.notEqual(moved.corners[4].vertex, 16 * 33 + 16, 'the corner moved');
+  assert.deepEqual(moved.corners.map((c) => c.vertex).filter((_, k) => k !== 4), layout.corners.map((c) => c.vertex).filter((_, k) => k !== 4));
+  assert.equal(moved.patches[1].alpha, String(alphaBar));
+  assert.equal(await ltId('layout-corner').inputValue(), '');
   const bad = { ...layout, patches: layout.patches.map((p, i) => (i === 1 ? { corners: [1, 2, 5, 12] } : p)) };
   allowHttpErrors = true;
   try {

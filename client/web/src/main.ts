@@ -23,7 +23,8 @@ import { fabricateRequest, kitSummary, kitZip, type FabricateResult } from './ki
 import {
   cssColour, deployedPatches, layoutFabricateRequest, layoutFiles, layoutFromJson, layoutSummary, maxDeviationOf,
   notConverged, patchAlpha, patchColour, patchDesignLine, patchRows, patchSliderPosition, runFiles, runProgress, runRows,
-  runSummary, runZip, sideSegments, trialRows, uncoveredLines, type LayoutMode, type LayoutResult, type LayoutRunResult,
+  runSummary, runZip, sideSegments, trialRows, uncoveredLines, type Layout, type LayoutMode, type LayoutResult,
+  type LayoutRunResult,
 } from './layout';
 import type { Rgb } from './colormap';
 import { appendSuggestions } from './suggestions';
@@ -101,6 +102,8 @@ const ui = {
   layoutSummary: el('layout-summary'),
   layoutRun: el<HTMLTableElement>('layout-run'),
   layoutDownloads: el('layout-downloads'),
+  layoutCornerBox: el('layout-corner-box'),
+  layoutCorner: el<HTMLSelectElement>('layout-corner'),
   layoutPatchBox: el('layout-patch-box'),
   layoutPatch: el<HTMLSelectElement>('layout-patch'),
   layoutPatchAlpha: el<HTMLInputElement>('layout-patch-alpha'),
@@ -435,7 +438,18 @@ function updateCorners(): void {
 viewer.onPick = (pick: Pick) => {
   if (!state.loaded) return;
   if (state.layout) {
-    ui.status.textContent = 'A layout is shown: Clear (section 2) to place corners of a single patch.';
+    // A layout corner chosen under "Move corner": it goes to the picked vertex and the layout is
+    // cut again, so every patch at that corner follows.
+    if (ui.layoutCorner.value !== '' && pick.kind === 'surface' && current?.kind !== 'build') {
+      const k = Number(ui.layoutCorner.value);
+      const layout: Layout = structuredClone(state.layout.report.layout);
+      layout.corners[k] = { vertex: pick.vertex };
+      ui.layoutCorner.value = '';
+      ui.status.textContent = `corner ${k} moved to vertex ${pick.vertex}: cutting the layout again`;
+      void computeLayout({ layout });
+      return;
+    }
+    ui.status.textContent = 'A layout is shown: choose a corner under "Move corner" to move it, or Clear (section 2) to place corners of a single patch.';
     return;
   }
   if (pick.kind === 'marker') {
@@ -783,6 +797,7 @@ function clearLayout(): void {
   ui.layoutUncovered.textContent = '';
   ui.layoutTrialsBox.hidden = true;
   ui.layoutPatchBox.hidden = true;
+  ui.layoutCornerBox.hidden = true;
   ui.layoutPatchInfo.textContent = '';
   delete ui.layoutPatchInfo.dataset['ready'];
   setLayoutDownloads([]);
@@ -833,6 +848,8 @@ function showLayout(result: LayoutResult): void {
   ui.layoutPatch.replaceChildren(...r.patches.filter((p) => p.ok).map((p) => new Option(p.name, p.name)));
   if (chosen && r.patches.some((p) => p.ok && p.name === chosen)) ui.layoutPatch.value = chosen;
   ui.layoutPatchBox.hidden = ui.layoutPatch.options.length === 0;
+  ui.layoutCorner.replaceChildren(new Option('—', ''), ...r.layout.corners.map((_, k) => new Option(String(k), String(k))));
+  ui.layoutCornerBox.hidden = false;
   showPatchChoices();
   setLayoutDownloads(layoutFiles(result));
   const svg = result.views.find((f) => f.name === 'layout.svg');
