@@ -199,6 +199,24 @@ TriangleMesh annulus(double r0, double r1, int rings, int sectors) {
   return TriangleMesh(std::move(vertices), std::move(faces));
 }
 
+TriangleMesh torus(double major, double minor, int nu, int nv) {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+      vertices.push_back(Vec3((major + minor * std::cos(v)) * std::cos(u),
+                              (major + minor * std::cos(v)) * std::sin(u), minor * std::sin(v)));
+    }
+  auto id = [&](int i, int j) { return (j % nv) * nu + (i % nu); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return TriangleMesh(std::move(vertices), std::move(faces));
+}
+
 CommandResult run_cli(const std::string& arguments) {
   return run_command(std::string("'") + GRIDSHELL_CLI + "' " + arguments);
 }

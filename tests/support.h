@@ -60,6 +60,10 @@ TriangleMesh icosphere(int subdivisions, double radius);
 /// i * sectors + j. Two boundary loops.
 TriangleMesh annulus(double r0, double r1, int rings, int sectors);
 
+/// A closed torus about the z axis (radii `major` > `minor`): nu x nv vertices, vertex (i, j)
+/// at angle 2 pi i / nu round the axis and 2 pi j / nv round the tube has index j * nu + i.
+TriangleMesh torus(double major, double minor, int nu, int nv);
+
 /// Closest point to `p` on the triangle (a, b, c), by the Voronoi regions of its vertices,
 /// edges and face (Ericson, Real-Time Collision Detection, 5.1.5). Written here, independently
 /// of the kernel's closest-point code, as the tests' oracle.

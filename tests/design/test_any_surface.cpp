@@ -164,21 +164,8 @@ TEST(AnySurface, LoopAroundATorusTubeDoesNotBoundARegion) {
   // A torus (R = 3, r = 1); corners on one meridian go round the tube: the loop does not
   // separate the surface. A small square on the outer equator is a disk.
   const int nu = 48, nv = 24;
-  std::vector<Vec3> vertices;
-  std::vector<Face> faces;
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
-      vertices.push_back(
-          Vec3((3 + std::cos(v)) * std::cos(u), (3 + std::cos(v)) * std::sin(u), std::sin(v)));
-    }
+  const TriangleMesh torus = testing::torus(3, 1, nu, nv);
   auto id = [&](int i, int j) { return (j % nv) * nu + (i % nu); };
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  const TriangleMesh torus(std::move(vertices), std::move(faces));
   const std::string message = infeasible_message(
       torus, CornerSpec::at_vertices({id(0, 0), id(0, 6), id(0, 12), id(0, 18)}));
   EXPECT_TRUE(message.find("do not bound a region") != std::string::npos ||

@@ -236,22 +236,7 @@ TEST(AutoLayout, SurfacesItCannotLayOutAreRefusedSayingWhy) {
   const std::string holes = refusal(TriangleMesh(square.vertices(), faces));
   EXPECT_NE(holes.find("3 boundary loops"), std::string::npos) << holes;
   // A torus: closed with a handle.
-  const int nu = 48, nv = 24;
-  std::vector<Vec3> vertices;
-  std::vector<Face> torus_faces;
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
-      vertices.push_back(
-          Vec3((3 + std::cos(v)) * std::cos(u), (3 + std::cos(v)) * std::sin(u), std::sin(v)));
-    }
-  const auto id = [&](int i, int j) { return (j % nv) * nu + (i % nu); };
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      torus_faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      torus_faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  const std::string torus = refusal(TriangleMesh(vertices, torus_faces));
+  const std::string torus = refusal(testing::torus(3, 1, 48, 24));
   EXPECT_NE(torus.find("0 boundary loops and Euler characteristic 0"), std::string::npos) << torus;
   // A sphere whose cap above z = 5 is pressed in (mirrored at z = 5): closed, but the crater's
   // faces face its centre, so rays from there would meet the surface three times.
