@@ -105,11 +105,17 @@ const v1::LayoutReport::PatchSummary* print_layout_report(const v1::LayoutReport
               100 * r.coverage(), r.covered_area(), r.input_area(), r.patches_size());
   const v1::LayoutReport::PatchSummary* failed = nullptr;
   for (const auto& p : r.patches()) {
-    if (p.ok())
-      std::printf("  %-6s ok       area %.4g, eta %.5f, corners %.0f %.0f %.0f %.0f deg\n",
+    if (p.ok()) {
+      // The feasible planar angles, from which a layout patch's own "alpha" may choose.
+      char range[64] = "";
+      if (p.alpha_range_size() == 2)
+        std::snprintf(range, sizeof range, ", alpha %.1f..%.1f deg", p.alpha_range(0) * deg,
+                      p.alpha_range(1) * deg);
+      std::printf("  %-6s ok       area %.4g, eta %.5f, corners %.0f %.0f %.0f %.0f deg%s\n",
                   p.name().c_str(), p.area(), p.eta(), p.corner_angles(0) * deg,
-                  p.corner_angles(1) * deg, p.corner_angles(2) * deg, p.corner_angles(3) * deg);
-    else
+                  p.corner_angles(1) * deg, p.corner_angles(2) * deg, p.corner_angles(3) * deg,
+                  range);
+    } else
       std::printf("  %-6s FAILS    %s: %s\n", p.name().c_str(), p.problem_field().c_str(),
                   p.problem().c_str());
     if (!p.ok() && !failed) failed = &p;
