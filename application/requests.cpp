@@ -533,6 +533,8 @@ std::vector<v1::Suggestion> suggestions_for(const DesignInputs& in, const PatchW
   int rank = 0;
   for (const DesignSuggestion& s :
        suggest_feasible_designs(in.mesh, work, options, failure, limits, progress)) {
+    // A layout's patch keeps the layout's corners (its neighbours share them).
+    if (in.layout && s.kind == DesignSuggestion::Kind::Corners) continue;
     v1::Suggestion& m = out.emplace_back();
     m.set_rank(++rank);
     m.set_kind(to_string(s.kind));
