@@ -120,6 +120,7 @@ void print_suggestions(const std::vector<v1::Suggestion>& suggestions) {
 
 int report_error(const Error& error) {
   finish_progress();
+  remove_unused_output_folder();
   const std::string field = cli_field(error.field(), field_context());
   std::string line = "error: ";
   if (error.code() == ErrorCode::Infeasible) line += "infeasible: ";

@@ -288,11 +288,22 @@ double median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
+namespace {
+/// The outermost folder prepare_output_folder created ("" if --out existed).
+std::string created_output_folder;
+}  // namespace
+
 void prepare_output_folder(const std::string& out) {
   namespace fs = std::filesystem;
   if (out.empty()) throw InvalidInput("--out", "empty: give the output folder");
   std::error_code ec;
+  fs::path missing;
+  for (fs::path p = fs::absolute(out, ec); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    missing = p;
+    if (p == p.parent_path()) break;
+  }
   fs::create_directories(out, ec);
+  if (!ec && !missing.empty()) created_output_folder = missing.string();
   if (ec)
     throw InvalidInput("--out", "cannot create the output folder " + out + ": " + ec.message());
   if (!fs::is_directory(out, ec)) throw InvalidInput("--out", out + " exists and is not a folder");
@@ -302,6 +313,18 @@ void prepare_output_folder(const std::string& out) {
   if (!f) throw InvalidInput("--out", "cannot write into " + out + ": " + std::strerror(errno));
   std::fclose(f);
   fs::remove(probe, ec);
+}
+
+void remove_unused_output_folder() {
+  namespace fs = std::filesystem;
+  if (created_output_folder.empty()) return;
+  std::error_code ec;
+  // Only what this run created, and only if nothing was written into it.
+  for (fs::recursive_directory_iterator it(created_output_folder, ec), end; !ec && it != end;
+       it.increment(ec))
+    if (!it->is_directory(ec)) return;
+  if (!ec) fs::remove_all(created_output_folder, ec);
+  created_output_folder.clear();
 }
 
 namespace {

@@ -137,5 +137,8 @@ double median(std::vector<double> values);
 /// written into it, before any work is done (also before a remote run). Throws InvalidInput
 /// naming --out otherwise.
 void prepare_output_folder(const std::string& out);
+/// After a failed command: removes the folders prepare_output_folder created if nothing was
+/// written into them (bad input leaves no empty --out behind; an --out that existed stays).
+void remove_unused_output_folder();
 
 }  // namespace gridshell::cli

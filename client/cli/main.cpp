@@ -67,12 +67,14 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const Cancelled&) {
     cli::finish_progress();
+    cli::remove_unused_output_folder();
     std::cerr << "error: cancelled\n";
     return 130;
   } catch (const Error& e) {
     return cli::report_error(e);  // the field in the CLI's terms (cli_errors.cpp)
   } catch (const cli::RemoteError& e) {
     cli::finish_progress();
+    cli::remove_unused_output_folder();
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   } catch (const std::exception& e) {

@@ -521,7 +521,12 @@ TEST(CliLayout, APatchsOwnAlphaAndCountsInTheLayoutOverrideTheRunsOptions) {
   r = run_cli("run example:sphere --layout '" + file + "' --quiet --out '" + dir + "/bad'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("layout.patches[1].alpha"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir + "/bad/design.json"));
+  // The output folder it created is gone again (nothing was written); one that existed stays.
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad"));
+  std::filesystem::create_directories(dir + "/existing");
+  r = run_cli("run example:sphere --layout '" + file + "' --quiet --out '" + dir + "/existing'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(std::filesystem::is_directory(dir + "/existing"));
 }
 
 }  // namespace
