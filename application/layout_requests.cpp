@@ -126,7 +126,12 @@ RequestedLayout cut_requested_layout(const v1::Layout& layout,
   if (layout.corners_size() > 0 || layout.patches_size() > 0)
     throw InvalidInput("layout", "give a layout or ask for an automatic one, not both");
   const auto start = std::chrono::steady_clock::now();
-  AutoLayout found = auto_layout(mesh, options, auto_options, progress);
+  AutoLayout found;
+  try {
+    found = auto_layout(mesh, options, auto_options, progress);
+  } catch (const InvalidInput& e) {
+    rethrow_within(e, "automatic");  // its options: "automatic.max_patches"
+  }
   v1::LayoutReport::Automatic& report = out.automatic.emplace();
   report.set_columns(found.columns);
   report.set_rows(found.rows);

@@ -4,7 +4,6 @@
 #define CGAL_EIGEN3_ENABLED 1  // CGAL's parameterization solves with Eigen
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
-#include <CGAL/Surface_mesh_parameterization/Barycentric_mapping_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/Error_code.h>
 #include <CGAL/Surface_mesh_parameterization/Mean_value_coordinates_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/Square_border_parameterizer_3.h>
@@ -201,9 +200,6 @@ std::vector<Vec2> square_map(const TriangleMesh& mesh, const std::vector<int>& l
       throw Infeasible("layout",
                        "the surface could not be mapped onto a square (a face is not "
                        "manifold for CGAL)");
-  // Vertices on no face (a loader's welded duplicates) would leave the map's system singular.
-  for (CgalMesh::Vertex_index v : handle)
-    if (cgal.is_isolated(v)) cgal.remove_vertex(v);
   // A border halfedge of the loop; the corners run along the border in CGAL's direction.
   CgalMesh::Halfedge_index border;
   for (CgalMesh::Halfedge_index h : cgal.halfedges())
@@ -212,31 +208,17 @@ std::vector<Vec2> square_map(const TriangleMesh& mesh, const std::vector<int>& l
       break;
     }
   using Border = SMP::Square_border_arc_length_parameterizer_3<CgalMesh>;
+  using Parameterizer = SMP::Mean_value_coordinates_parameterizer_3<CgalMesh, Border>;
   const Border border_map(handle[loop[corners[0]]], handle[loop[corners[1]]],
                           handle[loop[corners[2]]], handle[loop[corners[3]]]);
   auto uv_map = cgal.add_property_map<CgalMesh::Vertex_index, Kernel::Point_2>("v:uv").first;
-  std::vector<Vec2> uv(mesh.vertex_count(), Vec2::Zero());
-  const auto read = [&](SMP::Error_code status) {
-    if (status != SMP::OK) return false;
-    for (int v = 0; v < mesh.vertex_count(); ++v) {
-      if (cgal.is_removed(handle[v])) continue;
-      uv[v] = Vec2(uv_map[handle[v]].x(), uv_map[handle[v]].y());
-      if (!uv[v].allFinite()) return false;
-    }
-    return true;
-  };
-  // Mean value coordinates follow the surface's shape; where its weights break down (faces of
-  // no area: a net's collapsed pole gave "Cannot solve linear system") the uniform Tutte map,
-  // which depends on the connectivity only, is one to one all the same.
-  if (read(SMP::parameterize(
-          cgal, SMP::Mean_value_coordinates_parameterizer_3<CgalMesh, Border>(border_map), border,
-          uv_map)))
-    return uv;
-  const SMP::Error_code status = SMP::parameterize(
-      cgal, SMP::Barycentric_mapping_parameterizer_3<CgalMesh, Border>(border_map), border, uv_map);
-  if (!read(status))
+  const SMP::Error_code status = SMP::parameterize(cgal, Parameterizer(border_map), border, uv_map);
+  if (status != SMP::OK)
     throw Infeasible("layout", std::string("the surface could not be mapped onto a square: ") +
                                    SMP::get_error_message(status));
+  std::vector<Vec2> uv(mesh.vertex_count(), Vec2::Zero());
+  for (int v = 0; v < mesh.vertex_count(); ++v)
+    uv[v] = Vec2(uv_map[handle[v]].x(), uv_map[handle[v]].y());
   return uv;
 }
 
@@ -363,8 +345,9 @@ std::vector<Vec2> ring_map(const RingCut& cut) {
   std::sort(corners.begin(), corners.end());
   std::swap(corners[1], corners[3]);  // CGAL walks the border against the loop's order
   const std::vector<Vec2> uv = square_map(cut.disk, loop, corners);
-  const Vec2 origin = uv[ends[0]], along = uv[ends[1]] - origin;
-  const Vec2 across = ((uv[ends[2]] - origin).norm() < 1.5 ? uv[ends[2]] : uv[ends[3]]) - origin;
+  // The border runs p0 -> (loop A) -> copy of p0 -> (copies along the cut) -> copy of pm ->
+  // (loop B) -> pm -> (the cut) -> p0: p0's neighbours on the square are its copy and pm.
+  const Vec2 origin = uv[ends[0]], along = uv[ends[1]] - origin, across = uv[ends[2]] - origin;
   std::vector<Vec2> out(uv.size());
   for (size_t v = 0; v < uv.size(); ++v)
     out[v] = Vec2((uv[v] - origin).dot(along), (uv[v] - origin).dot(across));
@@ -419,10 +402,6 @@ CubeFrame cube_frame(const TriangleMesh& mesh) {
                       "open or give a layout file (docs/multi-patch.md)");
   return out;
 }
-
-}  // namespace
-
-namespace {
 
 /// The grids a surface is tried with, fewest patches first, and how each is laid out.
 struct Grids {
@@ -569,7 +548,7 @@ Grids closed_grids(const TriangleMesh& mesh, const AutoLayoutOptions& options, A
   out.cut = text;
   Grids grids;
   for (int k = 1; 6 * k * k <= options.max_patches; ++k) grids.sizes.push_back({k, k, 6 * k * k});
-  grids.layout = [frame, surface, &mesh](int k, int) {
+  grids.layout = [frame, surface](int k, int) {
     PatchLayout layout;
     std::map<std::array<int, 3>, int> index;
     const auto corner = [&](std::array<int, 3> at) {
@@ -588,7 +567,6 @@ Grids closed_grids(const TriangleMesh& mesh, const AutoLayoutOptions& options, A
       LayoutCorner c;
       c.point = *hit;
       layout.corners.push_back(c);
-      (void)mesh;
       return index[at] = static_cast<int>(layout.corners.size()) - 1;
     };
     for (int axis = 0; axis < 3; ++axis)
@@ -627,9 +605,10 @@ AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch
                       : surface == Surface::Ring ? ring_grids(mesh, options, out)
                                                  : closed_grids(mesh, options, out);
   if (grids.sizes.empty())
-    throw InvalidInput("max_patches", "a " + out.surface + " needs at least " +
-                                          std::string(surface == Surface::Ring ? "3" : "6") +
-                                          " patches");
+    throw InvalidInput("max_patches", surface == Surface::Ring
+                                          ? "a ring needs at least 3 patches (columns round it)"
+                                          : "a closed surface needs at least 6 patches (the faces "
+                                            "of a cube)");
   std::vector<PatchLayout> layouts;
   bool chosen = false;
   size_t checked = 0;

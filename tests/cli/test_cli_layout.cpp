@@ -403,6 +403,13 @@ TEST(CliLayout, RunWithAnAutomaticLayoutBuildsAClosedSphereOnItsLowestPatchAndAT
   EXPECT_LE(deployment["rms_with_notches"].get<double>(), 0.005 * diagonal);
   EXPECT_LE(deployment["max_seam_gap"].get<double>(), 0.001 * diagonal);
   EXPECT_NE(r.out.find("stands on " + lowest), std::string::npos) << r.out;
+  // Fewer patches than a cube's faces: refused naming the flag, nothing written.
+  auto few = run_cli("layout '" + dir +
+                     "/sphere.obj' --layout auto --max-patches 5 --quiet --out '" + dir + "/few'");
+  EXPECT_EQ(few.exit_code, 2);
+  EXPECT_NE(few.err.find("--max-patches: a closed surface needs at least 6"), std::string::npos)
+      << few.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/few"));
   // Its kit's supports are that patch's anchors, as in the joined run.
   r = run_cli("fabricate '" + dir +
               "/sphere/design.json' --unit 0.1 --sheet 3000x1000 --quiet --out '" + dir +

@@ -246,6 +246,21 @@ TEST(AutoLayout, SurfacesItCannotLayOutAreRefusedSayingWhy) {
     if (p.z() > 5) p.z() = 10 - p.z();
   const std::string crater = refusal(TriangleMesh(dented, sphere.faces()));
   EXPECT_NE(crater.find("do not face away from its centre"), std::string::npos) << crater;
+  // Too few patches allowed for a ring's columns or a cube's faces.
+  for (const auto& [mesh, fewest] :
+       {std::pair{testing::annulus(5, 10, 4, 48), 3}, std::pair{testing::icosphere(2, 10), 6}}) {
+    AutoLayoutOptions options;
+    options.max_patches = fewest - 1;
+    try {
+      auto_layout(mesh, {}, options);
+      ADD_FAILURE() << "laid out in fewer than " << fewest << " patches";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.field(), "max_patches");
+      EXPECT_NE(std::string(e.message()).find(std::to_string(fewest)), std::string::npos);
+    }
+    options.max_patches = fewest;
+    EXPECT_EQ(auto_layout(mesh, {}, options).trials.size(), 1u);
+  }
 }
 
 }  // namespace

@@ -227,7 +227,8 @@ struct AutoLayout {
 /// rays from the centroid through the cube faces' grid points (at equal angles) meet the
 /// surface; it must be star-shaped about its centroid (every face facing away from it).
 /// Throws Infeasible (field "layout") for any other surface (more holes, handles, several
-/// pieces), and for a closed surface that is not star-shaped, saying why.
+/// pieces), and for a closed surface that is not star-shaped, saying why; InvalidInput
+/// ("max_patches") when it allows fewer patches than a ring's 3 columns or a cube's 6 faces.
 AutoLayout auto_layout(const TriangleMesh& mesh, const TargetPatchOptions& patch_options = {},
                        const AutoLayoutOptions& options = {}, const Progress& progress = {});
 
