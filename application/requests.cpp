@@ -476,6 +476,7 @@ std::shared_ptr<const PatchWork> layout_patch_work(const RunSettings& settings,
     for (size_t j = 0; j < cut.patches.size(); ++j) {
       const LayoutPatch& p = cut.patches[j];
       const bool asked = static_cast<int>(j) == in.layout_patch;
+      if (!asked && !settings.patch_cache) continue;  // nowhere to keep the others' work
       if (!p.target || p.problem) {
         if (!asked) continue;
         const Error problem = p.problem ? *p.problem : Infeasible("", "the patch could not be cut");
