@@ -267,6 +267,12 @@ function buildForm(d: OptionsResult): void {
     simulation: { main: ui.simulationOptions, advanced: ui.simulationAdvanced },
     layout: { main: ui.layoutOptions, advanced: ui.layoutAdvanced },
   });
+  // One patch's member counts take the design options' bounds, as described.
+  for (const [input, key] of [[ui.layoutPatchU, 'design.members_u'], [ui.layoutPatchV, 'design.members_v']] as const) {
+    const o = form.option(key);
+    if (o?.maximum !== undefined) input.max = String(o.maximum);
+    if (o?.help) input.title = o.help;
+  }
   form.onChange = (_key, option, settled) => {
     saveUrl();
     if (option.group !== 'design') return; // a simulation or layout option: the next call takes it
