@@ -22,10 +22,6 @@ struct Position {
   bool seam = false;  ///< a seam bolt is here
 };
 
-std::string lamella(const std::string& patch, Family family, int index) {
-  return layout_part_name(patch, family, index);
-}
-
 }  // namespace
 
 std::string layout_part_name(const std::string& patch, Family family, int index) {
@@ -126,7 +122,8 @@ LayoutKit make_layout_kit(const std::vector<LayoutKitPatch>& patches,
         continue;
       }
       shared.push_back({c.surface_point,
-                        {lamella(patch.name, Family::G, c.g), lamella(patch.name, Family::H, c.h)},
+                        {layout_part_name(patch.name, Family::G, c.g),
+                         layout_part_name(patch.name, Family::H, c.h)},
                         false});
     }
   for (const SeamBolt& bolt : bolts)
