@@ -95,6 +95,23 @@ void fill_run(const DeploymentRun& run, const v1::SimulationOptions& options,
   out->set_seconds(run.seconds);
   for (const auto& [term, value] : run.energies) (*out->mutable_energies())[term] = value;
   out->set_energy_unit(run.energy_unit);
+  if (!run.profile.factorization.empty()) {
+    const SolverProfile& p = run.profile;
+    v1::SolverProfile* profile = out->mutable_solver_profile();
+    profile->set_factorization(p.factorization);
+    profile->set_unknowns(p.unknowns);
+    profile->set_factor_nonzeros(p.factor_nonzeros);
+    profile->set_analyses(p.analyses);
+    profile->set_evaluations(p.evaluations);
+    profile->set_factorizations(p.factorizations);
+    profile->set_failed_factorizations(p.failed_factorizations);
+    profile->set_cost_evaluations(p.cost_evaluations);
+    profile->set_seconds_analyze(p.analyze_seconds);
+    profile->set_seconds_evaluate(p.evaluate_seconds);
+    profile->set_seconds_factorize(p.factorize_seconds);
+    profile->set_seconds_solve(p.solve_seconds);
+    profile->set_seconds_cost(p.cost_seconds);
+  }
   fill_stresses(run, options, out);
   for (const SimulatedConnection& c : run.connections) {
     v1::Connection* connection = out->add_connections();

@@ -4,15 +4,34 @@
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <unordered_map>
 
+#include "cholmod_cholesky.h"
 #include "gridshell/foundation/parallel.h"
 #include "sparse_cholesky.h"
 
 namespace gridshell {
+
+namespace {
+/// Adds the seconds of its scope to a total.
+class Timed {
+ public:
+  explicit Timed(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~Timed() {
+    total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  Timed(const Timed&) = delete;
+  Timed& operator=(const Timed&) = delete;
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
+}  // namespace
 namespace {
 /// Fraction to the boundary: a barrier coordinate moves at most this fraction of the way to
 /// the bound of its domain in one step.
@@ -41,8 +60,22 @@ struct NewtonSolver::Impl {
   Eigen::SparseMatrix<double> damped;   // step(): hessian + lambda D (same pattern)
   std::vector<int> diagonal;            // value index of each diagonal entry
   Eigen::VectorXd gradient;
-  // The unknowns are numbered in a fill-reducing order already (see the constructor).
-  BlockCholesky cholesky;
+  // The unknowns are numbered in a fill-reducing order already (see the constructor) for the
+  // block kernel; CHOLMOD orders them itself (nested dissection) for large systems.
+  mutable NewtonSolver::Stats stats;
+  struct Factorization {
+    BlockCholesky block;
+    std::unique_ptr<CholmodCholesky> cholmod;  // in place of `block` when set
+    bool factorize(const Eigen::SparseMatrix<double>& a) {
+      return cholmod ? cholmod->factorize(a) : block.factorize(a);
+    }
+    Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+      return cholmod ? cholmod->solve(b) : block.solve(b);
+    }
+    Eigen::MatrixXd inverse_submatrix(const std::vector<int>& unknowns) const {
+      return cholmod ? cholmod->inverse_submatrix(unknowns) : block.inverse_submatrix(unknowns);
+    }
+  } cholesky;
   int threads = 1;
   /// Scratch of one term's evaluation (per worker, reused across terms and evaluations).
   struct Scratch {
@@ -187,6 +220,7 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
   // 1.5% of AMD on the unknowns on the examples). The Hessian is assembled in its factorization
   // order and the Cholesky needs no permutation.
   // The graph of blocks: per block, itself and every block it shares a term with (sorted).
+  bool use_cholmod = false;
   std::vector<std::vector<int>> adjacent(nb);
   for (int b = 0; b < nb; ++b) adjacent[b].push_back(b);
   for (const std::vector<int>& tb : term_blocks)
@@ -201,6 +235,7 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
     edges += list.size();
   }
   {
+    const Timed timed(m.stats.analyze_seconds);  // the ordering is part of the analysis
     // AMD on the (symmetric) graph as it is; AMDOrdering would symmetrize it once more.
     Eigen::SparseMatrix<int> G(nb, nb);
     G.resizeNonZeros(static_cast<Eigen::Index>(edges));
@@ -213,11 +248,30 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
       }
     }
     G.outerIndexPtr()[nb] = k;
-    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
-    Eigen::internal::minimum_degree_ordering(G, order);  // indices()[k]: the block eliminated k-th
+    long total = 0;
+    for (const auto& block : m.blocks) total += block.second;
+    use_cholmod = options_.cholmod_from > 0 && total >= options_.cholmod_from;
+    std::vector<int> order;  // order[k]: the block eliminated k-th
+    if (use_cholmod) {
+      // Nested dissection: for grids far better than minimum degree (docs/solver.md).
+      const auto& cache = options_.order_cache;
+      if (cache && cache->blocks == m.blocks && cache->order.size() == static_cast<size_t>(nb)) {
+        order = cache->order;
+      } else {
+        order = nested_dissection_order(adjacent);
+        if (cache) {
+          cache->blocks = m.blocks;
+          cache->order = order;
+        }
+      }
+    } else {
+      Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> amd;
+      Eigen::internal::minimum_degree_ordering(G, amd);
+      order.assign(amd.indices().data(), amd.indices().data() + nb);
+    }
     m.block_offset.assign(nb, 0);
     for (int k = 0; k < nb; ++k) {
-      const int b = order.indices()[k];
+      const int b = order[k];
       m.block_offset[b] = m.unknowns;
       m.unknowns += m.blocks[b].second;
     }
@@ -310,15 +364,28 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
     for (int b = 0; b < nb; ++b) sizes[m.block_offset[b]] = m.blocks[b].second;
     for (int size : sizes)
       if (size > 0) block_sizes.push_back(size);
-    m.cholesky.analyze(m.hessian, block_sizes);
+    const Timed timed(m.stats.analyze_seconds);
+    m.stats.unknowns = m.unknowns;
+    if (use_cholmod) {
+      m.cholesky.cholmod = std::make_unique<CholmodCholesky>();
+      m.cholesky.cholmod->analyze(m.hessian, /*ordered=*/true);
+      m.stats.factorization = "cholmod";
+    } else {
+      m.cholesky.block.analyze(m.hessian, block_sizes);
+      m.stats.factorization = "block";
+    }
   }
   m.gradient = Eigen::VectorXd::Zero(m.unknowns);
 }
 
 NewtonSolver::~NewtonSolver() = default;
 
+const NewtonSolver::Stats& NewtonSolver::stats() const { return impl_->stats; }
+
 bool NewtonSolver::evaluate() {
   Impl& m = *impl_;
+  const Timed timed(m.stats.evaluate_seconds);
+  ++m.stats.evaluations;
   // The numeric curvature changes slowly; refresh it every options_.curvature_refresh calls.
   m.refresh_curvature = m.evaluations % std::max(1, options_.curvature_refresh) == 0;
   if (m.exact_hessian) ++m.evaluations;
@@ -396,12 +463,20 @@ double NewtonSolver::gradient_at(const double* block) const {
                                                                      : impl_->gradient[it->second];
 }
 
+double NewtonSolver::gradient_norm_at(const double* block, int size) const {
+  const auto it = impl_->offset_of.find(block);
+  if (it == impl_->offset_of.end() || impl_->gradient.size() == 0) return 0.0;
+  return impl_->gradient.segment(it->second, size).cwiseAbs().maxCoeff();
+}
+
 double NewtonSolver::gradient_max_norm() const {
   return impl_->gradient.size() ? impl_->gradient.cwiseAbs().maxCoeff() : 0.0;
 }
 
 bool NewtonSolver::evaluate_cost(double* cost) const {
   const Impl& m = *impl_;
+  const Timed timed(m.stats.cost_seconds);
+  ++m.stats.cost_evaluations;
   std::vector<double> residuals;
   double sum = 0;
   for (const Term& term : m.terms) {
@@ -519,12 +594,25 @@ NewtonSolver::StepResult NewtonSolver::step(int max_trials) {
     ++result.trials;
     std::copy(h, h + m.hessian.nonZeros(), A.valuePtr());
     for (int i : m.diagonal) A.valuePtr()[i] += lambda_ * std::max(std::abs(h[i]), floor);
-    if (!m.cholesky.factorize(A)) {
+    bool factorized = false;
+    {
+      const Timed timed(m.stats.factorize_seconds);
+      ++m.stats.factorizations;
+      factorized = m.cholesky.factorize(A);
+    }
+    if (!factorized) {
+      ++m.stats.failed_factorizations;
       lambda_ = std::max(lambda_ * nu_, 1e-8);
       nu_ *= 2;
       continue;
     }
-    const Eigen::VectorXd d = m.cholesky.solve(-m.gradient);
+    m.stats.factor_nonzeros = m.cholesky.cholmod ? m.cholesky.cholmod->factor_nonzeros()
+                                                 : m.cholesky.block.factor_nonzeros();
+    Eigen::VectorXd d;
+    {
+      const Timed timed(m.stats.solve_seconds);
+      d = m.cholesky.solve(-m.gradient);
+    }
     // The fraction to the boundary of every barrier's domain (uniform: the step alpha d) and
     // the trust radii (alpha_trust d: shorten the step along the same direction).
     const double alpha_barrier = barrier_fraction(d);

@@ -22,6 +22,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace gridshell {
@@ -57,6 +58,19 @@ class NewtonSolver {
     /// Exact-Hessian mode: recompute the numeric curvature every this many evaluations and
     /// reuse it in between (it varies slowly; a lagged Hessian keeps fast convergence).
     int curvature_refresh = 8;
+    /// Systems of at least this many unknowns are factorized by CHOLMOD (supernodal, nested
+    /// dissection of the blocks) instead of the block kernel (0: never); the simulation passes
+    /// SimulationOptions::cholmod_from.
+    int cholmod_from = 0;
+    /// The block order of a CHOLMOD system (nested dissection of the blocks' graph), kept here
+    /// for the next solver on the same blocks: a rebuild after a connection moves changes a few
+    /// couplings only, and the old order still serves (its ordering cost ~0.8 s at 165k
+    /// unknowns). Optional; shared by the caller's successive solvers.
+    struct OrderCache {
+      std::vector<std::pair<double*, int>> blocks;
+      std::vector<int> order;
+    };
+    std::shared_ptr<OrderCache> order_cache;
   };
 
   struct StepResult {
@@ -66,6 +80,19 @@ class NewtonSolver {
     bool out_of_trials = false;  ///< the trial budget ran out first
     double relative_step = 0;    ///< max_i |d_i| / (1 + |x_i|) of the accepted step
   };
+
+  /// Where the solver's time went since its construction (docs/solver.md).
+  struct Stats {
+    std::string factorization;  ///< "block" (the block kernel) or "cholmod"
+    long unknowns = 0, factor_nonzeros = 0;
+    int evaluations = 0;            ///< gradient and Hessian assemblies
+    int factorizations = 0;         ///< numeric factorizations, failed ones included
+    int failed_factorizations = 0;  ///< not positive definite: damped more
+    int cost_evaluations = 0;       ///< trial costs (the step's line search)
+    double analyze_seconds = 0, evaluate_seconds = 0, factorize_seconds = 0, solve_seconds = 0,
+           cost_seconds = 0;
+  };
+  const Stats& stats() const;
 
   /// `blocks`: the free parameter blocks (pointer, size); their order defines the unknowns.
   NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vector<Term> terms,
@@ -81,6 +108,9 @@ class NewtonSolver {
   /// The gradient's entry for the first unknown of parameter block `block` from the last
   /// evaluate(); 0 if the block is not free.
   double gradient_at(const double* block) const;
+  /// Max-norm of the gradient over the `size` unknowns of parameter block `block` from the last
+  /// evaluate(); 0 if the block is not free.
+  double gradient_norm_at(const double* block, int size) const;
   /// One damped Newton step from the last evaluate(): tries (H + lambda D) d = -g until the
   /// cost decreases (gain ratio > 1e-4), increasing lambda otherwise; on success the
   /// parameters hold x + d (not yet re-evaluated).

@@ -252,6 +252,9 @@ class Deployment {
   void fill_problem(const Terms& terms, ceres::Problem& problem) const;
   bool move_sliders();
   void solve_newton(const Progress& progress, const std::string& stage, DeploymentRun& run);
+  /// Where the largest remaining force of an unconverged run acts: a rod vertex, an edge's
+  /// twist or a sliding connection, named by lamella (and part when there are several).
+  std::string largest_force(const NewtonSolver& newton) const;
   void solve_ceres(const Progress& progress, const std::string& stage, DeploymentRun& run);
   void update_frames();
   void update_reference_twist(Rod& rod);
@@ -918,9 +921,36 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
   // evaluations' ~30% of a run; no gain at 2210 or 4386 rod vertices either). The threads of a
   // deployment go to running the two modes side by side instead (deployment_job.cpp).
   newton_options.threads = 1;
+  newton_options.cholmod_from = options_.cholmod_from;
+  newton_options.order_cache = std::make_shared<NewtonSolver::Options::OrderCache>();
 
   double lambda = newton_options.initial_lambda;
   std::unique_ptr<NewtonSolver> newton;
+  // Each solver's statistics go into the run's profile when it is replaced or the run ends.
+  const auto collect = [&run](const NewtonSolver& solver) {
+    const NewtonSolver::Stats& s = solver.stats();
+    SolverProfile& p = run.profile;
+    p.factorization = s.factorization;
+    p.unknowns = s.unknowns;
+    if (s.factor_nonzeros > 0) p.factor_nonzeros = s.factor_nonzeros;
+    ++p.analyses;
+    p.evaluations += s.evaluations;
+    p.factorizations += s.factorizations;
+    p.failed_factorizations += s.failed_factorizations;
+    p.cost_evaluations += s.cost_evaluations;
+    p.analyze_seconds += s.analyze_seconds;
+    p.evaluate_seconds += s.evaluate_seconds;
+    p.factorize_seconds += s.factorize_seconds;
+    p.solve_seconds += s.solve_seconds;
+    p.cost_seconds += s.cost_seconds;
+  };
+  struct Collect {
+    const std::unique_ptr<NewtonSolver>& solver;
+    const decltype(collect)& add;
+    ~Collect() {
+      if (solver) add(*solver);
+    }
+  } at_end{newton, collect};
   Terms terms;
   bool rebuild = true;
   double first = -1, best = 0;
@@ -936,6 +966,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       sliding ? options_.exact_hessian_below : options_.exact_hessian_below_fixed;
   while (true) {
     if (rebuild) {
+      if (newton) collect(*newton);
       newton.reset();
       terms = build_terms();
       newton = std::make_unique<NewtonSolver>(terms.blocks, terms.terms, newton_options);
@@ -982,18 +1013,23 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
       return;
     }
     if (run.iterations >= options_.max_iterations) {
-      run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) + ")";
+      run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) +
+                        "); largest remaining force at " + largest_force(*newton);
       return;
     }
     const NewtonSolver::StepResult step = newton->step(options_.max_iterations - run.iterations);
     run.iterations += step.trials;
     lambda = newton->lambda();
     if (step.out_of_trials) {
-      run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) + ")";
+      run.termination = "iteration cap reached (" + std::to_string(options_.max_iterations) +
+                        "); largest remaining force at " + largest_force(*newton);
       return;
     }
     if (!step.accepted) {
-      run.termination = "no step decreases the energy (damping at its maximum)";
+      run.termination =
+          "no step decreases the energy (damping at its maximum); largest "
+          "remaining force at " +
+          largest_force(*newton);
       return;
     }
     // Step criterion: a Newton step at rounding level (1e-12 relative) with the gradient close
@@ -1012,6 +1048,49 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
     update_frames();
     if (move_sliders() || sides_changed()) rebuild = true;
   }
+}
+
+std::string Deployment::largest_force(const NewtonSolver& newton) const {
+  const auto lamella = [&](int r) {
+    const Rod& rod = rods_[r];
+    std::string name = std::string(rod.family == Family::G ? "g" : "h") + std::to_string(rod.index);
+    if (first_rod_.size() > 1) {
+      const int part = static_cast<int>(std::upper_bound(first_rod_.begin(), first_rod_.end(), r) -
+                                        first_rod_.begin() - 1);
+      name += " of part " + std::to_string(part + 1);
+    }
+    return "lamella " + name;
+  };
+  double best = -1;
+  std::string where;
+  const auto consider = [&](double g, const auto& describe) {
+    if (g > best) {
+      best = g;
+      where = describe();
+    }
+  };
+  for (int r = 0; r < static_cast<int>(rods_.size()); ++r) {
+    const Rod& rod = rods_[r];
+    for (size_t k = 0; k < rod.x.size(); ++k)
+      consider(newton.gradient_norm_at(rod.x[k].data(), 3), [&] {
+        return "vertex " + std::to_string(k) + " of " + std::to_string(rod.x.size()) + " of " +
+               lamella(r);
+      });
+    for (size_t k = 0; k < rod.theta.size(); ++k)
+      consider(newton.gradient_norm_at(&rod.theta[k], 1),
+               [&] { return "the twist of edge " + std::to_string(k) + " of " + lamella(r); });
+  }
+  for (const Joint& joint : joints_)
+    for (const Slider& s : joint.end)
+      if (s.sliding)
+        consider(newton.gradient_norm_at(&s.beta, 1), [&] {
+          return "the sliding connection g" + std::to_string(joint.g) + " x h" +
+                 std::to_string(joint.h) + " (its end on " + lamella(s.rod) + ")";
+        });
+  if (best < 0) return "";
+  char force[64];
+  std::snprintf(force, sizeof force, " (%.1e of the reference force)", best / force_reference_);
+  return where + force;
 }
 
 void Deployment::solve_ceres(const Progress& progress, const std::string& stage,
@@ -1104,6 +1183,7 @@ DeploymentRun Deployment::solve(const Progress& progress) {
   out.gradient_norm = run.gradient_norm;
   out.gradient_tolerance = options_.gradient_tolerance;
   out.termination = run.termination;
+  out.profile = run.profile;
   if (out.connections_at_vertices > 0)
     out.termination += "; " + std::to_string(out.connections_at_vertices) +
                        " connection end(s) held at a rod vertex (energy rising to both sides)";

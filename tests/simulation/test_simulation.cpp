@@ -297,6 +297,45 @@ TEST(Simulation, CompressionStiffnessShapesThePathNotTheEquilibrium) {
       InvalidInput);
 }
 
+// CHOLMOD (taken for large systems) and the block kernel solve the same Newton systems: with
+// the switch forced down to a small example, both modes reach the same equilibrium, and the
+// profile says which factorization ran and where the time went.
+TEST(Simulation, CholmodAndTheBlockKernelFindTheSameEquilibrium) {
+  ExampleSurface example = make_example("archway");
+  const Design design = make_design(example.mesh, CornerSpec::at_vertices(example.corners), {});
+  auto run = [&](bool notches, int cholmod_from) {
+    SimulationOptions options;
+    options.notches = notches;
+    options.cholmod_from = cholmod_from;
+    return simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                               design.lamella_width, design.lamella_thickness, options);
+  };
+  for (bool notches : {false, true}) {
+    const DeploymentRun block = run(notches, 0), cholmod = run(notches, 1);
+    ASSERT_TRUE(block.converged) << block.termination;
+    ASSERT_TRUE(cholmod.converged) << cholmod.termination;
+    EXPECT_EQ(block.profile.factorization, "block");
+    EXPECT_EQ(cholmod.profile.factorization, "cholmod");
+    for (const DeploymentRun* r : {&block, &cholmod}) {
+      const SolverProfile& p = r->profile;
+      EXPECT_EQ(p.factorizations, r->iterations);  // an iteration is a linear solve
+      EXPECT_GE(p.analyses, 1);
+      EXPECT_EQ(p.analyses, r->outer_iterations);
+      EXPECT_GT(p.evaluations, 0);
+      EXPECT_GT(p.unknowns, 0);
+      EXPECT_GT(p.factor_nonzeros, p.unknowns);
+      EXPECT_GE(p.factorize_seconds, 0);
+    }
+    double largest = 0;
+    for (size_t l = 0; l < block.lamellas.size(); ++l)
+      for (size_t v = 0; v < block.lamellas[l].centerline.size(); ++v)
+        largest = std::max(
+            largest, (cholmod.lamellas[l].centerline[v] - block.lamellas[l].centerline[v]).norm());
+    EXPECT_LT(largest, 1e-6) << "notches " << notches;  // the patch is 100 wide
+    EXPECT_NEAR(cholmod.rms, block.rms, 1e-7 * block.rms) << "notches " << notches;
+  }
+}
+
 // The cap counts linear solves, also those of a step that needs several: never exceeded.
 TEST(Simulation, IterationCapIsNeverExceeded) {
   PlanarGrid p = planar_grid(3, 4.0);

@@ -121,6 +121,12 @@ struct SimulationOptions {
   double max_vertex_step = 0.25;
   double max_twist_step = 2.0;
   int max_outer_iterations = 200;  // frame updates / connection re-projections
+  /// Newton solver: systems of at least this many unknowns are factorized by CHOLMOD
+  /// (supernodal, nested dissection of the parameter blocks), smaller ones by the block kernel
+  /// (0: always the block kernel). Both cost the same per factorization near 34k unknowns on
+  /// this machine (a 44 x 44-member grid); CHOLMOD is 2.5x faster at 165k (docs/solver.md).
+  /// Every example is far below it.
+  int cholmod_from = 34000;
   /// Jacobian evaluation threads of the Ceres solver, 0 = hardware concurrency (the Newton
   /// solver evaluates on one; see solve_newton).
   int threads = 0;
@@ -162,6 +168,18 @@ struct SimulatedConnection {
   bool at_vertex_g = false, at_vertex_h = false;
 };
 
+/// Where a simulation's time went, summed over the Newton solver's rebuilds (each connection
+/// move starts a new one: one more analysis). docs/solver.md.
+struct SolverProfile {
+  std::string factorization;  ///< "block" (the block kernel), "cholmod" (supernodal), or ""
+  long unknowns = 0;          ///< of the last system
+  long factor_nonzeros = 0;   ///< of the last factorization
+  int analyses = 0, evaluations = 0, factorizations = 0, failed_factorizations = 0,
+      cost_evaluations = 0;
+  double analyze_seconds = 0, evaluate_seconds = 0, factorize_seconds = 0, solve_seconds = 0,
+         cost_seconds = 0;
+};
+
 struct DeploymentRun {
   bool notches = false;
   std::vector<SimulatedLamella> lamellas;  ///< g members first, then h, by index
@@ -184,6 +202,7 @@ struct DeploymentRun {
   double gradient_tolerance = 0;
   std::string termination;  ///< why the solver stopped
   double seconds = 0;
+  SolverProfile profile;  ///< Newton solver only
 };
 
 /// Simulates the deployed grid. `target` is the target patch (distances are measured to it and

@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// gridshell — supernodal sparse Cholesky from CHOLMOD (SuiteSparse) for large Newton systems
+// (private header).
+//
+// The block kernel (sparse_cholesky.h) is an up-looking factorization: every update is a small
+// dense product, so its cost grows with the factor's entries times their rows, without the
+// dense-matrix speed of large panels. On a 100 x 100-member grid (~176k unknowns) its ordering
+// and algorithm took ~3.7 s per factorization; CHOLMOD's supernodal factorization with a
+// nested-dissection (METIS) ordering works on dense supernodes through BLAS 3 and is far faster
+// there (docs/solver.md has the measurements and the size where the Newton solver switches).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <vector>
+
+namespace gridshell {
+
+class CholmodCholesky {
+ public:
+  /// The fill-reducing ordering CHOLMOD computes in analyze().
+  enum class Ordering { metis, amd, best };
+  explicit CholmodCholesky(Ordering ordering = Ordering::metis);
+  ~CholmodCholesky();
+  CholmodCholesky(const CholmodCholesky&) = delete;
+  CholmodCholesky& operator=(const CholmodCholesky&) = delete;
+
+  /// Symbolic analysis (ordering, supernodes) of a symmetric matrix given by its upper triangle
+  /// (column-major, compressed, sorted). With `ordered`, the unknowns are already numbered in a
+  /// fill-reducing order (e.g. nested_dissection_order of their blocks) and only the
+  /// elimination tree's postorder is applied.
+  void analyze(const Eigen::SparseMatrix<double>& upper, bool ordered = false);
+  /// Numeric factorization of a matrix with the analysed pattern (std::invalid_argument if its
+  /// size differs); false if it is not (numerically) positive definite.
+  bool factorize(const Eigen::SparseMatrix<double>& upper);
+  bool ok() const { return ok_; }
+  /// Solves A x = b with the last successful factorization (std::logic_error without one).
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
+  /// Solves A X = B for all columns of B.
+  Eigen::MatrixXd solve_many(const Eigen::MatrixXd& b) const;
+  /// The principal submatrix of A^-1 at the given unknowns (one solve per unknown).
+  Eigen::MatrixXd inverse_submatrix(const std::vector<int>& unknowns) const;
+  /// Stored entries of the factor (supernodes' dense blocks).
+  long factor_nonzeros() const;
+  /// Floating-point operations of one factorization, from the analysis.
+  double factor_flops() const;
+  /// Bytes CHOLMOD holds at most (factor, workspace), since construction.
+  long peak_bytes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  bool ok_ = false;
+};
+
+/// Nested dissection (METIS, through CHOLMOD) of a symmetric graph given by its adjacency lists
+/// (sorted; a node may list itself): the nodes in elimination order.
+std::vector<int> nested_dissection_order(const std::vector<std::vector<int>>& adjacent);
+
+}  // namespace gridshell
