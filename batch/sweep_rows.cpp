@@ -199,6 +199,8 @@ std::string status_of_exit_code(int exit_code) {
       return "invalid";
     case 3:
       return "infeasible";
+    case 4:
+      return "unconverged";  // files kept for diagnosis, not a result
     case 130:
       return "cancelled";
     default:

@@ -168,7 +168,7 @@ int run_layout(const RunArguments& args) {
   if (failed)
     throw Infeasible(failed->problem_field(), failed->problem() + " (patch " + failed->name() +
                                                   "; every patch's checks: layout.json)");
-  return 0;
+  return unconverged_exit(d, args.output.out);
 }
 
 int run_run(const RunArguments& args) {
@@ -212,7 +212,7 @@ int run_run(const RunArguments& args) {
   std::string written;
   for (const auto& [name, contents] : run_files(result)) written += " " + name;
   std::printf("\n  wrote          %s\n", written.c_str());
-  return 0;
+  return unconverged_exit(result.simulation().deployment(), args.output.out);
 }
 
 }  // namespace

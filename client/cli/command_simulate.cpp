@@ -104,6 +104,55 @@ void print_deployment_summary(const v1::Deployment& d) {
 
 namespace {
 
+/// What to change for a run that stopped this way.
+std::string advice(const std::string& termination) {
+  if (termination.rfind("iteration cap", 0) == 0) return "raise --max-iterations";
+  return "the solver found no step that lowers the energy: try a finer rod (--edges-per-interval "
+         "3) or the reference solver (--solver ceres); docs/solver.md";
+}
+
+int unconverged_error(const std::vector<std::string>& runs, const std::string& out) {
+  if (runs.empty()) return 0;
+  std::string line = "error: not converged: ";
+  for (size_t i = 0; i < runs.size(); ++i) line += (i ? "; " : "") + runs[i];
+  std::cerr << line << ". The files in " << out
+            << " are kept for diagnosis, marked \"converged\": false; they are not a result.\n";
+  return 4;
+}
+
+}  // namespace
+
+int unconverged_exit(const v1::Deployment& d, const std::string& out) {
+  std::vector<std::string> runs;
+  char buffer[160];
+  for (const v1::SimulationRun* r : {&d.without_notches(), &d.with_notches()}) {
+    if (r->grid_vertices() == 0 || r->converged()) continue;
+    std::snprintf(buffer, sizeof buffer, " after %d iterations, tolerance %.1e", r->iterations(),
+                  r->gradient_tolerance());
+    runs.push_back(std::string(r->notches() ? "with notches: " : "without notches: ") +
+                   r->termination() + buffer + ": " + advice(r->termination()));
+  }
+  return unconverged_error(runs, out);
+}
+
+int unconverged_exit(const v1::LayoutDeployment& d, const std::string& out) {
+  if (d.converged()) return 0;
+  std::vector<std::string> runs;
+  for (const auto& p : d.patches())
+    if (!p.converged())
+      runs.push_back("patch " + p.name() + " alone (its deployment.json in patches/" + p.name() +
+                     "/ says why)");
+  for (const auto& [joined, what] :
+       {std::pair{&d.joined_without_notches(), "the whole joined without notches: "},
+        std::pair{&d.joined_with_notches(), "the whole joined with notches: "}})
+    if (joined->iterations() > 0 && !joined->converged())
+      runs.push_back(what + joined->termination() + ": " + advice(joined->termination()));
+  if (runs.empty()) runs.push_back("a run of the layout (deployment.json)");
+  return unconverged_error(runs, out);
+}
+
+namespace {
+
 struct SimulateArguments {
   std::string design;
   OutputFlags output;
@@ -132,7 +181,7 @@ int run_simulate(const SimulateArguments& args) {
   std::string written = "deployment.json";
   for (const v1::File& view : result.views()) written += " " + view.name();
   std::printf("  wrote           %s\n", written.c_str());
-  return 0;
+  return unconverged_exit(result.deployment(), args.output.out);
 }
 
 }  // namespace

@@ -48,7 +48,7 @@ std::string counts(const std::vector<sweep::RowStatus>& statuses) {
   std::map<std::string, int> by_status;
   for (const auto& s : statuses) ++by_status[s.status];
   std::string text;
-  for (const char* name : {"ok", "invalid", "infeasible", "failed", "pending"})
+  for (const char* name : {"ok", "invalid", "infeasible", "unconverged", "failed", "pending"})
     if (by_status.count(name))
       text += (text.empty() ? "" : ", ") + std::to_string(by_status[name]) + " " + name;
   return text;

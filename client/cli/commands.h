@@ -121,6 +121,12 @@ void add_simulation_flags(CLI::App* sub, SimulationFlags& flags);
 /// The options as given (the request check, resolve_simulation_options, names the flag).
 v1::SimulationOptions simulation_options_from_flags(const SimulationFlags& flags);
 void print_deployment_summary(const v1::Deployment& deployment);
+/// Exit code 4 for a simulation that did not converge (docs/cli.md): one `error:` line on
+/// stderr naming each run that did not, why it stopped and what to change; the files written
+/// stay in `out` for diagnosis, marked "converged": false. 0 if every run converged.
+int unconverged_exit(const v1::Deployment& deployment, const std::string& out);
+/// The same for a layout's runs (each patch alone, the whole joined).
+int unconverged_exit(const v1::LayoutDeployment& deployment, const std::string& out);
 
 Command add_health_command(CLI::App& app);
 /// `gridshell bench sweep` (bench_sweep.cpp): the local and Slurm engines on 32 rows, Slurm's

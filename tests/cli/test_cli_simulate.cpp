@@ -86,6 +86,35 @@ const std::string& small_design() {
   return file;
 }
 
+// A run that does not converge is not a result: exit code 4, one error line naming each run,
+// why it stopped and what to change; the files stay for diagnosis, marked unconverged. With
+// the cap raised, the same design converges and exits 0.
+TEST(CliSimulate, AnUnconvergedRunExitsWithCode4AndKeepsItsFilesMarked) {
+  const std::string out = testing::temp_dir() + "/unconverged";
+  const auto result = run_cli("simulate '" + design_dir() +
+                              "/design.json' --quiet --max-iterations 5 --out '" + out + "'");
+  EXPECT_EQ(result.exit_code, 4) << result.err;
+  EXPECT_NE(result.err.find("error: not converged: without notches: iteration cap reached (5)"),
+            std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("with notches: iteration cap reached (5)"), std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("raise --max-iterations"), std::string::npos) << result.err;
+  EXPECT_NE(result.out.find("NOT converged"), std::string::npos) << result.out;
+  const json d = json::parse(testing::read_text(out + "/deployment.json"));
+  EXPECT_FALSE(d["converged"].get<bool>());
+  EXPECT_FALSE(d["without_notches"]["converged"].get<bool>());
+  EXPECT_TRUE(std::filesystem::exists(out + "/deployed.obj"));
+  // The solver's profile: the block kernel at this size, one linear solve per iteration.
+  const json& profile = d["without_notches"]["solver_profile"];
+  EXPECT_EQ(profile["factorization"], "block");
+  EXPECT_EQ(profile["factorizations"].get<int>(), d["without_notches"]["iterations"].get<int>());
+
+  const auto enough = run_cli("simulate '" + design_dir() + "/design.json' --quiet --notches off" +
+                              " --max-iterations 2000 --out '" + out + "-enough'");
+  EXPECT_EQ(enough.exit_code, 0) << enough.err;
+}
+
 TEST(CliSimulate, StressesAgainstTheMaterialsStrengths) {
   // Lime wood (the default): utilization = the largest corner stress / 60 MPa; the corner stress
   // adds both bending stresses at one vertex, so it lies between the larger of a rod's two

@@ -173,6 +173,26 @@ Sweep four_rows() {
   return s;
 }
 
+// A row whose simulation does not converge is "unconverged" (exit 4), not a result: its error
+// names the run; it is not retried; the sweep's counts show it.
+TEST(SweepLocal, AnUnconvergedRowIsNotAResult) {
+  const std::string dir = testing::temp_dir();
+  const std::string manifest = testing::write_text(
+      dir, "rows.csv",
+      "id,mesh,max-iterations," + kSmall + "\n" + "capped,example:double-vault,3," + kSmallValues +
+          "\n" + "free,example:double-vault,2000," + kSmallValues + "\n");
+  const auto r = run_cli("sweep '" + manifest + "' --out '" + dir + "/out' --workers 2 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("2: 1 ok, 1 unconverged"), std::string::npos) << r.out;
+  const json capped = json::parse(testing::read_text(dir + "/out/rows/capped/status.json"));
+  EXPECT_EQ(capped["status"], "unconverged");
+  EXPECT_EQ(capped["exit_code"], 4);
+  EXPECT_EQ(capped["attempt"], 1);
+  EXPECT_NE(capped["error"].get<std::string>().find("not converged"), std::string::npos) << capped;
+  const json free = json::parse(testing::read_text(dir + "/out/rows/free/status.json"));
+  EXPECT_EQ(free["status"], "ok");
+}
+
 TEST(SweepLocal, RowsAreWrittenWholeWithTheirStatusAndSummaries) {
   const Sweep s = four_rows();
   const auto r = run_cli("sweep '" + s.manifest + "' --out '" + s.out + "' --workers 2 --quiet");

@@ -84,7 +84,8 @@ std::vector<Problem> validate(const Manifest& manifest, RowChecker& checker);
 /// The outcome of one row (status.json).
 struct RowStatus {
   std::string id;
-  std::string status;  ///< ok | invalid | infeasible | failed | cancelled | killed | pending
+  /// ok | invalid | infeasible | unconverged | failed | cancelled | killed | pending
+  std::string status;
   int exit_code = -1;
   std::string error;  ///< the row's `error:` line, without the prefix
   int attempt = 0;
@@ -96,7 +97,8 @@ struct RowStatus {
   /// rms_with_notches, max_bending_stress, t_grid, t1, t2 (missing when not computed).
   std::map<std::string, double> results;
   bool finished_for_good() const {
-    return status == "ok" || status == "invalid" || status == "infeasible";
+    return status == "ok" || status == "invalid" || status == "infeasible" ||
+           status == "unconverged";  // the same row would stop the same way again
   }
 };
 
