@@ -33,6 +33,8 @@ namespace {
 struct BenchArguments {
   std::string what;
   std::vector<int> sizes{1000, 4000, 16000, 64000};
+  std::vector<int> members{15, 30, 60};  // solver
+  int max_iterations = 2000;             // solver
   std::string surface = "waves-bump";
   int sources = 5;
   int cgal_sources = 3;
@@ -292,10 +294,10 @@ Command add_bench_command(CLI::App& app) {
   args->out = std::string(GRIDSHELL_SOURCE_DIR) + "/docs/benchmarks.md";
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks (not tests); results go to docs/");
   sub->add_option("WHAT", args->what,
-                  "geodesic | design | simulate | resolution | service | interactive | sweep | "
-                  "fabricate | scale | abuse")
+                  "geodesic | design | simulate | solver | resolution | service | interactive | "
+                  "sweep | fabricate | scale | abuse")
       ->required()
-      ->check(CLI::IsMember({"geodesic", "design", "simulate", "resolution", "service",
+      ->check(CLI::IsMember({"geodesic", "design", "simulate", "solver", "resolution", "service",
                              "interactive", "sweep", "fabricate", "scale", "abuse"}));
   sub->add_flag("--quick", args->quick, "abuse: a 2 s stall timeout instead of 10 s");
   sub->add_option("--json", args->json, "abuse: also write the rows to this JSON file");
@@ -317,6 +319,11 @@ Command add_bench_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--sizes", args->sizes, "target vertex counts")
       ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--members", args->members, "solver: members per family of each grid")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--max-iterations", args->max_iterations, "solver: iteration cap of each run")
       ->capture_default_str();
   sub->add_option("--surface", args->surface, "example surface")->capture_default_str();
   sub->add_option("--sources", args->sources, "sources per size")->capture_default_str();
@@ -344,6 +351,13 @@ Command add_bench_command(CLI::App& app) {
       if (s < 100 || s > 2000000) throw InvalidInput("--sizes", "each size must be 100..2000000");
     if (args->repeats < 1) throw InvalidInput("--repeats", "must be at least 1");
     if (args->what == "simulate") return bench_simulate(args->repeats, args->out, args->no_write);
+    if (args->what == "solver") {
+      if (args->members.empty()) throw InvalidInput("--members", "give at least one grid size");
+      for (int m : args->members)
+        if (m < 2 || m > 200) throw InvalidInput("--members", "each must be 2..200");
+      if (args->max_iterations < 1) throw InvalidInput("--max-iterations", "must be at least 1");
+      return bench_solver(args->members, args->max_iterations, args->out, args->no_write);
+    }
     if (args->what == "fabricate") {
       if (args->scan_points < 1000 || args->scan_points > 100000000)
         throw InvalidInput("--scan-points", "must be 1000..100000000");

@@ -255,12 +255,13 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
     if (use_cholmod) {
       // Nested dissection: for grids far better than minimum degree (docs/solver.md).
       const auto& cache = options_.order_cache;
-      if (cache && cache->blocks == m.blocks && cache->order.size() == static_cast<size_t>(nb)) {
+      if (cache && cache->blocks == m.blocks && cache->adjacent == adjacent) {
         order = cache->order;
       } else {
         order = nested_dissection_order(adjacent);
         if (cache) {
           cache->blocks = m.blocks;
+          cache->adjacent = adjacent;
           cache->order = order;
         }
       }

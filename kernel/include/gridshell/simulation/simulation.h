@@ -124,7 +124,8 @@ struct SimulationOptions {
   /// Newton solver: systems of at least this many unknowns are factorized by CHOLMOD
   /// (supernodal, nested dissection of the parameter blocks), smaller ones by the block kernel
   /// (0: always the block kernel). Both cost the same per factorization near 34k unknowns on
-  /// this machine (a 44 x 44-member grid); CHOLMOD is 2.5x faster at 165k (docs/solver.md).
+  /// this machine (a 44 x 44-member grid): the block kernel 10% faster at 28k, CHOLMOD 1.28x
+  /// at 40k, 1.31-1.35x at 61k, 2.5x at 165k (docs/solver.md).
   /// Every example is far below it.
   int cholmod_from = 34000;
   /// Jacobian evaluation threads of the Ceres solver, 0 = hardware concurrency (the Newton
