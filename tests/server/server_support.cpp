@@ -650,4 +650,19 @@ Certificate make_self_signed_certificate() {
   return out;
 }
 
+nlohmann::json deployment_without_timings(const std::string& text) {
+  auto json = nlohmann::json::parse(text);
+  for (const char* key : {"seconds", "seconds_without_notches", "seconds_with_notches"})
+    json.erase(key);
+  for (const char* run : {"with_notches", "without_notches"}) {
+    if (!json.contains(run)) continue;
+    json[run].erase("seconds");
+    if (!json[run].contains("solver_profile")) continue;
+    for (auto it = json[run]["solver_profile"].begin(); it != json[run]["solver_profile"].end();)
+      it =
+          it.key().rfind("seconds", 0) == 0 ? json[run]["solver_profile"].erase(it) : std::next(it);
+  }
+  return json;
+}
+
 }  // namespace gridshell::testing

@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -112,5 +113,9 @@ struct Certificate {
   std::string cert_pem, key_pem;
 };
 Certificate make_self_signed_certificate();
+
+/// deployment.json without its timings (the totals, each run's seconds and the seconds of its
+/// solver profile), to compare a remote run with an in-process one.
+nlohmann::json deployment_without_timings(const std::string& text);
 
 }  // namespace gridshell::testing

@@ -78,13 +78,7 @@ TEST(CliRemote, SimulateAndRunWriteTheSameFiles) {
                     design + "'")
                 .exit_code,
             0);
-  auto strip = [](const std::string& text) {
-    auto json = nlohmann::json::parse(text);
-    for (const char* key : {"seconds_without_notches", "seconds_with_notches"}) json.erase(key);
-    for (const char* run : {"with_notches", "without_notches"})
-      if (json.contains(run)) json[run].erase("seconds");
-    return json;
-  };
+  const auto strip = testing::deployment_without_timings;
   for (const std::string& command :
        {"simulate '" + design + "/design.json' --notches on",
         std::string(

@@ -471,15 +471,6 @@ TEST(Daemon, InfeasibleDesignIsFailedPrecondition) {
 }
 
 /// deployment.json without the fields that are wall-clock times.
-nlohmann::json deployment_without_timings(const std::string& text) {
-  auto json = nlohmann::json::parse(text);
-  for (const char* key : {"seconds", "seconds_without_notches", "seconds_with_notches"})
-    json.erase(key);
-  for (const char* run : {"with_notches", "without_notches"})
-    if (json.contains(run)) json[run].erase("seconds");
-  return json;
-}
-
 v1::SimulateRequest simulate_request(const std::string& notches) {
   v1::SimulateRequest request;
   v1::DesignRequest design = testing::design_request("double-vault", 32);
@@ -507,8 +498,8 @@ TEST(Daemon, RemoteSimulateEqualsInProcess) {
     EXPECT_EQ(files.at(name), local.at(name)) << name;  // results do not depend on threads
   }
   ASSERT_TRUE(files.count("deployment.json"));
-  const auto deployment = deployment_without_timings(files.at("deployment.json"));
-  EXPECT_EQ(deployment, deployment_without_timings(local.at("deployment.json")));
+  const auto deployment = testing::deployment_without_timings(files.at("deployment.json"));
+  EXPECT_EQ(deployment, testing::deployment_without_timings(local.at("deployment.json")));
   EXPECT_TRUE(deployment["converged"].get<bool>());
   EXPECT_LT(deployment["rms_with_notches"].get<double>(),
             deployment["rms_without_notches"].get<double>());
@@ -532,8 +523,8 @@ TEST(Daemon, RemoteRunEqualsInProcessDesignThenSimulate) {
   const FileBundle files = run_files(*remote.result);
   for (const char* name : {"design.json", "planar.svg", "deployed.obj", "deviation.ply"})
     EXPECT_TRUE(files.count(name)) << name;
-  EXPECT_EQ(deployment_without_timings(files.at("deployment.json")),
-            deployment_without_timings(run_files(local).at("deployment.json")));
+  EXPECT_EQ(testing::deployment_without_timings(files.at("deployment.json")),
+            testing::deployment_without_timings(run_files(local).at("deployment.json")));
   std::set<std::string> stages;
   for (const v1::Progress& p : remote.progress) stages.insert(p.stage());
   EXPECT_GE(stages.size(), 3u);  // patch/design stages and the simulation
