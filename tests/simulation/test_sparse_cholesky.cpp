@@ -65,6 +65,31 @@ std::vector<int> random_blocks(int n, unsigned seed) {
   return sizes;
 }
 
+/// For a factorization analysed on A (random_spd(300, 5, 200, 30, 5)): a matrix made indefinite
+/// on one diagonal entry is refused and leaves nothing behind (the next factorization of A is
+/// exact again); a right-hand side of another size, a matrix of another pattern or size are
+/// refused.
+template <typename Factorization>
+void expect_refuses_indefinite_and_other_patterns(Factorization& cholesky,
+                                                  const Eigen::SparseMatrix<double>& A) {
+  const int n = static_cast<int>(A.rows());
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
+      oracle(A);
+  for (int row : {0, n / 2, n - 1}) {
+    Eigen::SparseMatrix<double> B = A;
+    B.coeffRef(row, row) = -B.coeffRef(row, row);
+    EXPECT_FALSE(cholesky.factorize(B)) << "row " << row;
+    EXPECT_FALSE(cholesky.ok());
+    EXPECT_THROW(cholesky.solve(b), std::logic_error);
+    ASSERT_TRUE(cholesky.factorize(A)) << "row " << row;
+    EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << "row " << row;
+  }
+  EXPECT_THROW(cholesky.solve(Eigen::VectorXd::Ones(n + 1)), std::invalid_argument);
+  EXPECT_THROW(cholesky.factorize(random_spd(n, 2, 0, 0, 5)), std::invalid_argument);
+  EXPECT_THROW(cholesky.factorize(random_spd(n + 1, 5, 200, 30, 5)), std::invalid_argument);
+}
+
 TEST(BlockCholesky, SolvesLikeEigensSimplicialLltForAnyBlockPartition) {
   const int n = 400;
   for (unsigned seed : {1u, 2u, 3u}) {
@@ -186,22 +211,7 @@ TEST(BlockCholesky, RefactorizesAndRejectsIndefiniteMatrices) {
         oracle(B);
     EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << scale;
   }
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
-      oracle(A);
-  for (int row : {0, 150, n - 1}) {
-    Eigen::SparseMatrix<double> B = A;
-    B.coeffRef(row, row) = -B.coeffRef(row, row);
-    EXPECT_FALSE(cholesky.factorize(B)) << "row " << row;
-    EXPECT_FALSE(cholesky.ok());
-    EXPECT_THROW(cholesky.solve(b), std::logic_error);
-    // A failed factorization leaves nothing behind: the next one is exact again.
-    ASSERT_TRUE(cholesky.factorize(A)) << "row " << row;
-    EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << "row " << row;
-  }
-  EXPECT_THROW(cholesky.solve(Eigen::VectorXd::Ones(n + 1)), std::invalid_argument);
-  // A matrix with another pattern than the analysed one, or of another size, is refused.
-  EXPECT_THROW(cholesky.factorize(random_spd(n, 2, 0, 0, 5)), std::invalid_argument);
-  EXPECT_THROW(cholesky.factorize(random_spd(n + 1, 5, 200, 30, 5)), std::invalid_argument);
+  expect_refuses_indefinite_and_other_patterns(cholesky, A);
   EXPECT_THROW(cholesky.analyze(A, {n - 1}), std::invalid_argument);
 }
 
@@ -254,20 +264,7 @@ TEST(CholmodCholesky, InverseSubmatrixRefactorizationAndIndefiniteMatrices) {
       EXPECT_NEAR(S(a, c), inverse(unknowns[a], unknowns[c]),
                   1e-12 * inverse.diagonal().maxCoeff());
   EXPECT_THROW(cholesky.inverse_submatrix({n}), std::invalid_argument);
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
-      oracle(A);
-  for (int row : {0, 150, n - 1}) {
-    Eigen::SparseMatrix<double> B = A;
-    B.coeffRef(row, row) = -B.coeffRef(row, row);
-    EXPECT_FALSE(cholesky.factorize(B)) << "row " << row;
-    EXPECT_FALSE(cholesky.ok());
-    EXPECT_THROW(cholesky.solve(b), std::logic_error);
-    ASSERT_TRUE(cholesky.factorize(A)) << "row " << row;
-    EXPECT_LT(relative_difference(cholesky.solve(b), oracle.solve(b)), 1e-12) << "row " << row;
-  }
-  EXPECT_THROW(cholesky.solve(Eigen::VectorXd::Ones(n + 1)), std::invalid_argument);
-  EXPECT_THROW(cholesky.factorize(random_spd(n, 2, 0, 0, 5)), std::invalid_argument);
-  EXPECT_THROW(cholesky.factorize(random_spd(n + 1, 5, 200, 30, 5)), std::invalid_argument);
+  expect_refuses_indefinite_and_other_patterns(cholesky, A);
 }
 
 // Nested dissection of a k x k grid graph (the shape of a gridshell's Hessian): a permutation,
