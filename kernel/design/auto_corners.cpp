@@ -8,12 +8,14 @@
 #include <cmath>
 #include <iomanip>
 #include <numbers>
+#include <optional>
 #include <queue>
 #include <set>
 #include <sstream>
 
 #include "gridshell/design/target_patch.h"
 #include "gridshell/foundation/errors.h"
+#include "gridshell/foundation/parallel.h"
 #include "gridshell/mesh/curvature.h"
 #include "gridshell/mesh/mesh_topology.h"
 #include "gridshell/mesh/normals.h"
@@ -246,39 +248,56 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
     double seconds;  // the cut's
   };
   auto run_kind = [&](const std::vector<std::array<int, 4>>& quads, const char* kind) {
+    // The cuts are independent (each its own exact geodesics on the whole mesh): they run on
+    // the maps' threads, each into its own slot, and are reported in candidate order, so the
+    // outcome does not depend on the thread count. pillow_1 subdivided twice (21k vertices, 21
+    // cuts), 2 cores: the search 5.97 -> 3.50 s, the design 6.80 -> 4.02 s wall (medians of 3),
+    // peak memory 148 -> 252 MiB (two cuts in flight).
+    const size_t count =
+        std::min(quads.size(), static_cast<size_t>(std::max(0, o.max_cuts - report.cuts)));
+    struct Slot {
+      AutoCornerCandidate candidate;
+      std::optional<Cut> cut;
+    };
+    std::vector<Slot> slots(count);
+    const int first = static_cast<int>(report.candidates.size());
+    parallel_for(
+        count,
+        [&](std::size_t k, const Progress& inner) {
+          AutoCornerCandidate& c = slots[k].candidate;
+          c.vertices = quads[k];
+          c.kind = kind;
+          std::array<SurfacePoint, 4> corners;
+          for (int i = 0; i < 4; ++i) corners[i] = SurfacePoint::at_vertex(mesh, quads[k][i]);
+          const auto cut_start = std::chrono::steady_clock::now();
+          try {
+            Patch patch = cut_patch(mesh, corners, options.geodesic, options.cut, inner.checker());
+            c.area = surface_area(patch.mesh);
+            c.corner_angles = corner_angles(patch);
+            const auto [lo, hi] =
+                std::minmax_element(c.corner_angles.begin(), c.corner_angles.end());
+            if (*lo < o.min_corner_angle || *hi > o.max_corner_angle) {
+              c.reason = "corner angles " + fixed(degrees(*lo), 1) + ".." + fixed(degrees(*hi), 1) +
+                         " degrees outside the range";
+            } else {
+              c.reason = "cut; not evaluated";
+              slots[k].cut =
+                  Cut{first + static_cast<int>(k), std::move(patch), corners,
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - cut_start)
+                          .count()};
+            }
+          } catch (const Cancelled&) {
+            throw;
+          } catch (const Error& e) {
+            c.reason = "cut: " + e.message();
+          }
+        },
+        progress, {o.maps.threads, "patch: automatic corners", 0, 0.5});
     std::vector<Cut> cuts;
-    for (const auto& q : quads) {
-      if (report.cuts >= o.max_cuts) break;
-      progress.check();
-      progress.report("patch: automatic corners", 0.5 * report.cuts / o.max_cuts);
-      AutoCornerCandidate c;
-      c.vertices = q;
-      c.kind = kind;
-      std::array<SurfacePoint, 4> corners;
-      for (int i = 0; i < 4; ++i) corners[i] = SurfacePoint::at_vertex(mesh, q[i]);
+    for (Slot& slot : slots) {
       ++report.cuts;
-      const auto cut_start = std::chrono::steady_clock::now();
-      try {
-        Patch patch = cut_patch(mesh, corners, options.geodesic, options.cut, progress.checker());
-        c.area = surface_area(patch.mesh);
-        c.corner_angles = corner_angles(patch);
-        const auto [lo, hi] = std::minmax_element(c.corner_angles.begin(), c.corner_angles.end());
-        if (*lo < o.min_corner_angle || *hi > o.max_corner_angle) {
-          c.reason = "corner angles " + fixed(degrees(*lo), 1) + ".." + fixed(degrees(*hi), 1) +
-                     " degrees outside the range";
-        } else {
-          c.reason = "cut; not evaluated";
-          cuts.push_back(
-              {static_cast<int>(report.candidates.size()), std::move(patch), corners,
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - cut_start)
-                   .count()});
-        }
-      } catch (const Cancelled&) {
-        throw;
-      } catch (const Error& e) {
-        c.reason = "cut: " + e.message();
-      }
-      report.candidates.push_back(std::move(c));
+      report.candidates.push_back(std::move(slot.candidate));
+      if (slot.cut) cuts.push_back(std::move(*slot.cut));
     }
     std::stable_sort(cuts.begin(), cuts.end(), [&](const Cut& a, const Cut& b) {
       return report.candidates[a.candidate].area > report.candidates[b.candidate].area;

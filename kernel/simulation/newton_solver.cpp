@@ -31,8 +31,7 @@ class Timed {
   double& total_;
   std::chrono::steady_clock::time_point start_;
 };
-}  // namespace
-namespace {
+
 /// Fraction to the boundary: a barrier coordinate moves at most this fraction of the way to
 /// the bound of its domain in one step.
 constexpr double kToBoundary = 0.95;
@@ -60,8 +59,9 @@ struct NewtonSolver::Impl {
   Eigen::SparseMatrix<double> damped;   // step(): hessian + lambda D (same pattern)
   std::vector<int> diagonal;            // value index of each diagonal entry
   Eigen::VectorXd gradient;
-  // The unknowns are numbered in a fill-reducing order already (see the constructor) for the
-  // block kernel; CHOLMOD orders them itself (nested dissection) for large systems.
+  // The unknowns are numbered in a fill-reducing order already (see the constructor): minimum
+  // degree of the blocks for the block kernel, nested dissection of the blocks for CHOLMOD
+  // (which then only postorders its elimination tree).
   mutable NewtonSolver::Stats stats;
   struct Factorization {
     BlockCholesky block;

@@ -83,6 +83,31 @@ TEST(AutoCorners, ClosedSphereGetsAnInnerPatch) {
   EXPECT_EQ(target.patch.mesh.topology().boundary_loops.size(), 1u);
 }
 
+// The candidates are cut on several threads: the report and the choice are those of one thread,
+// candidate by candidate (the helicoid's several boundary candidates, the sphere's inner ones).
+TEST(AutoCorners, TheSearchDoesNotDependOnTheThreadCount) {
+  for (const TriangleMesh& mesh : {helicoid(), testing::icosphere(3, 10)}) {
+    TargetPatchOptions one, three;
+    one.auto_corners.maps.threads = 1;
+    three.auto_corners.maps.threads = 3;
+    const TargetPatch a = make_target_patch(mesh, CornerSpec{}, one);
+    const TargetPatch b = make_target_patch(mesh, CornerSpec{}, three);
+    const AutoCornerReport &ra = *a.auto_corners, &rb = *b.auto_corners;
+    ASSERT_GT(ra.cuts, 1);
+    EXPECT_EQ(ra.cuts, rb.cuts);
+    EXPECT_EQ(ra.evaluations, rb.evaluations);
+    EXPECT_EQ(ra.chosen, rb.chosen);
+    ASSERT_EQ(ra.candidates.size(), rb.candidates.size());
+    for (size_t i = 0; i < ra.candidates.size(); ++i) {
+      EXPECT_EQ(ra.candidates[i].vertices, rb.candidates[i].vertices) << i;
+      EXPECT_EQ(ra.candidates[i].reason, rb.candidates[i].reason) << i;
+      EXPECT_EQ(ra.candidates[i].area, rb.candidates[i].area) << i;
+      EXPECT_EQ(ra.candidates[i].corner_angles, rb.candidates[i].corner_angles) << i;
+    }
+    EXPECT_EQ(a.corner_angles, b.corner_angles);
+  }
+}
+
 TEST(AutoCorners, AnnulusGetsADiskPatch) {
   const TargetPatch target = make_target_patch(testing::annulus(2, 6, 10, 64), CornerSpec{});
   expect_acceptable(target);
