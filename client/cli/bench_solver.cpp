@@ -23,17 +23,20 @@
 
 namespace gridshell::cli {
 
-int bench_solver(const std::vector<int>& members, int max_iterations, const std::string& out,
-                 bool no_write) {
+int bench_solver(const std::vector<int>& members, int max_iterations, bool notches,
+                 const std::string& out, bool no_write) {
   std::ostringstream table;
   const SimulationOptions defaults;
-  table << "## Simulation at growing grid sizes: where the time goes (issue 36)\n\n"
+  table << "## Simulation at growing grid sizes" << (notches ? ", with notches" : "")
+        << ": where the time goes (issue 36)\n\n"
         << "Measured " << today() << " on " << cpu_name() << ", "
         << std::thread::hardware_concurrency()
         << " hardware threads, one run each (deterministic iterations and factor sizes; times "
            "from a shared machine). `example:double-vault` designed with n x n inner members "
-           "and lamella width 9 / n, simulated without notches (the longer of the two runs) "
-           "with each factorization of the Newton systems: the block kernel (block), CHOLMOD "
+           "and lamella width 9 / n, simulated "
+        << (notches ? "with notches (sliding connections: the system is rebuilt as they move) "
+                    : "without notches (the longer of the two runs) ")
+        << "with each factorization of the Newton systems: the block kernel (block), CHOLMOD "
            "supernodal with nested dissection of the parameter blocks (cholmod), each for every "
            "system. The default takes CHOLMOD from "
         << defaults.cholmod_from
@@ -41,7 +44,8 @@ int bench_solver(const std::vector<int>& members, int max_iterations, const std:
            "iterations (= factorizations, failed ones in parentheses), and seconds in the "
            "ordering and symbolic analysis, the assembly of gradient and Hessian, the "
            "factorizations (per factorization in parentheses), the solves and the trial "
-           "costs; total wall time of the run; RMS to the target and the energy at the equilibrium.\n\n"
+           "costs; total wall time of the run; RMS to the target and the energy at the "
+           "equilibrium.\n\n"
         << "| members | factorization | unknowns | factor entries | iterations | analysis s | "
            "assembly s | factorization s (each ms) | solves s | trial costs s | total s | RMS | "
            "energy | converged |\n"
@@ -57,7 +61,7 @@ int bench_solver(const std::vector<int>& members, int max_iterations, const std:
     for (const auto& [name, from] : {std::pair{"block", 0}, std::pair{"cholmod", 1}}) {
       std::cerr << "bench solver: " << n << " x " << n << " members, " << name << "\n";
       SimulationOptions options;
-      options.notches = false;
+      options.notches = notches;
       options.cholmod_from = from;
       options.max_iterations = max_iterations;
       const DeploymentRun run =
@@ -85,8 +89,8 @@ int bench_solver(const std::vector<int>& members, int max_iterations, const std:
   table << "\nPeak resident memory of the whole benchmark process: " << usage.ru_maxrss / 1024
         << " MiB.\n\nCommand: `gridshell bench solver --members ";
   for (size_t i = 0; i < members.size(); ++i) table << (i ? "," : "") << members[i];
-  table << " --max-iterations " << max_iterations << "`\n";
-  publish_section(out, "solver", table.str(), no_write);
+  table << " --max-iterations " << max_iterations << (notches ? " --notches" : "") << "`\n";
+  publish_section(out, notches ? "solver-notches" : "solver", table.str(), no_write);
   return 0;
 }
 

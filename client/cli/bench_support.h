@@ -28,10 +28,10 @@ int bench_resolution(const std::vector<double>& edges, int repeats, const std::s
                      bool no_write);
 
 /// `gridshell bench solver` (bench_solver.cpp, issue 36): double-vault with n x n members for
-/// each of `members`, simulated without notches with the block kernel and with CHOLMOD side by
-/// side, the solver's profile per run; section "solver".
-int bench_solver(const std::vector<int>& members, int max_iterations, const std::string& out,
-                 bool no_write);
+/// each of `members`, simulated without (or with) notches with the block kernel and with
+/// CHOLMOD side by side, the solver's profile per run; section "solver" ("solver-notches").
+int bench_solver(const std::vector<int>& members, int max_iterations, bool notches,
+                 const std::string& out, bool no_write);
 
 /// `gridshell bench fabricate` (bench_fabricate.cpp): kits of the seven examples and compare on
 /// synthetic scans of `scan_points` points; section "fabricate".

@@ -35,6 +35,7 @@ struct BenchArguments {
   std::vector<int> sizes{1000, 4000, 16000, 64000};
   std::vector<int> members{15, 30, 60};  // solver
   int max_iterations = 2000;             // solver
+  bool notches = false;                  // solver
   std::string surface = "waves-bump";
   int sources = 5;
   int cgal_sources = 3;
@@ -325,6 +326,7 @@ Command add_bench_command(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--max-iterations", args->max_iterations, "solver: iteration cap of each run")
       ->capture_default_str();
+  sub->add_flag("--notches", args->notches, "solver: simulate with notches (sliding connections)");
   sub->add_option("--surface", args->surface, "example surface")->capture_default_str();
   sub->add_option("--sources", args->sources, "sources per size")->capture_default_str();
   sub->add_option("--cgal-sources", args->cgal_sources, "sources also solved by CGAL")
@@ -356,7 +358,8 @@ Command add_bench_command(CLI::App& app) {
       for (int m : args->members)
         if (m < 2 || m > 200) throw InvalidInput("--members", "each must be 2..200");
       if (args->max_iterations < 1) throw InvalidInput("--max-iterations", "must be at least 1");
-      return bench_solver(args->members, args->max_iterations, args->out, args->no_write);
+      return bench_solver(args->members, args->max_iterations, args->notches, args->out,
+                          args->no_write);
     }
     if (args->what == "fabricate") {
       if (args->scan_points < 1000 || args->scan_points > 100000000)

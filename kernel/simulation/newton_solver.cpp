@@ -65,7 +65,7 @@ struct NewtonSolver::Impl {
   mutable NewtonSolver::Stats stats;
   struct Factorization {
     BlockCholesky block;
-    std::unique_ptr<CholmodCholesky> cholmod;  // in place of `block` when set
+    std::shared_ptr<CholmodCholesky> cholmod;  // in place of `block` when set
     bool factorize(const Eigen::SparseMatrix<double>& a) {
       return cholmod ? cholmod->factorize(a) : block.factorize(a);
     }
@@ -220,14 +220,23 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
   // 1.5% of AMD on the unknowns on the examples). The Hessian is assembled in its factorization
   // order and the Cholesky needs no permutation.
   // The graph of blocks: per block, itself and every block it shares a term with (sorted).
-  bool use_cholmod = false;
+  long total = 0;
+  for (const auto& block : m.blocks) total += block.second;
+  const bool use_cholmod = options_.cholmod_from > 0 && total >= options_.cholmod_from;
   std::vector<std::vector<int>> adjacent(nb);
   for (int b = 0; b < nb; ++b) adjacent[b].push_back(b);
-  for (const std::vector<int>& tb : term_blocks)
-    for (int x : tb)
+  for (size_t t = 0; t < m.terms.size(); ++t) {
+    std::vector<int> clique = term_blocks[t];
+    if (use_cholmod)  // the couplings it may have after a rebuild, for a pattern that stays
+      for (const double* p : m.terms[t].may_read) {
+        const auto it = block_of.find(p);
+        if (it != block_of.end()) clique.push_back(it->second);
+      }
+    for (int x : clique)
       if (x >= 0)
-        for (int y : tb)
+        for (int y : clique)
           if (y >= 0 && y != x) adjacent[x].push_back(y);
+  }
   size_t edges = 0;
   for (std::vector<int>& list : adjacent) {
     std::sort(list.begin(), list.end());
@@ -248,21 +257,20 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
       }
     }
     G.outerIndexPtr()[nb] = k;
-    long total = 0;
-    for (const auto& block : m.blocks) total += block.second;
-    use_cholmod = options_.cholmod_from > 0 && total >= options_.cholmod_from;
     std::vector<int> order;  // order[k]: the block eliminated k-th
     if (use_cholmod) {
       // Nested dissection: for grids far better than minimum degree (docs/solver.md).
       const auto& cache = options_.order_cache;
       if (cache && cache->blocks == m.blocks && cache->adjacent == adjacent) {
         order = cache->order;
+        m.cholesky.cholmod = cache->analysed;  // the same pattern in the same order
       } else {
         order = nested_dissection_order(adjacent);
         if (cache) {
           cache->blocks = m.blocks;
           cache->adjacent = adjacent;
           cache->order = order;
+          cache->analysed.reset();
         }
       }
     } else {
@@ -368,11 +376,16 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
     const Timed timed(m.stats.analyze_seconds);
     m.stats.unknowns = m.unknowns;
     if (use_cholmod) {
-      m.cholesky.cholmod = std::make_unique<CholmodCholesky>();
-      m.cholesky.cholmod->analyze(m.hessian, /*ordered=*/true);
+      if (!m.cholesky.cholmod) {
+        m.cholesky.cholmod = std::make_shared<CholmodCholesky>();
+        m.cholesky.cholmod->analyze(m.hessian, /*ordered=*/true);
+        if (options_.order_cache) options_.order_cache->analysed = m.cholesky.cholmod;
+        ++m.stats.analyses;
+      }
       m.stats.factorization = "cholmod";
     } else {
       m.cholesky.block.analyze(m.hessian, block_sizes);
+      ++m.stats.analyses;
       m.stats.factorization = "block";
     }
   }

@@ -27,6 +27,8 @@
 
 namespace gridshell {
 
+class CholmodCholesky;
+
 class NewtonSolver {
  public:
   /// One residual block. `parameters` point at the blocks it reads; blocks that are not free
@@ -48,6 +50,11 @@ class NewtonSolver {
     /// model with those fixed; if that trial fails, the whole step is shortened uniformly.
     double lower = -std::numeric_limits<double>::infinity();
     double upper = std::numeric_limits<double>::infinity();
+    /// Optional: blocks the term may read after a rebuild (a sliding connection's edge on the
+    /// other side of its middle). A CHOLMOD system holds their couplings in its pattern (as
+    /// zeros), so a rebuild that only swaps them keeps the pattern, the order and the symbolic
+    /// analysis (Options::order_cache).
+    std::vector<double*> may_read = {};
   };
 
   struct Options {
@@ -72,6 +79,7 @@ class NewtonSolver {
       std::vector<std::pair<double*, int>> blocks;
       std::vector<std::vector<int>> adjacent;
       std::vector<int> order;
+      std::shared_ptr<CholmodCholesky> analysed;  // its symbolic analysis, reused with the order
     };
     std::shared_ptr<OrderCache> order_cache;
   };
@@ -88,6 +96,7 @@ class NewtonSolver {
   struct Stats {
     std::string factorization;  ///< "block" (the block kernel) or "cholmod"
     long unknowns = 0, factor_nonzeros = 0;
+    int analyses = 0;  ///< symbolic analyses: 1, or 0 when the previous solver's was reused
     int evaluations = 0;            ///< gradient and Hessian assemblies
     int factorizations = 0;         ///< numeric factorizations, failed ones included
     int failed_factorizations = 0;  ///< not positive definite: damped more

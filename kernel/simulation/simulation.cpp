@@ -729,11 +729,24 @@ Deployment::Terms Deployment::build_terms() {
     const Binding bg = bind(a), bh = bind(b);
     std::vector<double*> parameters = bg.parameters;
     parameters.insert(parameters.end(), bh.parameters.begin(), bh.parameters.end());
+    // A sliding end whose slide crosses the middle of its edge blends with the edge on the other
+    // side: a rebuild then reads that edge instead (see bind()).
+    std::vector<double*> may_read;
+    for (const Slider* s : {&a, &b}) {
+      if (!s->sliding || s->held) continue;
+      Rod& rod = rods_[s->rod];
+      const int other = s->edge - s->side;  // the neighbour bind() did not take
+      if (other < 0 || other >= rod.n) continue;
+      may_read.push_back(rod.x[s->side > 0 ? s->edge - 1 : s->edge + 2].data());
+      may_read.push_back(&rod.theta[other]);
+    }
     rod_terms::ConnectionResidual connection{bg.edge, bh.edge, joint.offset * thickness_, position,
                                              direction};
     add(pair_cost(connection), parameters);
+    out.terms.back().may_read = may_read;
     if (joint.anchor >= 0) {
       add(pair_cost(anchor_residual(joint, bg, bh)), parameters);
+      out.terms.back().may_read = may_read;
       if (options_.anchor_tangents)
         for (int end = 0; end < 2; ++end) {
           const rod_terms::AnchorTangent tangent{anchors_[joint.anchor].across[end],
@@ -933,7 +946,7 @@ void Deployment::solve_newton(const Progress& progress, const std::string& stage
     p.factorization = s.factorization;
     p.unknowns = s.unknowns;
     if (s.factor_nonzeros > 0) p.factor_nonzeros = s.factor_nonzeros;
-    ++p.analyses;
+    p.analyses += s.analyses;
     p.evaluations += s.evaluations;
     p.factorizations += s.factorizations;
     p.failed_factorizations += s.failed_factorizations;

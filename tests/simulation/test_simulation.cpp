@@ -315,12 +315,13 @@ TEST(Simulation, CholmodAndTheBlockKernelFindTheSameEquilibrium) {
     ASSERT_TRUE(block.converged) << block.termination;
     ASSERT_TRUE(cholmod.converged) << cholmod.termination;
     EXPECT_EQ(block.profile.factorization, "block");
+    EXPECT_EQ(block.profile.analyses, block.outer_iterations);  // the block kernel: each rebuild
     EXPECT_EQ(cholmod.profile.factorization, "cholmod");
     for (const DeploymentRun* r : {&block, &cholmod}) {
       const SolverProfile& p = r->profile;
       EXPECT_EQ(p.factorizations, r->iterations);  // an iteration is a linear solve
       EXPECT_GE(p.analyses, 1);
-      EXPECT_EQ(p.analyses, r->outer_iterations);
+      EXPECT_LE(p.analyses, r->outer_iterations);  // one per rebuild at most
       EXPECT_GT(p.evaluations, 0);
       EXPECT_GT(p.unknowns, 0);
       EXPECT_GT(p.factor_nonzeros, p.unknowns);

@@ -170,7 +170,8 @@ struct SimulatedConnection {
 };
 
 /// Where a simulation's time went, summed over the Newton solver's rebuilds (each connection
-/// move starts a new one: one more analysis). docs/solver.md.
+/// move starts a new one: one more analysis, unless a CHOLMOD system keeps its pattern).
+/// docs/solver.md.
 struct SolverProfile {
   std::string factorization;  ///< "block" (the block kernel), "cholmod" (supernodal), or ""
   long unknowns = 0;          ///< of the last system
