@@ -65,7 +65,7 @@ struct CholmodCholesky::Impl {
   }
 };
 
-CholmodCholesky::CholmodCholesky(Ordering ordering) : impl_(std::make_unique<Impl>()) {
+CholmodCholesky::CholmodCholesky() : impl_(std::make_unique<Impl>()) {
   // Debian's CHOLMOD runs a few loops per supernode (clearing its maps, zeroing a supernode)
   // as OpenMP regions of a compiled-in 4 threads, whatever OMP_NUM_THREADS says. On 2 cores
   // their wake-ups took 3.9 s of system time in a 30 x 30-member run (15.2 s against 6.5 s
@@ -78,37 +78,19 @@ CholmodCholesky::CholmodCholesky(Ordering ordering) : impl_(std::make_unique<Imp
   c.supernodal = CHOLMOD_SUPERNODAL;
   c.quick_return_if_not_posdef = 1;  // a failed trial costs only up to the failing column
   c.final_ll = 1;
-  switch (ordering) {
-    case Ordering::metis:
-      c.nmethods = 1;
-      c.method[0].ordering = CHOLMOD_METIS;
-      break;
-    case Ordering::amd:
-      c.nmethods = 1;
-      c.method[0].ordering = CHOLMOD_AMD;
-      break;
-    case Ordering::best:
-      c.nmethods = 0;  // CHOLMOD's default: AMD, and METIS where AMD's fill is large
-      break;
-  }
+  c.nmethods = 1;  // the given order, postordered: no ordering of its own
+  c.method[0].ordering = CHOLMOD_NATURAL;
   c.postorder = 1;
 }
 
 CholmodCholesky::~CholmodCholesky() = default;
 
-void CholmodCholesky::analyze(const Eigen::SparseMatrix<double>& upper, bool ordered) {
+void CholmodCholesky::analyze(const Eigen::SparseMatrix<double>& upper) {
   Impl& m = *impl_;
   cholmod_free_factor(&m.factor, &m.common);
   ok_ = false;
   cholmod_sparse a = Impl::view(upper);
-  const int nmethods = m.common.nmethods, ordering = m.common.method[0].ordering;
-  if (ordered) {
-    m.common.nmethods = 1;
-    m.common.method[0].ordering = CHOLMOD_NATURAL;
-  }
   m.factor = cholmod_analyze(&a, &m.common);
-  m.common.nmethods = nmethods;
-  m.common.method[0].ordering = ordering;
   if (m.factor == nullptr)
     throw std::runtime_error("CHOLMOD analysis failed (status " + std::to_string(m.common.status) +
                              ")");

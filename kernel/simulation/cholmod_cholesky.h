@@ -19,18 +19,15 @@ namespace gridshell {
 
 class CholmodCholesky {
  public:
-  /// The fill-reducing ordering CHOLMOD computes in analyze().
-  enum class Ordering { metis, amd, best };
-  explicit CholmodCholesky(Ordering ordering = Ordering::metis);
+  CholmodCholesky();
   ~CholmodCholesky();
   CholmodCholesky(const CholmodCholesky&) = delete;
   CholmodCholesky& operator=(const CholmodCholesky&) = delete;
 
-  /// Symbolic analysis (ordering, supernodes) of a symmetric matrix given by its upper triangle
-  /// (column-major, compressed, sorted). With `ordered`, the unknowns are already numbered in a
-  /// fill-reducing order (e.g. nested_dissection_order of their blocks) and only the
-  /// elimination tree's postorder is applied.
-  void analyze(const Eigen::SparseMatrix<double>& upper, bool ordered = false);
+  /// Symbolic analysis (elimination tree, its postorder, supernodes) of a symmetric matrix given
+  /// by its upper triangle (column-major, compressed, sorted), its unknowns already numbered in
+  /// a fill-reducing order (the Newton solver's: nested_dissection_order of its blocks).
+  void analyze(const Eigen::SparseMatrix<double>& upper);
   /// Numeric factorization of a matrix with the analysed pattern (std::invalid_argument if its
   /// size differs); false if it is not (numerically) positive definite.
   bool factorize(const Eigen::SparseMatrix<double>& upper);

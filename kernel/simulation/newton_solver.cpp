@@ -378,7 +378,7 @@ NewtonSolver::NewtonSolver(std::vector<std::pair<double*, int>> blocks, std::vec
     if (use_cholmod) {
       if (!m.cholesky.cholmod) {
         m.cholesky.cholmod = std::make_shared<CholmodCholesky>();
-        m.cholesky.cholmod->analyze(m.hessian, /*ordered=*/true);
+        m.cholesky.cholmod->analyze(m.hessian);
         if (options_.order_cache) options_.order_cache->analysed = m.cholesky.cholmod;
         ++m.stats.analyses;
       }

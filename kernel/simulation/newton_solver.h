@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "gridshell/simulation/simulation.h"
+
 namespace gridshell {
 
 class CholmodCholesky;
@@ -92,18 +94,9 @@ class NewtonSolver {
     double relative_step = 0;    ///< max_i |d_i| / (1 + |x_i|) of the accepted step
   };
 
-  /// Where the solver's time went since its construction (docs/solver.md).
-  struct Stats {
-    std::string factorization;  ///< "block" (the block kernel) or "cholmod"
-    long unknowns = 0, factor_nonzeros = 0;
-    int analyses = 0;  ///< symbolic analyses: 1, or 0 when the previous solver's was reused
-    int evaluations = 0;            ///< gradient and Hessian assemblies
-    int factorizations = 0;         ///< numeric factorizations, failed ones included
-    int failed_factorizations = 0;  ///< not positive definite: damped more
-    int cost_evaluations = 0;       ///< trial costs (the step's line search)
-    double analyze_seconds = 0, evaluate_seconds = 0, factorize_seconds = 0, solve_seconds = 0,
-           cost_seconds = 0;
-  };
+  /// Where the solver's time went since its construction (docs/solver.md): the profile a
+  /// simulation sums over its solvers.
+  using Stats = SolverProfile;
   const Stats& stats() const;
 
   /// `blocks`: the free parameter blocks (pointer, size); their order defines the unknowns.

@@ -259,6 +259,12 @@ TEST(Simulation, RejectsInconsistentGridsWithTheField) {
 // notches ends in the same equilibrium with the exact compressive softening and with 3/4 of it
 // (the full Hessian ends each run), on another path; with sliding connections the setting is
 // not used at all.
+/// A design's deployment with the given options.
+DeploymentRun simulate_design(const Design& design, const SimulationOptions& options) {
+  return simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
+                             design.lamella_width, design.lamella_thickness, options);
+}
+
 TEST(Simulation, CompressionStiffnessShapesThePathNotTheEquilibrium) {
   ExampleSurface example = make_example("archway");
   const Design design = make_design(example.mesh, CornerSpec::at_vertices(example.corners), {});
@@ -266,8 +272,7 @@ TEST(Simulation, CompressionStiffnessShapesThePathNotTheEquilibrium) {
     SimulationOptions options;
     options.notches = notches;
     options.compression_stiffness = scale;
-    return simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
-                               design.lamella_width, design.lamella_thickness, options);
+    return simulate_design(design, options);
   };
   const DeploymentRun exact = run(false, 1.0), softer = run(false, 0.75);
   ASSERT_TRUE(exact.converged) << exact.termination;
@@ -307,8 +312,7 @@ TEST(Simulation, CholmodAndTheBlockKernelFindTheSameEquilibrium) {
     SimulationOptions options;
     options.notches = notches;
     options.cholmod_from = cholmod_from;
-    return simulate_deployment(design.grid, design.anchors, design.target.patch.mesh,
-                               design.lamella_width, design.lamella_thickness, options);
+    return simulate_design(design, options);
   };
   for (bool notches : {false, true}) {
     const DeploymentRun block = run(notches, 0), cholmod = run(notches, 1);
