@@ -2,6 +2,7 @@
 #include "gridshell/application/compare_job.h"
 
 #include <cmath>
+#include <numbers>
 
 #include "gridshell/application/convert_deployment.h"
 #include "gridshell/foundation/errors.h"
@@ -71,14 +72,27 @@ CompareJob compare_job(const std::vector<Vec3>& scan, const std::vector<Simulate
   r.set_points_used(c.used);
   r.set_points_rejected(c.rejected);
   r.set_rejection_distance(c.rejection_distance);
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j)
-      r.add_transform(i < 3 ? (j < 3 ? c.rotation(i, j) : c.translation[i]) : (j == 3 ? 1 : 0));
+  const auto add_transform = [](const Eigen::Matrix3d& R, const Vec3& t,
+                                google::protobuf::RepeatedField<double>& to) {
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) to.Add(i < 3 ? (j < 3 ? R(i, j) : t[i]) : (j == 3 ? 1 : 0));
+  };
+  add_transform(c.rotation, c.translation, *r.mutable_transform());
   const Eigen::AngleAxisd axis_angle(c.rotation);
   const Vec3 rv = axis_angle.axis() * axis_angle.angle();
   for (int k = 0; k < 3; ++k) r.add_rotation_vector(rv[k]);
   r.set_icp_iterations(c.icp_iterations);
   r.set_coarse(c.coarse);
+  v1::Registration& g = *r.mutable_registration();
+  g.set_orientations_tried(c.orientations_tried);
+  g.set_poses_refined(c.poses_refined);
+  g.set_residual(c.residual);
+  g.set_runner_up(c.runner_up);
+  g.set_ambiguity(c.runner_up > 0 ? c.residual / c.runner_up : 0);
+  g.set_rotation_degrees(axis_angle.angle() * 180 / std::numbers::pi);
+  g.set_translation(c.translation.norm());
+  if (c.runner_up > 0)
+    add_transform(c.runner_up_rotation, c.runner_up_translation, *g.mutable_runner_up_transform());
   fill(r.mutable_deployment(), c.deployment, "deployment");
   fill(r.mutable_target(), c.target, "target");
   job.ply = compare_ply(scan, c);

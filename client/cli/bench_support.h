@@ -35,7 +35,8 @@ int bench_solver(const std::vector<int>& members, int max_iterations, bool notch
 
 /// `gridshell bench fabricate` (bench_fabricate.cpp): kits of the seven examples and compare on
 /// synthetic scans of `scan_points` points; section "fabricate".
-int bench_fabricate(int repeats, int scan_points, const std::string& out, bool no_write,
+int bench_fabricate(int repeats, int scan_points, const std::vector<std::string>& scan_examples,
+                    const std::vector<double>& scan_noise, const std::string& out, bool no_write,
                     bool compare_only = false);
 
 /// `gridshell bench scale` (bench_scale.cpp, issue 17): whole designs of `examples` at each of

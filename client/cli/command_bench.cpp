@@ -50,6 +50,10 @@ struct BenchArguments {
   int request_threads = 1;    // interactive: --request-threads of the daemon it starts
   int redesign_threads = 0;   // interactive: --redesign-threads of the daemon it starts
   int scan_points = 1000000;  // fabricate: points of the synthetic scans
+  // fabricate: the deployments the synthetic scans are taken of, and their noise (sigma per
+  // coordinate, in lamella thicknesses; 0 is an exact scan)
+  std::vector<std::string> scan_examples{"double-vault", "hypar", "sphere"};
+  std::vector<double> scan_noise{0.1, 0};
   bool compare_only = false;  // fabricate: the scan comparison alone
   std::vector<std::string> examples{"double-vault", "waves-bump", "sphere"};  // scale
   int largest_examples = 1;  // scale: examples that also run the largest size
@@ -312,6 +316,15 @@ Command add_bench_command(CLI::App& app) {
                   "scale: another gridshell program run side by side (e.g. an older build)");
   sub->add_option("--scan-points", args->scan_points, "fabricate: points of the synthetic scans")
       ->capture_default_str();
+  sub->add_option("--scan-examples", args->scan_examples,
+                  "fabricate: examples whose deployments the synthetic scans are taken of")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--scan-noise", args->scan_noise,
+                  "fabricate: noise of the synthetic scans (sigma per coordinate in lamella "
+                  "thicknesses; 0: exact)")
+      ->delimiter(',')
+      ->capture_default_str();
   sub->add_flag("--compare-only", args->compare_only,
                 "fabricate: the scan comparison alone (printed, not written)");
   sub->add_option("--edges", args->edges,
@@ -364,8 +377,8 @@ Command add_bench_command(CLI::App& app) {
     if (args->what == "fabricate") {
       if (args->scan_points < 1000 || args->scan_points > 100000000)
         throw InvalidInput("--scan-points", "must be 1000..100000000");
-      return bench_fabricate(args->repeats, args->scan_points, args->out, args->no_write,
-                             args->compare_only);
+      return bench_fabricate(args->repeats, args->scan_points, args->scan_examples,
+                             args->scan_noise, args->out, args->no_write, args->compare_only);
     }
     if (args->what == "resolution") {
       if (args->edges.empty()) throw InvalidInput("--edges", "give at least one resolution");

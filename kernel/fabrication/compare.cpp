@@ -238,6 +238,22 @@ IcpResult icp(const std::vector<Vec3>& points, const Reference& reference, Pose 
   return out;
 }
 
+/// Root mean square of the exact distances from `points` moved by `pose` to `reference`, over the
+/// nearest `keep` fraction of them.
+double trimmed_distance(const std::vector<Vec3>& points, const Reference& reference,
+                        const Pose& pose, double keep) {
+  std::vector<double> d(points.size());
+  Vec3 last = Vec3::Zero();
+  bool have_last = false;
+  for (size_t i = 0; i < points.size(); ++i)
+    d[i] = reference.distance(pose.apply(points[i]), last, have_last);
+  const size_t n = std::max<size_t>(1, static_cast<size_t>(keep * static_cast<double>(d.size())));
+  std::nth_element(d.begin(), d.begin() + (n - 1), d.end());
+  double sum = 0;
+  for (size_t i = 0; i < n; ++i) sum += d[i] * d[i];
+  return std::sqrt(sum / static_cast<double>(n));
+}
+
 /// Mean and principal axes (columns, by increasing variance, right-handed).
 std::pair<Vec3, Eigen::Matrix3d> principal_axes(const std::vector<Vec3>& points) {
   Vec3 mean = Vec3::Zero();
@@ -508,21 +524,24 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   if (debug)
     for (const Orientation& o : orientations)
       std::fprintf(stderr, "candidate flip %d turn %d score %g\n", o.flip, o.turn, o.icp.score);
-  // The three best orientations that differ by more than 20 degrees: a shell with a symmetry
-  // (a vault turned by half a turn) fits its smooth target in each, and only the lamellas tell
-  // them apart.
+  // Every orientation that fits the smooth target nearly as well as the best, if it differs from
+  // the better ones by more than 20 degrees: a shell with symmetries (a vault turned by half a
+  // turn, a saddle by a quarter turn with its normal flipped) fits its target in each, and only
+  // the lamellas tell them apart. At most six.
   std::sort(orientations.begin(), orientations.end(),
             [](const Orientation& a, const Orientation& b) { return a.icp.score < b.icp.score; });
   std::vector<Orientation> distinct;
   for (const Orientation& o : orientations) {
+    if (o.icp.score > 3 * orientations.front().icp.score + 1e-6 * patch.extent) break;
     bool near = false;
     for (const Orientation& d : distinct)
       near =
           near || Eigen::AngleAxisd(o.icp.pose.rotation * d.icp.pose.rotation.transpose()).angle() <
                       20 * std::numbers::pi / 180;
     if (!near) distinct.push_back(o);
-    if (distinct.size() == 3) break;
+    if (distinct.size() == 6) break;
   }
+  out.orientations_tried = static_cast<int>(distinct.size());
   if (debug) std::fprintf(stderr, "orientation %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
   // Sub-stage CPU times for the debug lines.
@@ -592,45 +611,105 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   std::vector<IcpResult> refined(starts.size());
   parallel_for(starts.size(),
                [&](size_t k, const Progress& inner) {
-                 refined[k] = icp(coarse_points, lamellas, starts[k].second, 20, 0.8, inner);
+                 refined[k] = icp(coarse_points, lamellas, starts[k].second, 30, 1.0, inner);
                },
-               progress, {options.threads, "compare: coarse registration", 0.8, 0.9});
-  IcpResult chosen;
-  chosen.score = 1e300;
-  for (size_t k = 0; k < starts.size(); ++k) {
-    const size_t o = starts[k].first;
-    if (debug)
-      std::fprintf(stderr, "orientation %zu offset %zu (%g) -> score %g\n", o, k % kBest,
-                   start_offset_score[k], refined[k].score);
-    if (refined[k].score < chosen.score) {
-      chosen = refined[k];
-      out.coarse = "principal axes, " + std::string(distinct[o].flip ? "normal flipped, " : "") +
-                   "turned " + std::to_string(360 * distinct[o].turn / kTurns) +
-                   " degrees about the normal axis, ICP on the target patch, in-plane offset "
-                   "search on the lamellas";
-    }
-  }
+               progress, {options.threads, "compare: coarse registration", 0.8, 0.85});
   if (debug) std::fprintf(stderr, "  refinements cpu %.3f s\n", sub_cpu());
+  // (4) The refined starts ranked by exact distances (the AABB tree, not the sampled estimate:
+  // its error, a fraction of the sample spacing, is as large as the differences between the
+  // poses), the nearest 80 % of a fixed subset: the rest may be outliers or parts the scan has
+  // and the model lacks.
+  const std::vector<Vec3> judge_points = subset(1000);
+  const Vec3 scan_centre = scan_mean;
+  const auto same_pose = [&](const Pose& a, const Pose& b) {
+    return Eigen::AngleAxisd(a.rotation * b.rotation.transpose()).angle() <
+               2 * std::numbers::pi / 180 &&
+           (a.apply(scan_centre) - b.apply(scan_centre)).norm() < 0.005 * lamellas.extent;
+  };
+  std::vector<double> exact(starts.size());
+  parallel_for(starts.size(),
+               [&](size_t k, const Progress&) {
+                 exact[k] = trimmed_distance(judge_points, lamellas, refined[k].pose, 0.8);
+               },
+               progress, {options.threads, "compare: coarse registration", 0.85, 0.87});
+  std::vector<size_t> ranked(starts.size());
+  std::iota(ranked.begin(), ranked.end(), 0);
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [&](size_t a, size_t b) { return exact[a] < exact[b]; });
+  if (debug)
+    for (size_t k : ranked)
+      std::fprintf(stderr, "orientation %zu offset %zu (%g) -> estimate %g exact %g\n",
+                   starts[k].first, k % kBest, start_offset_score[k], refined[k].score, exact[k]);
+  // (5) The finalists: each orientation's best pose, and the next best to make at least three,
+  // all distinct. A symmetric shape may fit the scan as well in another orientation, but its
+  // coarse pose there is often still a few lamella thicknesses off and only the fine ICP says
+  // so: every orientation gets its chance. Each finalist is refined on a larger subset with
+  // outliers rejected at three robust standard deviations and judged again; the best is the
+  // result, the best of the others that stayed distinct from it says how unambiguous it is.
+  std::vector<size_t> finalists;
+  const auto take = [&](size_t k) {
+    for (size_t f : finalists)
+      if (same_pose(refined[k].pose, refined[f].pose)) return;
+    finalists.push_back(k);
+  };
+  for (size_t o = 0; o < distinct.size(); ++o)
+    for (size_t k : ranked)
+      if (starts[k].first == o) {
+        take(k);
+        break;
+      }
+  for (size_t k : ranked)
+    if (finalists.size() < 3) take(k);
   if (debug) std::fprintf(stderr, "offsets %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
-
-  // Refinement on a larger subset, outliers rejected at three robust standard deviations.
   progress.report("compare: ICP", 0.9);
-  const IcpResult fine =
-      icp(subset(options.icp_points), lamellas, chosen.pose, options.max_iterations, 1.0, progress);
-  out.rotation = fine.pose.rotation;
-  out.translation = fine.pose.translation;
-  out.icp_iterations = fine.iterations;
+  const std::vector<Vec3> icp_points = subset(options.icp_points);
+  const std::vector<Vec3> final_judge = subset(3000);
+  std::vector<IcpResult> fine(finalists.size());
+  std::vector<double> residual(finalists.size());
+  parallel_for(finalists.size(),
+               [&](size_t f, const Progress& inner) {
+                 fine[f] = icp(icp_points, lamellas, refined[finalists[f]].pose,
+                               options.max_iterations, 1.0, inner);
+                 residual[f] = trimmed_distance(final_judge, lamellas, fine[f].pose, 0.8);
+               },
+               progress, {options.threads, "compare: ICP", 0, 1});
+  const size_t best =
+      static_cast<size_t>(std::min_element(residual.begin(), residual.end()) - residual.begin());
+  out.poses_refined = static_cast<int>(finalists.size());
+  out.residual = residual[best];
+  for (size_t f = 0; f < finalists.size(); ++f)
+    if (f != best && !same_pose(fine[f].pose, fine[best].pose) &&
+        (out.runner_up == 0 || residual[f] < out.runner_up)) {
+      out.runner_up = residual[f];
+      out.runner_up_rotation = fine[f].pose.rotation;
+      out.runner_up_translation = fine[f].pose.translation;
+    }
+  {
+    const Orientation& o = distinct[starts[finalists[best]].first];
+    out.coarse = "principal axes, " + std::string(o.flip ? "normal flipped, " : "") + "turned " +
+                 std::to_string(360 * o.turn / kTurns) +
+                 " degrees about the normal axis, ICP on the target patch, in-plane offset "
+                 "search on the lamellas; the best of " +
+                 std::to_string(finalists.size()) + " poses refined";
+  }
+  out.rotation = fine[best].pose.rotation;
+  out.translation = fine[best].pose.translation;
+  out.icp_iterations = fine[best].iterations;
   if (debug)
-    std::fprintf(stderr, "fine ICP %.3f s (cpu %.3f s), %d iterations, score %g\n", since(t0),
-                 cpu(), fine.iterations, fine.score);
+    for (size_t f = 0; f < finalists.size(); ++f)
+      std::fprintf(stderr, "fine %zu: %d iterations, estimate %g, exact %g, rotation %g rad\n", f,
+                   fine[f].iterations, fine[f].score, residual[f],
+                   Eigen::AngleAxisd(fine[f].pose.rotation).angle());
+  if (debug) std::fprintf(stderr, "fine ICP %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
+  const Pose& chosen = fine[best].pose;
 
   // Exact distances of every point, in parallel chunks of points taken in Morton (Z-curve)
   // order: a scan file's order may be anything (the bench's is shuffled), and neighbouring
   // queries walk the same branches of the k-d and AABB trees, which then stay in cache.
   const size_t n = scan.size(), chunk = 1 << 14;
-  const std::vector<std::uint32_t> order_z = morton_order(scan, fine.pose);
+  const std::vector<std::uint32_t> order_z = morton_order(scan, chosen);
   out.deployment_distance.assign(n, 0);
   out.target_distance.assign(n, 0);
   parallel_for((n + chunk - 1) / chunk,
@@ -641,7 +720,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                  for (size_t k = from; k < to; ++k) {
                    if ((k & 1023) == 0) inner.check();
                    const size_t i = order_z[k];
-                   const Vec3 p = fine.pose.apply(scan[i]);
+                   const Vec3 p = chosen.apply(scan[i]);
                    out.deployment_distance[i] = lamellas.distance(p, on_lamellas, have_lamellas);
                    out.target_distance[i] = patch.distance(p, on_patch, have_patch);
                  }

@@ -58,6 +58,14 @@ struct ScanComparison {
   Vec3 translation = Vec3::Zero();
   int icp_iterations = 0;
   std::string coarse;  ///< the start ICP was refined from
+  /// How unambiguous the pose is: the coarse orientations started from, the distinct poses
+  /// refined against the lamellas, the chosen pose's trimmed RMS and that of the best other
+  /// pose (0 if none was left).
+  int orientations_tried = 0, poses_refined = 0;
+  double residual = 0, runner_up = 0;
+  /// The runner-up pose (identity if none was left).
+  Eigen::Matrix3d runner_up_rotation = Eigen::Matrix3d::Identity();
+  Vec3 runner_up_translation = Vec3::Zero();
   double rejection_distance = 0;
   int used = 0, rejected = 0;
   std::vector<double> deployment_distance;  ///< per scan point (after registration)
