@@ -254,6 +254,70 @@ double trimmed_distance(const std::vector<Vec3>& points, const Reference& refere
   return std::sqrt(sum / static_cast<double>(n));
 }
 
+/// The lamellas seen from above: a raster over the plane (origin, e1, e2) holding each pixel's
+/// distance to the nearest projected reference sample (an 8-neighbour chamfer transform). Scoring
+/// a pose of the scan in the plane costs one lookup per point instead of a k-d tree query, so
+/// turns about the normal and offsets in the plane can be searched together.
+struct PlanView {
+  Vec3 origin, e1, e2;
+  double pixel = 1, lo_u = 0, lo_v = 0;
+  int width = 0, height = 0;
+  std::vector<float> distance;
+
+  PlanView(const std::vector<Vec3>& samples, const Vec3& origin_, const Vec3& e1_, const Vec3& e2_,
+           double margin, double pixel_)
+      : origin(origin_), e1(e1_), e2(e2_), pixel(pixel_) {
+    double hi_u = -1e300, hi_v = -1e300;
+    lo_u = lo_v = 1e300;
+    for (const Vec3& p : samples) {
+      const double u = (p - origin).dot(e1), v = (p - origin).dot(e2);
+      lo_u = std::min(lo_u, u), hi_u = std::max(hi_u, u);
+      lo_v = std::min(lo_v, v), hi_v = std::max(hi_v, v);
+    }
+    lo_u -= margin, lo_v -= margin;
+    width = static_cast<int>((hi_u + margin - lo_u) / pixel) + 1;
+    height = static_cast<int>((hi_v + margin - lo_v) / pixel) + 1;
+    constexpr float kFar = 1e30f;
+    distance.assign(static_cast<size_t>(width) * height, kFar);
+    for (const Vec3& p : samples) {
+      const int i = static_cast<int>(((p - origin).dot(e1) - lo_u) / pixel);
+      const int j = static_cast<int>(((p - origin).dot(e2) - lo_v) / pixel);
+      distance[static_cast<size_t>(j) * width + i] = 0;
+    }
+    const float a = static_cast<float>(pixel), b = static_cast<float>(std::sqrt(2.0) * pixel);
+    const auto at = [&](int i, int j) -> float& {
+      return distance[static_cast<size_t>(j) * width + i];
+    };
+    for (int j = 0; j < height; ++j)
+      for (int i = 0; i < width; ++i) {
+        float& d = at(i, j);
+        if (i > 0) d = std::min(d, at(i - 1, j) + a);
+        if (j > 0) d = std::min(d, at(i, j - 1) + a);
+        if (i > 0 && j > 0) d = std::min(d, at(i - 1, j - 1) + b);
+        if (i + 1 < width && j > 0) d = std::min(d, at(i + 1, j - 1) + b);
+      }
+    for (int j = height - 1; j >= 0; --j)
+      for (int i = width - 1; i >= 0; --i) {
+        float& d = at(i, j);
+        if (i + 1 < width) d = std::min(d, at(i + 1, j) + a);
+        if (j + 1 < height) d = std::min(d, at(i, j + 1) + a);
+        if (i + 1 < width && j + 1 < height) d = std::min(d, at(i + 1, j + 1) + b);
+        if (i > 0 && j + 1 < height) d = std::min(d, at(i - 1, j + 1) + b);
+      }
+  }
+  /// Plane coordinates of a point.
+  Eigen::Vector2d project(const Vec3& p) const {
+    return {(p - origin).dot(e1), (p - origin).dot(e2)};
+  }
+  /// Distance at plane coordinates (the margin beyond the raster).
+  double at(const Eigen::Vector2d& q, double outside) const {
+    const int i = static_cast<int>(std::floor((q.x() - lo_u) / pixel));
+    const int j = static_cast<int>(std::floor((q.y() - lo_v) / pixel));
+    if (i < 0 || j < 0 || i >= width || j >= height) return outside;
+    return distance[static_cast<size_t>(j) * width + i];
+  }
+};
+
 /// Mean and principal axes (columns, by increasing variance, right-handed).
 std::pair<Vec3, Eigen::Matrix3d> principal_axes(const std::vector<Vec3>& points) {
   Vec3 mean = Vec3::Zero();
@@ -471,14 +535,16 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     return out;
   };
 
-  // Coarse, in three steps. (1) Orientation: principal axes of the scan onto those of the target
+  // Coarse, then fine. (1) Orientation: principal axes of the scan onto those of the target
   // patch, with both orientations of the axis of least variance (the shell's normal) and 12
   // turns about it, each tried with a short ICP against the patch: a smooth surface, so a start
-  // a few lamella spacings off still slides home. (2) Position on the lamellas: the grid of
-  // lamellas repeats itself every member spacing, and ICP started a spacing off stays there, so
-  // offsets in the shell's plane are searched on a grid (+-8 % of the extent in steps of
-  // 0.4 %), scored by the trimmed mean distance to the lamellas. (3) The best few are refined
-  // by ICP against the lamellas.
+  // a few lamella spacings off still slides home. Every orientation that fits nearly as well as
+  // the best goes on: a symmetric shape fits in several. (2) Position on the lamellas: the grid
+  // of lamellas repeats itself every member spacing, and ICP started a spacing off stays there,
+  // so turns about the normal and offsets in the shell's plane are searched on the lamellas seen
+  // from above. (3) The best few are refined by ICP against the lamellas and (4) ranked by exact
+  // distances. (5) Each orientation's best (and at least three) are refined to the end and the
+  // one nearest the lamellas wins; the runner-up says how ambiguous the choice was.
   const bool debug = std::getenv("GRIDSHELL_DEBUG_COMPARE") != nullptr;
   const auto clock = [] { return std::chrono::steady_clock::now(); };
   double c0 = process_cpu_seconds();
@@ -526,8 +592,8 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
       std::fprintf(stderr, "candidate flip %d turn %d score %g\n", o.flip, o.turn, o.icp.score);
   // Every orientation that fits the smooth target nearly as well as the best, if it differs from
   // the better ones by more than 20 degrees: a shell with symmetries (a vault turned by half a
-  // turn, a saddle by a quarter turn with its normal flipped) fits its target in each, and only
-  // the lamellas tell them apart. At most six.
+  // turn, a saddle by a quarter turn with its normal flipped, a dome by any turn) fits its target
+  // in each, and only the lamellas tell them apart.
   std::sort(orientations.begin(), orientations.end(),
             [](const Orientation& a, const Orientation& b) { return a.icp.score < b.icp.score; });
   std::vector<Orientation> distinct;
@@ -539,7 +605,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
           near || Eigen::AngleAxisd(o.icp.pose.rotation * d.icp.pose.rotation.transpose()).angle() <
                       20 * std::numbers::pi / 180;
     if (!near) distinct.push_back(o);
-    if (distinct.size() == 6) break;
+    if (distinct.size() == 12) break;
   }
   out.orientations_tried = static_cast<int>(distinct.size());
   if (debug) std::fprintf(stderr, "orientation %.3f s (cpu %.3f s)\n", since(t0), cpu());
@@ -554,7 +620,7 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   const std::vector<Vec3> probe = subset(300);
   const std::vector<Vec3> patch_points = subset(3000);
   const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
-  constexpr int kSteps = 10, kSide = 2 * kSteps + 1;
+  constexpr int kSteps = 10;
   const double step = 0.008 * lamellas.extent;
   // (1b) Each orientation settled on the patch with more points.
   std::vector<Pose> poses(distinct.size());
@@ -564,50 +630,105 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                },
                progress, {options.threads, "compare: coarse registration", 0.5, 0.6});
   if (debug) std::fprintf(stderr, "  patch ICPs cpu %.3f s\n", sub_cpu());
-  // (2) Offsets in the plane of the shell, every orientation's grid on all threads. Most of
-  // the grid's probes are far from every lamella, and a k-d tree's nearest-neighbour query costs
-  // about the number of samples within that distance: a tenth of the samples scores the grid
-  // at a fraction of the cost, the spacing term of the estimate absorbing the coarser sampling.
-  const Reference sparse(deployment, std::max(2000, options.reference_samples / 10),
-                         options.seed + 2);
-  std::vector<std::pair<double, Vec3>> scores(distinct.size() * kSide * kSide);
-  parallel_for(scores.size(),
-               [&](size_t job, const Progress& inner) {
-                 inner.check();
-                 const size_t o = job / (kSide * kSide);
-                 const int i = static_cast<int>(job % (kSide * kSide)) / kSide - kSteps;
-                 const int j = static_cast<int>(job % kSide) - kSteps;
-                 const Vec3 offset = step * (i * e1 + j * e2);
-                 std::vector<double> error(probe.size());
-                 for (size_t k = 0; k < probe.size(); ++k) {
-                   const Vec3 p = poses[o].apply(probe[k]) + offset;
-                   const auto [index, d2] = sparse.nearest(p);
-                   error[k] = sparse.estimate(p, index, d2);
-                 }
-                 const size_t keep = static_cast<size_t>(0.7 * (error.size() - 1));
-                 std::nth_element(error.begin(), error.begin() + keep, error.end());
-                 double sum = 0;
-                 for (size_t k = 0; k <= keep; ++k) sum += error[k];
-                 scores[job] = {sum / (keep + 1), offset};
-               },
-               progress, {options.threads, "compare: coarse registration", 0.6, 0.8});
-  if (debug) std::fprintf(stderr, "  offset grid cpu %.3f s\n", sub_cpu());
-  // (3) The best few offsets of each orientation, refined against the lamellas.
+  // (2) Turns about the normal and offsets in the plane of the shell, searched on the lamellas
+  // seen from above (PlanView): the target patch fixes the orientation only up to what slides
+  // along a smooth surface (a vault along its axis, a dome about its axis), and the grid of
+  // lamellas repeats itself every member spacing. Turns of +-15 degrees (the orientations are
+  // 30 degrees apart) and offsets of +-8 % of the extent, scored by the trimmed mean plan
+  // distance of scan points: coarse first (steps of 3 degrees and 1.6 %, 100 points), then
+  // around the best 8 of each orientation (1.5 degrees and 0.4 %, 300 points).
+  const double margin = 0.1 * lamellas.extent;
+  const PlanView plan(lamellas.samples, ref_mean, e1, e2, margin,
+                      std::max(0.5 * lamellas.spacing, lamellas.extent / 1500));
+  constexpr int kTurnSteps = 10;
+  const double turn_step = 1.5 * std::numbers::pi / 180;
+  struct PlanPose {
+    double score = 0, turn = 0, du = 0, dv = 0;
+  };
+  const auto plan_score = [&](const std::vector<Eigen::Vector2d>& points,
+                              const Eigen::Vector2d& centre, double turn, double du, double dv,
+                              std::vector<double>& error) {
+    const double c = std::cos(turn), s = std::sin(turn);
+    error.resize(points.size());
+    for (size_t k = 0; k < points.size(); ++k) {
+      const Eigen::Vector2d d = points[k] - centre;
+      const Eigen::Vector2d q(centre.x() + c * d.x() - s * d.y() + du,
+                              centre.y() + s * d.x() + c * d.y() + dv);
+      error[k] = plan.at(q, margin);
+    }
+    // The share of points farther than two pixels from every lamella: half of the plan is
+    // lamellas, so a trimmed mean is small at any pose, but only the right one puts (nearly)
+    // all the scan on them.
+    size_t off = 0;
+    for (double e : error) off += e > 2 * plan.pixel;
+    return static_cast<double>(off) / static_cast<double>(error.size());
+  };
   constexpr size_t kBest = 3;
+  std::vector<std::vector<PlanPose>> best_plan(distinct.size());
+  std::vector<Eigen::Vector2d> plan_centre(distinct.size());
+  parallel_for(
+      distinct.size(),
+      [&](size_t o, const Progress& inner) {
+        std::vector<Eigen::Vector2d> few, many;
+        Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+        for (size_t k = 0; k < probe.size(); ++k) {
+          many.push_back(plan.project(poses[o].apply(probe[k])));
+          if (k < 100) few.push_back(many.back());
+          centre += many.back();
+        }
+        centre /= static_cast<double>(many.size());
+        plan_centre[o] = centre;
+        std::vector<double> error;
+        std::vector<PlanPose> coarse;
+        for (int t = -kTurnSteps / 2; t <= kTurnSteps / 2; ++t) {
+          inner.check();
+          for (int i = -kSteps / 2; i <= kSteps / 2; ++i)
+            for (int j = -kSteps / 2; j <= kSteps / 2; ++j) {
+              const double turn = 2 * t * turn_step, du = 2 * i * step, dv = 2 * j * step;
+              coarse.push_back({plan_score(few, centre, turn, du, dv, error), turn, du, dv});
+            }
+        }
+        const size_t top = std::min<size_t>(8, coarse.size());
+        std::partial_sort(coarse.begin(), coarse.begin() + top, coarse.end(),
+                          [](const PlanPose& a, const PlanPose& b) { return a.score < b.score; });
+        std::vector<PlanPose> fine;
+        for (size_t c = 0; c < top; ++c)
+          for (int t = -1; t <= 1; ++t)
+            for (int i = -2; i <= 2; ++i)
+              for (int j = -2; j <= 2; ++j) {
+                const double turn = coarse[c].turn + t * turn_step;
+                const double du = coarse[c].du + 0.5 * i * step, dv = coarse[c].dv + 0.5 * j * step;
+                fine.push_back({plan_score(many, centre, turn, du, dv, error), turn, du, dv});
+              }
+        std::sort(fine.begin(), fine.end(),
+                  [](const PlanPose& a, const PlanPose& b) { return a.score < b.score; });
+        // The best few that are not neighbours of a better one.
+        for (const PlanPose& f : fine) {
+          bool near = false;
+          for (const PlanPose& b : best_plan[o])
+            near = near || (std::abs(f.turn - b.turn) <= 2 * turn_step &&
+                            std::abs(f.du - b.du) <= 2 * step && std::abs(f.dv - b.dv) <= 2 * step);
+          if (!near) best_plan[o].push_back(f);
+          if (best_plan[o].size() == kBest) break;
+        }
+      },
+      progress, {options.threads, "compare: coarse registration", 0.6, 0.8});
+  if (debug) std::fprintf(stderr, "  plan search cpu %.3f s\n", sub_cpu());
+  // (3) The best few of each orientation, refined against the lamellas.
   std::vector<std::pair<size_t, Pose>> starts;  // (orientation, start)
   std::vector<double> start_offset_score;
-  for (size_t o = 0; o < distinct.size(); ++o) {
-    std::vector<std::pair<double, Vec3>> offsets(scores.begin() + o * kSide * kSide,
-                                                 scores.begin() + (o + 1) * kSide * kSide);
-    std::sort(offsets.begin(), offsets.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (size_t k = 0; k < std::min(kBest, offsets.size()); ++k) {
-      Pose start = poses[o];
-      start.translation += offsets[k].second;
+  for (size_t o = 0; o < distinct.size(); ++o)
+    for (const PlanPose& b : best_plan[o]) {
+      // Turned about the normal through the scan's centre in the plane, then moved in the plane.
+      const Vec3 axis_point = ref_mean + plan_centre[o].x() * e1 + plan_centre[o].y() * e2;
+      const Eigen::Matrix3d turn = Eigen::AngleAxisd(b.turn, e1.cross(e2)).toRotationMatrix();
+      Pose start;
+      start.rotation = turn * poses[o].rotation;
+      start.translation =
+          turn * (poses[o].translation - axis_point) + axis_point + b.du * e1 + b.dv * e2;
       starts.push_back({o, start});
-      start_offset_score.push_back(offsets[k].first);
+      start_offset_score.push_back(b.score);
     }
-  }
   std::vector<IcpResult> refined(starts.size());
   parallel_for(starts.size(),
                [&](size_t k, const Progress& inner) {
@@ -638,8 +759,8 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                    [&](size_t a, size_t b) { return exact[a] < exact[b]; });
   if (debug)
     for (size_t k : ranked)
-      std::fprintf(stderr, "orientation %zu offset %zu (%g) -> estimate %g exact %g\n",
-                   starts[k].first, k % kBest, start_offset_score[k], refined[k].score, exact[k]);
+      std::fprintf(stderr, "orientation %zu start (plan %g) -> estimate %g exact %g\n",
+                   starts[k].first, start_offset_score[k], refined[k].score, exact[k]);
   // (5) The finalists: each orientation's best pose, and the next best to make at least three,
   // all distinct. A symmetric shape may fit the scan as well in another orientation, but its
   // coarse pose there is often still a few lamella thicknesses off and only the fine ICP says
@@ -650,12 +771,12 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   const auto take = [&](size_t k) {
     for (size_t f : finalists)
       if (same_pose(refined[k].pose, refined[f].pose)) return;
-    finalists.push_back(k);
+    if (finalists.size() < 6) finalists.push_back(k);
   };
   for (size_t o = 0; o < distinct.size(); ++o)
     for (size_t k : ranked)
       if (starts[k].first == o) {
-        take(k);
+        if (exact[k] <= 3 * exact[ranked.front()] + 1e-9 * lamellas.extent) take(k);
         break;
       }
   for (size_t k : ranked)

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <random>
 
 #include "gridshell/fabrication/compare.h"
@@ -311,6 +312,9 @@ TEST(Compare, RegistersASmallScanUnderAnyMotion) {
     for (const Vec3& p : l.centerline)
       worst = std::max(worst, (c.rotation * (R * p + shift) + c.translation - p).norm());
   EXPECT_LT(worst, 0.01) << c.coarse;  // the model is about 12 long
+  // Nothing else fits: the best other pose is much farther from the lamellas than the noise.
+  EXPECT_LT(c.residual, 0.01);
+  EXPECT_TRUE(c.runner_up == 0 || c.runner_up > 2 * c.residual) << c.runner_up;
   EXPECT_NEAR(c.deployment.rms, 0.005, 0.001);
   EXPECT_EQ(c.used + c.rejected, 4000);
   EXPECT_EQ(c.deployment.histogram_counts.size(), 20u);
@@ -337,6 +341,92 @@ TEST(Compare, RegistersASmallScanUnderAnyMotion) {
   }
   EXPECT_LT(worst_deployment, 1e-9);
   EXPECT_LT(worst_target, 1e-9);
+}
+
+TEST(Compare, ASymmetricGridRegistersToOneOfItsPosesAndSaysItIsAmbiguous) {
+  // A 5 x 5 grid of lamellas on the saddle z = 0.04 (x^2 - y^2): half a turn about z maps it onto
+  // itself, and so does a half turn about a diagonal. An exact scan (no noise), moved: the
+  // residual is at the level of double rounding, the pose found puts the model onto itself (the
+  // true one or a symmetric one), and another pose fits as well, which the registration says.
+  const auto z = [](double x, double y) { return 0.04 * (x * x - y * y); };
+  std::vector<SimulatedLamella> lamellas;
+  for (int family = 0; family < 2; ++family)
+    for (int k = -2; k <= 2; ++k) {
+      SimulatedLamella l;
+      for (int i = 0; i <= 24; ++i) {
+        const double t = -6 + 0.5 * i, c = 2.5 * k;
+        const double x = family ? c : t, y = family ? t : c;
+        l.centerline.push_back(Vec3(x, y, z(x, y)));
+        l.normals.push_back(Vec3(-0.08 * x, 0.08 * y, 1).normalized());
+      }
+      lamellas.push_back(l);
+    }
+  const auto triangles = lamella_surface(lamellas, 0.5, 0.1);
+  std::vector<Vec3> grid;
+  std::vector<Face> faces;
+  for (int i = 0; i <= 14; ++i)
+    for (int j = 0; j <= 14; ++j) {
+      const double x = -7 + i, y = -7 + j;
+      grid.push_back(Vec3(x, y, z(x, y)));
+      if (i < 14 && j < 14) {
+        const int a = 15 * i + j;
+        faces.push_back({a, a + 15, a + 16});
+        faces.push_back({a, a + 16, a + 1});
+      }
+    }
+  const TriangleMesh target(grid, faces);
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  std::vector<double> cumulative;
+  double area = 0;
+  for (const auto& t : triangles)
+    cumulative.push_back(area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm());
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(1.3, Vec3(-0.4, 0.7, 0.2).normalized()).toRotationMatrix();
+  const Vec3 shift(-20, 31, 5);
+  std::vector<Vec3> scan;
+  for (int i = 0; i < 4000; ++i) {
+    const size_t f =
+        std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * area) -
+        cumulative.begin();
+    const auto& t = triangles[std::min(f, triangles.size() - 1)];
+    double a = uniform(random), b = uniform(random);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    scan.push_back(R * (t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0])) + shift);
+  }
+  CompareOptions options;
+  options.reference_samples = 20000;
+  options.icp_points = 2000;
+  const ScanComparison c = compare_scan(scan, triangles, target, options);
+  const double size = 17;  // the model's diagonal, about
+  EXPECT_LT(c.residual, 1e-9 * size) << c.coarse;
+  EXPECT_LT(c.deployment.rms, 1e-9 * size);
+  EXPECT_EQ(c.rejected, 0);
+  // Both poses put every lamella's centre line where the true motion puts it: inside the
+  // lamellas, its farthest point as far from their faces as there (brute force over all
+  // triangles).
+  const auto on_lamellas = [&](const Eigen::Matrix3d& Q, const Vec3& q) {
+    double worst = 0;
+    for (const auto& l : lamellas)
+      for (const Vec3& p : l.centerline) {
+        const Vec3 moved = Q * (R * p + shift) + q;
+        double best = 1e300;
+        for (const Triangle3& t : triangles) {
+          const Vec3 w = closest_point_on_triangle(moved, t[0], t[1], t[2]);
+          best = std::min(best, (moved - (w[0] * t[0] + w[1] * t[1] + w[2] * t[2])).norm());
+        }
+        worst = std::max(worst, best);
+      }
+    return worst;
+  };
+  const double exact = on_lamellas(R.transpose(), -(R.transpose() * shift));  // about 0.05
+  EXPECT_NEAR(on_lamellas(c.rotation, c.translation), exact, 1e-9);
+  ASSERT_GT(c.runner_up, 0);
+  EXPECT_LT(c.runner_up, 1e-9 * size);
+  EXPECT_NEAR(on_lamellas(c.runner_up_rotation, c.runner_up_translation), exact, 1e-9);
+  // The two are different poses: a half turn apart.
+  EXPECT_NEAR(Eigen::AngleAxisd(c.rotation * c.runner_up_rotation.transpose()).angle(),
+              std::numbers::pi, 1e-6);
 }
 
 }  // namespace
