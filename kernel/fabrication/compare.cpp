@@ -620,7 +620,6 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   const std::vector<Vec3> probe = subset(300);
   const std::vector<Vec3> patch_points = subset(3000);
   const Vec3 e1 = ref_axes.col(1), e2 = ref_axes.col(2);
-  constexpr int kSteps = 10;
   const double step = 0.008 * lamellas.extent;
   // (1b) Each orientation settled on the patch with more points.
   std::vector<Pose> poses(distinct.size());
@@ -634,13 +633,15 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   // seen from above (PlanView): the target patch fixes the orientation only up to what slides
   // along a smooth surface (a vault along its axis, a dome about its axis), and the grid of
   // lamellas repeats itself every member spacing. Turns of +-15 degrees (the orientations are
-  // 30 degrees apart) and offsets of +-8 % of the extent, scored by the trimmed mean plan
-  // distance of scan points: coarse first (steps of 3 degrees and 1.6 %, 100 points), then
-  // around the best 8 of each orientation (1.5 degrees and 0.4 %, 300 points).
+  // 30 degrees apart) and offsets of +-19 % of the extent (a partial scan of a dome slides far
+  // on it), scored by the share of scan points off the lamellas in plan: coarse first (steps of
+  // 3 degrees and 1.6 %, 100 points), then around the best 8 of each orientation (1.5 degrees
+  // and 0.4 %, 300 points).
   const double margin = 0.1 * lamellas.extent;
   const PlanView plan(lamellas.samples, ref_mean, e1, e2, margin,
                       std::max(0.5 * lamellas.spacing, lamellas.extent / 1500));
   constexpr int kTurnSteps = 10;
+  constexpr int kPlanSteps = 12;
   const double turn_step = 1.5 * std::numbers::pi / 180;
   struct PlanPose {
     double score = 0, turn = 0, du = 0, dv = 0;
@@ -682,8 +683,8 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
         std::vector<PlanPose> coarse;
         for (int t = -kTurnSteps / 2; t <= kTurnSteps / 2; ++t) {
           inner.check();
-          for (int i = -kSteps / 2; i <= kSteps / 2; ++i)
-            for (int j = -kSteps / 2; j <= kSteps / 2; ++j) {
+          for (int i = -kPlanSteps; i <= kPlanSteps; ++i)
+            for (int j = -kPlanSteps; j <= kPlanSteps; ++j) {
               const double turn = 2 * t * turn_step, du = 2 * i * step, dv = 2 * j * step;
               coarse.push_back({plan_score(few, centre, turn, du, dv, error), turn, du, dv});
             }
