@@ -849,9 +849,12 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
                },
                progress, {options.threads, "compare: distances", 0, 1});
   if (debug) std::fprintf(stderr, "distances %.3f s (cpu %.3f s)\n", since(t0), cpu());
-  // Outliers: farther from the lamellas than four robust standard deviations of all distances.
+  // Outliers: farther from the lamellas than four robust standard deviations of all distances,
+  // and never nearer than a millionth of the model's size: an exact scan's distances are the
+  // rounding of its file's numbers (a float's 6e-8 of the coordinates, which may be larger than
+  // the model), and rejecting by them would throw away good points.
   const double sigma = 1.4826 * median_of(out.deployment_distance);
-  out.rejection_distance = std::max(4 * sigma, 1e-9 * lamellas.extent);
+  out.rejection_distance = std::max(4 * sigma, 1e-6 * lamellas.extent);
   out.inlier.assign(n, 0);
   for (size_t i = 0; i < n; ++i) {
     out.inlier[i] = out.deployment_distance[i] <= out.rejection_distance;

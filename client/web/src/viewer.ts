@@ -11,7 +11,8 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { acceleratedRaycast, computeBoundsTree, disposeBoundsTree } from 'three-mesh-bvh';
 import type { Deployment, Design, Lamella } from './api';
-import { diverging, sequential, type Rgb } from './colormap';
+import { diverging, type Rgb } from './colormap';
+import { lamellaMesh, type LamellaGroup } from './lamellas';
 
 THREE.BufferGeometry.prototype.computeBoundsTree = computeBoundsTree;
 THREE.BufferGeometry.prototype.disposeBoundsTree = disposeBoundsTree;
@@ -107,7 +108,8 @@ export class Viewer {
    * Test hooks, after every frame: the markers' pixel positions (CSS pixels from the canvas's
    * top left) as `data-markers` on the canvas, "x,y;x,y;...", corner 1 first; the layers drawn
    * as `data-layers` ("mesh,markers,patch,design"; a layout: "mesh,layout,layout-deployment"); the
-   * layout's patches and deployed lamellas drawn as `data-layout-patches` and `data-layout-lamellas`.
+   * layout's patches and deployed lamellas drawn as `data-layout-patches` and `data-layout-lamellas`;
+   * the lamella boxes drawn (either) as `data-lamellas` and their mesh vertices as `data-lamella-vertices`.
    */
   private publishHooks(): void {
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
@@ -125,6 +127,16 @@ export class Viewer {
       .map(([name]) => name).join(',');
     this.canvas.dataset['layoutPatches'] = String(this.layout.children.filter((c) => c.name === 'layout-patch').length);
     this.canvas.dataset['layoutLamellas'] = String(this.layoutDeployment.userData['lamellas'] ?? 0);
+    // The merged lamella meshes drawn (a single patch's deployment, a layout's): lamellas and vertices.
+    let lamellas = 0, vertices = 0;
+    for (const group of [this.deployment, this.layoutDeployment])
+      for (const child of group.children)
+        if (child.name === 'lamellas') {
+          lamellas += child.userData['lamellas'] as number;
+          vertices += child.userData['vertices'] as number;
+        }
+    this.canvas.dataset['lamellas'] = String(lamellas);
+    this.canvas.dataset['lamellaVertices'] = String(vertices);
   }
 
   /** A Float32Array of `xyz` relative to the mesh's centre. */
@@ -347,8 +359,7 @@ export class Viewer {
     this.clearGroup(this.deployment);
     this.design.visible = false;
     this.setPatchOpacity(0.3);
-    this.deployment.add(new THREE.Mesh(this.lamellaBoxes([{ rods: deployment.rods, width, thickness }], max, value),
-                                       new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
+    this.deployment.add(this.lamellaBoxes([{ rods: deployment.rods, width, thickness }], max, value));
     // Inner anchors the simulation added (interior_anchors "auto"): orange cubes at their targets.
     const added = deployment.added_anchors ?? [];
     if (added.length) {
@@ -364,50 +375,24 @@ export class Viewer {
   }
 
   /**
-   * Lamellas as boxes, one geometry: each group's rods with its cross-section (the span of
-   * `normal × tangent` times the width and the material normal times the thickness), coloured by
-   * `value(rod, vertex)` in [0, max] on the sequential map.
+   * Lamellas as boxes, one geometry (lamellas.ts: typed arrays, outward normals, end caps):
+   * each group's rods with its cross-section, coloured by `value(rod, vertex)` in [0, max] on
+   * the sequential map. Its lamella and vertex counts go to the canvas hooks.
    */
-  private lamellaBoxes(groups: { rods: Lamella[]; width: number; thickness: number }[], max: number,
-                       value: (rod: Lamella, vertex: number) => number): THREE.BufferGeometry {
-    const pos: number[] = [], col: number[] = [], idx: number[] = [];
-    const t = new THREE.Vector3(), n = new THREE.Vector3(), b = new THREE.Vector3(), h = new THREE.Vector3();
-    // The cross-section's corners as (±b, ±h) and its four faces as consecutive corner pairs.
-    const signs: [number, number][] = [[1, 1], [-1, 1], [-1, -1], [1, -1]];
-    for (const { rods, width, thickness } of groups)
-      for (const rod of rods) {
-        const pts = rod.centerline.map((p) => this.localPoint(p));
-        if (pts.length < 2) continue;
-        const corners: THREE.Vector3[][] = pts.map((p, i) => {
-          t.subVectors(pts[Math.min(pts.length - 1, i + 1)]!, pts[Math.max(0, i - 1)]!).normalize();
-          const nn = rod.normals[i];
-          n.set(nn?.[0] ?? 0, nn?.[1] ?? 0, nn?.[2] ?? 1);
-          b.crossVectors(t, n).normalize().multiplyScalar(width / 2);
-          h.copy(n).normalize().multiplyScalar(thickness / 2);
-          if (!Number.isFinite(b.x)) b.set(0, 0, 0);
-          if (!Number.isFinite(h.x)) h.set(0, 0, 0);
-          return signs.map(([sb, sh]) => p.clone().addScaledVector(b, sb).addScaledVector(h, sh));
-        });
-        for (let face = 0; face < 4; ++face) {
-          const base = pos.length / 3;
-          corners.forEach((c, i) => {
-            const a = c[face]!, d = c[(face + 1) % 4]!;
-            pos.push(a.x, a.y, a.z, d.x, d.y, d.z);
-            const colour = sequential(value(rod, i), max);
-            col.push(...colour, ...colour);
-            if (i + 1 < corners.length) {
-              const k = base + 2 * i;
-              idx.push(k, k + 1, k + 2, k + 1, k + 3, k + 2);
-            }
-          });
-        }
-      }
+  private lamellaBoxes(groups: LamellaGroup[], max: number,
+                       value: (rod: Lamella, vertex: number) => number): THREE.Mesh {
+    const boxes = lamellaMesh(groups, this.offset, max, value);
     const g = new THREE.BufferGeometry();
-    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
-    g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(col), 3));
-    g.setIndex(pos.length / 3 > 65535 ? new THREE.Uint32BufferAttribute(idx, 1) : new THREE.Uint16BufferAttribute(idx, 1));
-    g.computeVertexNormals();
-    return g;
+    g.setAttribute('position', new THREE.BufferAttribute(boxes.positions, 3));
+    g.setAttribute('normal', new THREE.BufferAttribute(boxes.normals, 3));
+    g.setAttribute('color', new THREE.BufferAttribute(boxes.colors, 3));
+    g.setIndex(new THREE.BufferAttribute(boxes.indices, 1));
+    // Closed boxes with outward faces: back faces culled, half the fragments of double-sided.
+    const mesh = new THREE.Mesh(g, new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.FrontSide, roughness: 0.6 }));
+    mesh.name = 'lamellas';
+    mesh.userData['lamellas'] = boxes.lamellas;
+    mesh.userData['vertices'] = boxes.vertices;
+    return mesh;
   }
 
   /**
@@ -443,7 +428,7 @@ export class Viewer {
    * The deployed lamellas of a layout's patches on one colour scale ([0, max]), over its patches
    * made translucent; `null` clears them (the patches opaque again).
    */
-  setLayoutDeployment(groups: { rods: Lamella[]; width: number; thickness: number }[] | null, max = 0,
+  setLayoutDeployment(groups: LamellaGroup[] | null, max = 0,
                       value: (rod: Lamella, vertex: number) => number = () => 0): void {
     this.clearGroup(this.layoutDeployment);
     for (const child of this.layout.children) {
@@ -455,8 +440,7 @@ export class Viewer {
       m.needsUpdate = true;
     }
     if (groups) {
-      this.layoutDeployment.add(new THREE.Mesh(this.lamellaBoxes(groups, max, value),
-                                               new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.DoubleSide, roughness: 0.6 })));
+      this.layoutDeployment.add(this.lamellaBoxes(groups, max, value));
       this.layoutDeployment.userData['lamellas'] = groups.reduce((k, g) => k + g.rods.length, 0);
     }
     this.requestRender();
