@@ -298,39 +298,55 @@ Assessment assess(int R, const Delta& delta, double scale, Family family, double
                 100);
   }
 
-  // Slopes.
-  double worst = 0;
+  // Slopes. Only the worst violation is described: an infeasible angle has many, and formatting
+  // each one's message was a third of the time of an infeasible design's suggestions.
+  enum class Violation { Backwards, BelowMin, AboveMax };
+  double worst = 0, worst_slope = 0;
   int worst_segment = -1;
-  std::string worst_problem;
+  Violation worst_kind = Violation::Backwards;
   for (size_t k = 0; k + 1 < F.points.size(); ++k) {
     const Vec2 d = F.points[k + 1] - F.points[k];
     double slope = 0, violation = 0;
-    std::string problem;
-    const Vec2 mid = 0.5 * (F.points[k] + F.points[k + 1]);
+    Violation kind = Violation::Backwards;
     if (d.x() < -kVertical) {
       violation = 40 + std::atan(-d.x() / std::max(d.norm(), 1e-300));
-      problem = name + " runs backwards (" + std::string(family == Family::G ? "u1" : "v1") +
-                " decreases) at " + where(family, mid);
     } else {
       const bool vertical = d.x() <= kVertical;
       slope = vertical ? options.vertical_c * d.y() : d.y() / d.x();
-      const std::string note = vertical ? " (vertical segment)" : "";
       if (!(slope > options.k_min)) {
         violation = slope > 0 ? 1e-9 + std::log(options.k_min / slope) : 30 + std::atan(-slope);
-        const char* relation = slope == options.k_min ? " = k_min " : " < k_min ";
-        problem = name + " slope " + number(slope) + note + relation + number(options.k_min) +
-                  " at " + where(family, mid);
+        kind = Violation::BelowMin;
       } else if (!(slope < options.k_max)) {
         violation = 1e-9 + std::log(slope / options.k_max);
-        const char* relation = slope == options.k_max ? " = k_max " : " > k_max ";
-        problem = name + " slope " + number(slope) + note + relation + number(options.k_max) +
-                  " at " + where(family, mid);
+        kind = Violation::AboveMax;
       }
     }
     if (violation > worst) {
       worst = violation;
       worst_segment = static_cast<int>(k);
-      worst_problem = problem;
+      worst_kind = kind;
+      worst_slope = slope;
+    }
+  }
+  std::string worst_problem;
+  if (worst_segment >= 0) {
+    const size_t k = static_cast<size_t>(worst_segment);
+    const Vec2 mid = 0.5 * (F.points[k] + F.points[k + 1]);
+    const std::string note =
+        F.points[k + 1].x() - F.points[k].x() <= kVertical && worst_kind != Violation::Backwards
+            ? " (vertical segment)"
+            : "";
+    if (worst_kind == Violation::Backwards) {
+      worst_problem = name + " runs backwards (" + std::string(family == Family::G ? "u1" : "v1") +
+                      " decreases) at " + where(family, mid);
+    } else if (worst_kind == Violation::BelowMin) {
+      const char* relation = worst_slope == options.k_min ? " = k_min " : " < k_min ";
+      worst_problem = name + " slope " + number(worst_slope) + note + relation +
+                      number(options.k_min) + " at " + where(family, mid);
+    } else {
+      const char* relation = worst_slope == options.k_max ? " = k_max " : " > k_max ";
+      worst_problem = name + " slope " + number(worst_slope) + note + relation +
+                      number(options.k_max) + " at " + where(family, mid);
     }
   }
   if (worst_segment >= 0) return fail(worst_problem, worst);
