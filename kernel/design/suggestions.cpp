@@ -7,7 +7,10 @@
 #include <iomanip>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
+
+#include "gridshell/foundation/parallel.h"
 
 namespace gridshell {
 namespace {
@@ -33,15 +36,36 @@ double round3(double value, bool up) {
   return (up ? std::ceil(value * scale - 1e-9) : std::floor(value * scale + 1e-9)) / scale;
 }
 
-bool alpha_feasible(const PatchWork& work, const CladdingOptions& cladding, AlphaRange* range,
-                    const Progress& progress) {
+/// The feasible planar angles on `maps` (and the patch's side lengths); false if there are none.
+bool alpha_feasible(const DistanceMaps& maps, const std::array<double, 4>& sides,
+                    const CladdingOptions& cladding, AlphaRange* range, const Progress& progress) {
   try {
-    *range = feasible_alpha_range(work.maps, side_lengths(work.target.patch), cladding,
-                                  progress.checker());
+    *range = feasible_alpha_range(maps, sides, cladding, progress.checker());
     return true;
   } catch (const Infeasible&) {
     return false;
   }
+}
+
+/// `map` resampled to `samples` x `samples` by bilinear interpolation (as the cladding functions
+/// read it), corners exact.
+DistanceMap resampled(const DistanceMap& map, int samples) {
+  const int n = map.resolution() - 1;
+  DistanceMap out;
+  out.family = map.family;
+  out.distances.resize(samples, samples);
+  for (int i = 0; i < samples; ++i)
+    for (int j = 0; j < samples; ++j) {
+      const double x = static_cast<double>(i) * n / (samples - 1),
+                   y = static_cast<double>(j) * n / (samples - 1);
+      const int i0 = std::min(static_cast<int>(x), n - 1),
+                j0 = std::min(static_cast<int>(y), n - 1);
+      const double a = x - i0, b = y - j0;
+      const Eigen::MatrixXd& D = map.distances;
+      out.distances(i, j) = (1 - a) * (1 - b) * D(i0, j0) + a * (1 - b) * D(i0 + 1, j0) +
+                            (1 - a) * b * D(i0, j0 + 1) + a * b * D(i0 + 1, j0 + 1);
+    }
+  return out;
 }
 
 /// The design with `options` on `work`; false (and nothing else) if it is infeasible.
@@ -71,7 +95,9 @@ struct Search {
   bool budget() const { return designs < limits.max_designs; }
 
   // Slope bounds: the smallest relaxation (k_max up, k_min down, or both by one factor) that
-  // gives a feasible planar angle on the same maps, then a complete design with it.
+  // gives a feasible planar angle, searched on the maps resampled to 33 x 33 (a ninth of the
+  // work of each check), then confirmed on the design's maps (the factor stepped up by 2 % while
+  // they disagree, down by 0.5 % while they agree on less) and by a complete design.
   void slope_bounds() {
     const CladdingOptions& base = options.cladding;
     const double ladder[] = {1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 2, 3, 5};
@@ -84,6 +110,17 @@ struct Search {
       if (v.lower_min) c.k_min = base.k_min / f;
       return c;
     };
+    auto rounded = [&](const Variant& v, double f) {
+      CladdingOptions c = relaxed(v, f);
+      if (v.raise_max) c.k_max = round3(c.k_max, true);
+      if (v.lower_min) c.k_min = round3(c.k_min, false);
+      return c;
+    };
+    const std::array<double, 4> sides = side_lengths(work.target.patch);
+    DistanceMaps coarse;
+    const int samples = std::min(33, work.maps.g.resolution());
+    coarse.g = resampled(work.maps.g, samples);
+    coarse.h = resampled(work.maps.h, samples);
     bool any = false;
     for (const Variant& v : {Variant{true, false}, Variant{false, true}, Variant{true, true}}) {
       if (v.raise_max && v.lower_min && any) break;  // both only when neither alone works
@@ -92,7 +129,7 @@ struct Search {
       double lo = 1, hi = 0;
       AlphaRange range;
       for (double f : ladder) {
-        if (alpha_feasible(work, relaxed(v, f), &range, progress)) {
+        if (alpha_feasible(coarse, sides, relaxed(v, f), &range, progress)) {
           hi = f;
           break;
         }
@@ -101,14 +138,25 @@ struct Search {
       if (hi == 0) continue;
       for (int k = 0; k < 6; ++k) {  // the smallest factor, to 1.5 % of the bracket's ratio
         const double mid = std::sqrt(lo * hi);
-        if (alpha_feasible(work, relaxed(v, mid), &range, progress))
+        if (alpha_feasible(coarse, sides, relaxed(v, mid), &range, progress))
           hi = mid;
         else
           lo = mid;
       }
-      CladdingOptions c = relaxed(v, hi);
-      if (v.raise_max) c.k_max = round3(c.k_max, true);
-      if (v.lower_min) c.k_min = round3(c.k_min, false);
+      bool confirmed = alpha_feasible(work.maps, sides, rounded(v, hi), &range, progress);
+      for (int step = 1; step < 10 && !confirmed; ++step) {
+        hi *= 1.02;
+        confirmed = alpha_feasible(work.maps, sides, rounded(v, hi), &range, progress);
+      }
+      if (!confirmed) continue;
+      // The coarse maps may also ask for more than the design's: step down while they agree.
+      for (int step = 0; step < 4 && hi / 1.005 > lo; ++step) {
+        AlphaRange lower;
+        if (!alpha_feasible(work.maps, sides, rounded(v, hi / 1.005), &lower, progress)) break;
+        hi /= 1.005;
+        range = lower;
+      }
+      const CladdingOptions c = rounded(v, hi);
       DesignOptions changed = options;
       changed.cladding = c;
       ++designs;
@@ -165,58 +213,82 @@ struct Search {
     };
     std::array<int, 4> base{};
     for (int i = 0; i < 4; ++i) base[i] = nearest_input(pm.vertices()[patch.corners[i]]);
-    for (double t : {0.05, 0.1}) {
+    // The moves, in the order they are tried: 5 % then 10 %, each corner along either side.
+    struct Move {
+      double t = 0;
+      int corner = 0;
+      bool forward = true;
+      std::array<int, 4> corners{};
+      std::optional<TargetPatch> target;  // the moved patch, if its screen passed
+    };
+    std::vector<Move> moves;
+    for (double t : {0.05, 0.1})
       for (int i = 0; i < 4; ++i)
         for (bool forward : {true, false}) {
-          if (!budget() || static_cast<int>(found.size()) >= 2 * limits.count) return;
-          progress.check();
+          if (static_cast<int>(moves.size()) >= limits.max_corner_screens) break;
           // Along side i (towards corner i+1) or side i-1 (towards corner i-1).
           const Vec3 p =
               forward ? along(patch.sides[i], t, false) : along(patch.sides[(i + 3) % 4], t, true);
           std::array<int, 4> moved = base;
           moved[i] = nearest_input(p);
           if (moved[i] == base[i]) continue;
-          if (screens >= limits.max_corner_screens) return;
-          ++screens;
-          try {
-            // Screened on coarse maps (R = 32, a third of the solves) first; only a move that
-            // is feasible there gets the design's maps and a complete design.
-            TargetPatch target = make_target_patch(mesh, CornerSpec::at_vertices(moved),
-                                                   patch_options(options), progress.checker());
-            {
-              const GeodesicSolver solver(target.patch.mesh, options.patch.geodesic);
-              DistanceMapOptions coarse = options.maps;
-              coarse.resolution =
-                  std::min(32, options.maps.resolution > 0 ? options.maps.resolution : 32);
-              PatchWork screen;
-              screen.target.patch = target.patch;
-              screen.maps = compute_distance_maps(target.patch, solver, coarse, progress.checker());
-              AlphaRange coarse_range;
-              if (!alpha_feasible(screen, options.cladding, &coarse_range, progress)) continue;
-            }
-            ++designs;
-            const PatchWork other =
-                prepare_patch_work(std::move(target), options, progress.checker());
-            AlphaRange range;
-            if (!design_ok(other, options, &range, progress)) continue;
-            DesignSuggestion s;
-            s.kind = DesignSuggestion::Kind::Corners;
-            s.corners = moved;
-            s.alpha = range;
-            s.change = t;
-            std::ostringstream text;
-            text << "move corner c" << i << " " << static_cast<int>(std::lround(100 * t))
-                 << "% along side "
-                 << (forward ? "c" + std::to_string(i) + "-c" + std::to_string((i + 1) % 4)
-                             : "c" + std::to_string(i) + "-c" + std::to_string((i + 3) % 4))
-                 << " (to input vertex " << moved[i] << "): feasible planar angles "
-                 << degrees_text(range);
-            s.description = text.str();
-            found.push_back(s);
-          } catch (const Infeasible&) {
-          } catch (const InvalidInput&) {
-          }
+          moves.push_back({t, i, forward, moved, std::nullopt});
         }
+    // Each move screened on coarse maps (R = 32, a third of the solves): the new patch cut and
+    // smoothed, its maps and its feasible planar angles. The screens are independent, so they
+    // run side by side (one thread each); only a move that passes gets the design's maps and a
+    // complete design, in the order above, so the suggestions do not depend on the threads.
+    parallel_for(moves.size(),
+                 [&](size_t m, const Progress& inner) {
+                   try {
+                     TargetPatch target =
+                         make_target_patch(mesh, CornerSpec::at_vertices(moves[m].corners),
+                                           patch_options(options), inner.checker());
+                     const GeodesicSolver solver(target.patch.mesh, options.patch.geodesic);
+                     DistanceMapOptions coarse = options.maps;
+                     coarse.resolution =
+                         std::min(32, options.maps.resolution > 0 ? options.maps.resolution : 32);
+                     coarse.threads = 1;
+                     const DistanceMaps maps =
+                         compute_distance_maps(target.patch, solver, coarse, inner.checker());
+                     AlphaRange coarse_range;
+                     if (alpha_feasible(maps, side_lengths(target.patch), options.cladding,
+                                        &coarse_range, inner))
+                       moves[m].target = std::move(target);
+                   } catch (const Infeasible&) {
+                   } catch (const InvalidInput&) {
+                   }
+                 },
+                 progress, {options.maps.threads, "suggestions", 0.3, 0.8});
+    for (Move& move : moves) {
+      if (!budget() || static_cast<int>(found.size()) >= 2 * limits.count) return;
+      progress.check();
+      ++screens;
+      if (!move.target) continue;
+      try {
+        ++designs;
+        const PatchWork other =
+            prepare_patch_work(std::move(*move.target), options, progress.checker());
+        AlphaRange range;
+        if (!design_ok(other, options, &range, progress)) continue;
+        DesignSuggestion s;
+        s.kind = DesignSuggestion::Kind::Corners;
+        s.corners = move.corners;
+        s.alpha = range;
+        s.change = move.t;
+        const int i = move.corner;
+        std::ostringstream text;
+        text << "move corner c" << i << " " << static_cast<int>(std::lround(100 * move.t))
+             << "% along side "
+             << (move.forward ? "c" + std::to_string(i) + "-c" + std::to_string((i + 1) % 4)
+                              : "c" + std::to_string(i) + "-c" + std::to_string((i + 3) % 4))
+             << " (to input vertex " << move.corners[i] << "): feasible planar angles "
+             << degrees_text(range);
+        s.description = text.str();
+        found.push_back(s);
+      } catch (const Infeasible&) {
+      } catch (const InvalidInput&) {
+      }
     }
   }
 
