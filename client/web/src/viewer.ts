@@ -56,6 +56,7 @@ export class Viewer {
   private layout = new THREE.Group();           // a multi-patch layout: patches in colours, their sides
   private layoutDeployment = new THREE.Group(); // its patches' deployed lamellas
   private frameRequested = false;
+  private moving = false; // the camera is being orbited, panned or zoomed
   private down: { x: number; y: number } | null = null;
 
   constructor(canvas: HTMLCanvasElement) {
@@ -66,6 +67,12 @@ export class Viewer {
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.addEventListener('change', () => this.requestRender());
+    // While the camera moves, large lamella meshes are drawn in their light version (lamellas.ts).
+    this.controls.addEventListener('start', () => { this.moving = true; });
+    this.controls.addEventListener('end', () => {
+      this.moving = false;
+      this.requestRender();
+    });
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8f99, 1.6));
     const light = new THREE.DirectionalLight(0xffffff, 1.4);
     light.position.set(0.5, 0.3, 1);
@@ -99,6 +106,16 @@ export class Viewer {
     this.frameRequested = true;
     requestAnimationFrame(() => {
       this.frameRequested = false;
+      let light = false;
+      for (const group of [this.deployment, this.layoutDeployment])
+        for (const child of group.children)
+          if (child.name === 'lamellas-light') {
+            child.visible = this.moving;
+            const full = group.getObjectByName('lamellas');
+            if (full) full.visible = !this.moving;
+            light ||= this.moving;
+          }
+      this.canvas.dataset['lamellasLight'] = light ? '1' : '0';
       this.renderer.render(this.scene, this.camera);
       this.publishHooks();
     });
@@ -109,7 +126,8 @@ export class Viewer {
    * top left) as `data-markers` on the canvas, "x,y;x,y;...", corner 1 first; the layers drawn
    * as `data-layers` ("mesh,markers,patch,design"; a layout: "mesh,layout,layout-deployment"); the
    * layout's patches and deployed lamellas drawn as `data-layout-patches` and `data-layout-lamellas`;
-   * the lamella boxes drawn (either) as `data-lamellas` and their mesh vertices as `data-lamella-vertices`.
+   * the lamella boxes drawn (either) as `data-lamellas` and their mesh vertices as `data-lamella-vertices`
+   * (`data-lamellas-light`: 1 when the frame drew their light version, while the camera moved).
    */
   private publishHooks(): void {
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
@@ -359,7 +377,7 @@ export class Viewer {
     this.clearGroup(this.deployment);
     this.design.visible = false;
     this.setPatchOpacity(0.3);
-    this.deployment.add(this.lamellaBoxes([{ rods: deployment.rods, width, thickness }], max, value));
+    this.deployment.add(...this.lamellaBoxes([{ rods: deployment.rods, width, thickness }], max, value));
     // Inner anchors the simulation added (interior_anchors "auto"): orange cubes at their targets.
     const added = deployment.added_anchors ?? [];
     if (added.length) {
@@ -380,7 +398,7 @@ export class Viewer {
    * the sequential map. Its lamella and vertex counts go to the canvas hooks.
    */
   private lamellaBoxes(groups: LamellaGroup[], max: number,
-                       value: (rod: Lamella, vertex: number) => number): THREE.Mesh {
+                       value: (rod: Lamella, vertex: number) => number): THREE.Mesh[] {
     const boxes = lamellaMesh(groups, this.offset, max, value);
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.BufferAttribute(boxes.positions, 3));
@@ -388,11 +406,21 @@ export class Viewer {
     g.setAttribute('color', new THREE.BufferAttribute(boxes.colors, 3));
     g.setIndex(new THREE.BufferAttribute(boxes.indices, 1));
     // Closed boxes with outward faces: back faces culled, half the fragments of double-sided.
-    const mesh = new THREE.Mesh(g, new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.FrontSide, roughness: 0.6 }));
+    const material = new THREE.MeshStandardMaterial({ vertexColors: true, side: THREE.FrontSide, roughness: 0.6 });
+    const mesh = new THREE.Mesh(g, material);
     mesh.name = 'lamellas';
     mesh.userData['lamellas'] = boxes.lamellas;
     mesh.userData['vertices'] = boxes.vertices;
-    return mesh;
+    mesh.userData['triangles'] = boxes.triangles;
+    if (!boxes.light) return [mesh];
+    // The light version, drawn instead while the camera moves: the same vertex buffers, fewer triangles.
+    const lg = new THREE.BufferGeometry();
+    for (const name of ['position', 'normal', 'color']) lg.setAttribute(name, g.getAttribute(name));
+    lg.setIndex(new THREE.BufferAttribute(boxes.light, 1));
+    const light = new THREE.Mesh(lg, material.clone());
+    light.name = 'lamellas-light';
+    light.visible = false;
+    return [mesh, light];
   }
 
   /**
@@ -440,7 +468,7 @@ export class Viewer {
       m.needsUpdate = true;
     }
     if (groups) {
-      this.layoutDeployment.add(this.lamellaBoxes(groups, max, value));
+      this.layoutDeployment.add(...this.lamellaBoxes(groups, max, value));
       this.layoutDeployment.userData['lamellas'] = groups.reduce((k, g) => k + g.rods.length, 0);
     }
     this.requestRender();
