@@ -492,6 +492,11 @@ test('Simulate: deployment with RMS, deployment.json downloads', async () => {
   assert.equal(name, 'deployment.json');
   const dep = JSON.parse(bytes.toString('utf8'));
   assert.ok(dep.rods.length > 0 && Number.isFinite(dep.rms_with_notches));
+  // One merged mesh of boxes: 8 vertices per rod vertex and 8 for the two end caps of each lamella.
+  const drawn = dep.rods.filter((r) => r.centerline.length >= 2);
+  assert.equal(await byId('viewer').getAttribute('data-lamellas'), String(drawn.length));
+  assert.equal(await byId('viewer').getAttribute('data-lamella-vertices'),
+               String(drawn.reduce((k, r) => k + 8 * r.centerline.length + 8, 0)));
   // The summary's percentage is the file's utilization: the largest corner stress over lime
   // wood's bending strength.
   const run = dep.with_notches;
@@ -543,6 +548,54 @@ test('Cancel stops a running simulation (the daemon cancels the job)', async () 
   assert.ok(await byId('cancel').isDisabled());
   await until(() => (daemonLog().match(/CANCELLED/g) ?? []).length > before, 5000, 'the daemon to log the cancellation');
   assert.ok(await byId('simulate').isEnabled(), 'the page stays usable');
+});
+
+test('a 100 x 100-member deployment (synthetic, 204 lamellas, 41k rod vertices) draws; orbiting draws it light, then whole', async () => {
+  // The daemon would take minutes to simulate it: the answer to this one Simulate is made here,
+  // in the shape of the daemon's event stream (no files).
+  const rods = [];
+  for (const family of ['g', 'h'])
+    for (let k = 0; k < 102; ++k) {
+      const centerline = [], normals = [], deviation = [];
+      for (let i = 0; i < 203; ++i) {
+        const u = i / 202 * 100 - 50, v = k / 101 * 100 - 50;
+        const [x, y] = family === 'g' ? [u, v] : [v, u];
+        centerline.push([x, y, 30 - (x * x + y * y) / 400]);
+        normals.push([x / 200, y / 200, 1]);
+        deviation.push((i % 7) / 70);
+      }
+      rods.push({ member: { family, index: k }, boundary: k === 0 || k === 101, centerline, normals, deviation,
+                  max_bending_stress: 1e6, max_torsion_stress: 0, max_normal_stress: 1e6 });
+    }
+  const run = { rms: 0.05, max_deviation: 0.0857, iterations: 10, converged: true, seconds: 300, max_bending_stress: 1e6,
+                max_torsion_stress: 0, max_normal_stress: 1e6, bending_utilization: 1 / 60, shear_utilization: 0,
+                overstressed_lamellas: 0 };
+  const deployment = { rods, rods_without_notches: rods, with_notches: run, without_notches: run, rms_with_notches: 0.05,
+                       rms_without_notches: 0.05, seconds_with_notches: 300, seconds_without_notches: 300, converged: true,
+                       grid_vertices: 41412, options: { bending_strength: 60e6, shear_strength: 6.8e6 } };
+  const body = `event: result\ndata: ${JSON.stringify({ deployment, views: [] })}\n\n`;
+  await page.route('**/v1/simulate', (route) => route.fulfill({ status: 200, contentType: 'text/event-stream', body }));
+  try {
+    const t0 = Date.now();
+    await byId('simulate').click();
+    await until(async () => (await byId('viewer').getAttribute('data-lamellas')) === '204', 20000, 'the 204 lamellas drawn');
+    console.log(`# synthetic 100 x 100 deployment: Simulate -> drawn in ${Date.now() - t0} ms (${body.length} bytes)`);
+  } finally {
+    await page.unroute('**/v1/simulate');
+  }
+  const viewer = byId('viewer');
+  assert.equal(await viewer.getAttribute('data-lamella-vertices'), String(204 * (8 * 203 + 8)));
+  assert.equal(await viewer.getAttribute('data-lamellas-light'), '0');
+  // A drag: the frames while it lasts draw the light version, the frame after it the whole boxes.
+  const box = await viewer.boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width / 2 + 60, box.y + box.height / 2, { steps: 3 });
+  await until(async () => (await viewer.getAttribute('data-lamellas-light')) === '1', 10000, 'a light frame');
+  await page.mouse.up();
+  await until(async () => (await viewer.getAttribute('data-lamellas-light')) === '0', 10000, 'the whole boxes again');
+  assert.ok((await canvasCoverage()) > 0.05, 'deployment drawn');
+  assert.match(await text('summary'), /with notches: RMS 0\.05/);
 });
 
 test('a redesign after the simulation shows the design again, not the old deployment', async () => {

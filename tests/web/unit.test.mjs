@@ -157,6 +157,25 @@ test('SSE: progress events, then the result, across arbitrary chunk boundaries',
   }
 });
 
+test('SSE: every cut (also between the two newlines that end an event), byte by byte, and a big result', async () => {
+  const text = 'event: progress\ndata: {"stage":"a","fraction":0.5}\n\n' + 'event: result\ndata: {"x":[1,2,3]}\n\n';
+  for (let cut = 1; cut < text.length; ++cut) {
+    const seen = [];
+    const result = await api.readEvents(streamOf([text.slice(0, cut), text.slice(cut)]), (p) => seen.push(p.stage));
+    assert.deepEqual(result, { x: [1, 2, 3] }, `cut at ${cut}`);
+    assert.deepEqual(seen, ['a'], `cut at ${cut}`);
+  }
+  assert.deepEqual(await api.readEvents(streamOf([...text]), () => {}), { x: [1, 2, 3] });
+  // A 20 MB result in 64 KiB chunks: read in linear time (the old reader searched the whole
+  // buffer after every chunk); the bound is loose, a quadratic reader took tens of seconds.
+  const big = `event: result\ndata: {"s":"${'x'.repeat(20e6)}"}\n\n`;
+  const chunks = [];
+  for (let i = 0; i < big.length; i += 65536) chunks.push(big.slice(i, i + 65536));
+  const t0 = performance.now();
+  assert.equal((await api.readEvents(streamOf(chunks), () => {})).s.length, 20e6);
+  assert.ok(performance.now() - t0 < 10000);
+});
+
 test('SSE: an error event becomes an ApiError with its field; a cut stream is UNAVAILABLE', async () => {
   const err = 'event: error\ndata: {"error":{"code":9,"status":"FAILED_PRECONDITION","field":"options.alpha","message":"no feasible angle"}}\n\n';
   await assert.rejects(api.readEvents(streamOf([err]), () => {}), (e) => {
@@ -646,4 +665,68 @@ test('layout run: the files of the whole (JSON that parses back) and run.zip wit
   assert.deepEqual(JSON.parse(Buffer.from(zip['run/patches/P1/design.json']).toString()), run.patches[0].design.design);
   const kit = lay.layoutFabricateRequest(run, 'cm');
   assert.deepEqual([kit.layout, kit.patches.length, kit.options], [run.design, 1, { unit: 'cm' }]);
+});
+
+const lm = await load('src/lamellas.ts');
+
+/** A synthetic n x n grid's deployment on a dome: 2n + 4 rods of `points` centreline points each. */
+function syntheticRods(n, points) {
+  const rods = [];
+  for (const family of ['g', 'h'])
+    for (let k = 0; k < n + 2; ++k) {
+      const centerline = [], normals = [], deviation = [];
+      for (let i = 0; i < points; ++i) {
+        const u = i / (points - 1) * 100 - 50, v = k / (n + 1) * 100 - 50;
+        const [x, y] = family === 'g' ? [u, v] : [v, u];
+        centerline.push([x + 3e5, y + 5e6, 30 - (x * x + y * y) / 400]);
+        normals.push([x / 200, y / 200, 1]);
+        deviation.push((i % 7) / 70);
+      }
+      rods.push({ member: { family, index: k }, boundary: k === 0 || k === n + 1, centerline, normals, deviation,
+                  max_bending_stress: k, max_torsion_stress: 0, max_normal_stress: 0 });
+    }
+  return rods;
+}
+
+test('lamella boxes: a synthetic 100 x 100 grid in one mesh, the counts, outward faces, the light version', () => {
+  const rods = syntheticRods(100, 203); // 204 lamellas, 41412 rod vertices as the real 100 x 100 run
+  rods.push({ ...rods[0], centerline: [[0, 0, 0]], normals: [[0, 0, 1]], deviation: [0] }); // one point: not drawn
+  const offset = [3e5, 5e6, 0];
+  const t0 = performance.now();
+  const m = lm.lamellaMesh([{ rods, width: 0.1, thickness: 0.01 }], offset, 0.1, (rod, i) => rod.deviation[i]);
+  const ms = performance.now() - t0;
+  assert.equal(m.lamellas, 204);
+  assert.equal(m.vertices, 204 * lm.lamellaCounts(203).vertices);
+  assert.equal(m.vertices, 204 * (8 * 203 + 8));
+  assert.equal(m.triangles, 204 * (8 * 202 + 4));
+  assert.equal(m.positions.length, 3 * m.vertices);
+  assert.equal(m.indices.length, 3 * m.triangles);
+  assert.ok(m.indices instanceof Uint32Array);
+  assert.ok(m.indices.every((i) => i < m.vertices));
+  // Relative to the offset, the box half a width / thickness off the centreline.
+  const first = rods[0].centerline[0];
+  assert.ok(Math.abs(m.positions[0] - (first[0] - offset[0])) < 0.06);
+  assert.ok(m.positions.every(Number.isFinite) && m.normals.every(Number.isFinite));
+  // Every triangle faces out: its winding's normal along the vertex normals, away from the centreline.
+  for (let t = 0; t < m.triangles; t += 997) {
+    const [a, b, c] = [0, 1, 2].map((j) => m.indices[3 * t + j]);
+    const p = (v) => [m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]];
+    const [pa, pb, pc] = [p(a), p(b), p(c)];
+    const e1 = pb.map((x, k) => x - pa[k]), e2 = pc.map((x, k) => x - pa[k]);
+    const cross = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+    const dot = cross[0] * m.normals[3 * a] + cross[1] * m.normals[3 * a + 1] + cross[2] * m.normals[3 * a + 2];
+    assert.ok(dot > 0, `triangle ${t} faces in`);
+  }
+  // Colours: the sequential map of each rod vertex's deviation.
+  assert.deepEqual([...m.colors.slice(0, 3)].map((x) => x.toFixed(4)), c.sequential(0, 0.1).map((x) => x.toFixed(4)));
+  // Above LIGHT_ABOVE triangles a light version for camera moves: the wide faces, fewer points.
+  assert.ok(m.triangles > lm.LIGHT_ABOVE && m.light !== null && m.lightStep > 1);
+  assert.ok(m.light.length / 3 <= 1.1 * lm.LIGHT_TRIANGLES + 204 * 4, `${m.light.length / 3} light triangles`);
+  assert.ok(m.light.every((i) => i < m.vertices));
+  // A small one has none, 16-bit indices.
+  const small = lm.lamellaMesh([{ rods: syntheticRods(4, 20), width: 1, thickness: 0.1 }], [0, 0, 0], 1, () => 0);
+  assert.equal(small.lamellas, 12);
+  assert.equal(small.light, null);
+  assert.ok(small.indices instanceof Uint16Array);
+  console.log(`# lamella boxes of a synthetic 100 x 100 grid: ${m.vertices} vertices, ${m.triangles} triangles in ${ms.toFixed(0)} ms`);
 });
