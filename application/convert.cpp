@@ -128,6 +128,7 @@ v1::AutoCornerSearch to_proto(const AutoCornerReport& report, const TriangleMesh
     }
     candidate->set_kind(c.kind);
     candidate->set_area(c.area);
+    candidate->set_coarse_area(c.coarse_area);
     for (double a : c.corner_angles) candidate->add_corner_angles(a);
     candidate->set_eta(c.eta);
     if (c.alpha_range)
@@ -142,6 +143,8 @@ v1::AutoCornerSearch to_proto(const AutoCornerReport& report, const TriangleMesh
   out.set_seconds(report.seconds);
   out.set_min_corner_angle(report.min_corner_angle);
   out.set_max_corner_angle(report.max_corner_angle);
+  out.set_simplified_vertices(report.simplified_vertices);
+  out.set_area_error(report.area_error);
   return out;
 }
 

@@ -279,6 +279,11 @@ void print_auto_corners(const v1::AutoCornerSearch& search) {
       c.input_vertices(0), c.input_vertices(1), c.input_vertices(2), c.input_vertices(3),
       c.kind().c_str(), search.chosen() + 1, search.candidates_size(), c.area(), search.cuts(),
       search.evaluations(), search.seconds());
+  if (search.simplified_vertices() > 0)
+    std::printf(
+        "                  ranked on a copy simplified to %d vertices (areas within %.2g %% of "
+        "the input's); the patch is cut exactly\n",
+        search.simplified_vertices(), 100 * search.area_error());
 }
 
 double median(std::vector<double> values) {

@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "gridshell/design/distance_map_copy.h"
 #include "gridshell/design/target_patch.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/foundation/parallel.h"
@@ -243,10 +244,14 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
 
   struct Cut {
     int candidate;
-    Patch patch;
+    std::optional<Patch> patch;  // empty: cut on the simplified copy only
     std::array<SurfacePoint, 4> corners;
     double seconds;  // the cut's
   };
+  // On a large mesh the candidates are cut and ranked on a simplified copy that keeps their
+  // corner vertices; each candidate evaluated is then cut again on the input. A corner angle
+  // is only rejected on the copy if it is outside the range by more than this.
+  constexpr double kCoarseAngleMargin = 2 * kPi / 180;
   auto run_kind = [&](const std::vector<std::array<int, 4>>& quads, const char* kind) {
     // The cuts are independent (each its own exact geodesics on the whole mesh): they run on
     // the maps' threads, each into its own slot, and are reported in candidate order, so the
@@ -255,6 +260,21 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
     // peak memory 148 -> 252 MiB (two cuts in flight).
     const size_t count =
         std::min(quads.size(), static_cast<size_t>(std::max(0, o.max_cuts - report.cuts)));
+    std::optional<SimplifiedMesh> copy;
+    std::vector<std::array<int, 4>> on_copy(count);
+    if (count > 1 && mesh.vertex_count() > o.simplify_above) {
+      std::vector<int> keep;
+      for (size_t k = 0; k < count; ++k)
+        for (int v : quads[k])
+          if (std::find(keep.begin(), keep.end(), v) == keep.end()) keep.push_back(v);
+      copy = simplify_mesh(mesh, o.simplify_to, keep, progress);
+      report.simplified_vertices = copy->mesh.vertex_count();
+      for (size_t k = 0; k < count; ++k)
+        for (int i = 0; i < 4; ++i)
+          on_copy[k][i] =
+              copy->kept[std::find(keep.begin(), keep.end(), quads[k][i]) - keep.begin()];
+    }
+    const TriangleMesh& cut_mesh = copy ? copy->mesh : mesh;
     struct Slot {
       AutoCornerCandidate candidate;
       std::optional<Cut> cut;
@@ -267,22 +287,29 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
           AutoCornerCandidate& c = slots[k].candidate;
           c.vertices = quads[k];
           c.kind = kind;
-          std::array<SurfacePoint, 4> corners;
-          for (int i = 0; i < 4; ++i) corners[i] = SurfacePoint::at_vertex(mesh, quads[k][i]);
+          std::array<SurfacePoint, 4> corners, cut_corners;
+          for (int i = 0; i < 4; ++i) {
+            corners[i] = SurfacePoint::at_vertex(mesh, quads[k][i]);
+            cut_corners[i] = copy ? SurfacePoint::at_vertex(cut_mesh, on_copy[k][i]) : corners[i];
+          }
           const auto cut_start = std::chrono::steady_clock::now();
           try {
-            Patch patch = cut_patch(mesh, corners, options.geodesic, options.cut, inner.checker());
-            c.area = surface_area(patch.mesh);
+            Patch patch =
+                cut_patch(cut_mesh, cut_corners, options.geodesic, options.cut, inner.checker());
+            (copy ? c.coarse_area : c.area) = surface_area(patch.mesh);
             c.corner_angles = corner_angles(patch);
             const auto [lo, hi] =
                 std::minmax_element(c.corner_angles.begin(), c.corner_angles.end());
-            if (*lo < o.min_corner_angle || *hi > o.max_corner_angle) {
+            const double margin = copy ? kCoarseAngleMargin : 0;
+            if (*lo < o.min_corner_angle - margin || *hi > o.max_corner_angle + margin) {
               c.reason = "corner angles " + fixed(degrees(*lo), 1) + ".." + fixed(degrees(*hi), 1) +
-                         " degrees outside the range";
+                         " degrees outside the range" + (copy ? " (on the simplified copy)" : "");
             } else {
               c.reason = "cut; not evaluated";
+              std::optional<Patch> exact;
+              if (!copy) exact = std::move(patch);
               slots[k].cut =
-                  Cut{first + static_cast<int>(k), std::move(patch), corners,
+                  Cut{first + static_cast<int>(k), std::move(exact), corners,
                       std::chrono::duration<double>(std::chrono::steady_clock::now() - cut_start)
                           .count()};
             }
@@ -299,14 +326,44 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
       report.candidates.push_back(std::move(slot.candidate));
       if (slot.cut) cuts.push_back(std::move(*slot.cut));
     }
-    std::stable_sort(cuts.begin(), cuts.end(), [&](const Cut& a, const Cut& b) {
-      return report.candidates[a.candidate].area > report.candidates[b.candidate].area;
-    });
+    const auto ranked_area = [&](const Cut& cut) {
+      const AutoCornerCandidate& c = report.candidates[cut.candidate];
+      return copy ? c.coarse_area : c.area;
+    };
+    std::stable_sort(cuts.begin(), cuts.end(),
+                     [&](const Cut& a, const Cut& b) { return ranked_area(a) > ranked_area(b); });
     for (Cut& cut : cuts) {
       AutoCornerCandidate& c = report.candidates[cut.candidate];
       if (report.evaluations >= o.max_evaluations) {
         c.reason = "cut; not evaluated (evaluation budget used)";
         continue;
+      }
+      if (!cut.patch) {
+        // Cut again on the input: the exact patch, its area and corner angles.
+        progress.check();
+        const auto cut_start = std::chrono::steady_clock::now();
+        try {
+          cut.patch =
+              cut_patch(mesh, cut.corners, options.geodesic, options.cut, progress.checker());
+        } catch (const Cancelled&) {
+          throw;
+        } catch (const Error& e) {
+          c.reason = "cut on the input: " + e.message();
+          continue;
+        }
+        cut.seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - cut_start).count();
+        c.area = surface_area(cut.patch->mesh);
+        c.corner_angles = corner_angles(*cut.patch);
+        if (c.area > 0)
+          report.area_error =
+              std::max(report.area_error, std::abs(c.coarse_area - c.area) / c.area);
+        const auto [lo, hi] = std::minmax_element(c.corner_angles.begin(), c.corner_angles.end());
+        if (*lo < o.min_corner_angle || *hi > o.max_corner_angle) {
+          c.reason = "corner angles " + fixed(degrees(*lo), 1) + ".." + fixed(degrees(*hi), 1) +
+                     " degrees outside the range";
+          continue;
+        }
       }
       progress.check();
       progress.report("patch: automatic corners",
@@ -314,7 +371,7 @@ TargetPatch search_auto_corners(const TriangleMesh& mesh, const TargetPatchOptio
       ++report.evaluations;
       try {
         TargetPatch target =
-            target_patch_from_cut(std::move(cut.patch), cut.corners, options, progress.checker());
+            target_patch_from_cut(std::move(*cut.patch), cut.corners, options, progress.checker());
         c.eta = target.smoothing.eta_after;
         c.corner_angles = target.corner_angles;
         const auto [lo, hi] = std::minmax_element(c.corner_angles.begin(), c.corner_angles.end());

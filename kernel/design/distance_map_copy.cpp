@@ -290,6 +290,67 @@ MapCopy make_map_copy(const Patch& patch, int max_vertices, int samples, const P
   return copy;
 }
 
+SimplifiedMesh simplify_mesh(const TriangleMesh& mesh, int max_vertices,
+                             const std::vector<int>& keep, const Progress& progress) {
+  if (max_vertices < 1)
+    throw InvalidInput("max_vertices", "must be at least 1, got " + std::to_string(max_vertices));
+  CgalMesh cgal;
+  cgal.reserve(mesh.vertex_count(), 3 * mesh.face_count() / 2 + 1, mesh.face_count());
+  std::vector<VertexIndex> handle;
+  handle.reserve(mesh.vertex_count());
+  for (const Vec3& p : mesh.vertices()) handle.push_back(cgal.add_vertex({p.x(), p.y(), p.z()}));
+  for (const Face& f : mesh.faces())
+    if (cgal.add_face(handle[f[0]], handle[f[1]], handle[f[2]]) == CgalMesh::null_face())
+      throw InvalidInput("mesh", "not a manifold surface: it cannot be simplified");
+  auto label = cgal.add_property_map<VertexIndex, int>("v:keep", -1).first;
+  for (int v : keep) {
+    if (v < 0 || v >= mesh.vertex_count())
+      throw InvalidInput("keep", "vertex " + std::to_string(v) + " is not a vertex of the mesh");
+    label[handle[v]] = v;
+  }
+  // Vertices without faces are not part of the surface.
+  std::size_t remaining = 0;
+  for (VertexIndex v : cgal.vertices()) remaining += !cgal.is_isolated(v);
+  CopyVisitor visitor;
+  visitor.label = &label;
+  visitor.vertices = &remaining;
+  visitor.progress = &progress;
+  KeepBoundaryPlacement placement;
+  placement.label = &label;
+  VertexCountStop stop{&remaining, static_cast<std::size_t>(max_vertices)};
+  if (remaining > stop.target)
+    SMS::edge_collapse(cgal, stop,
+                       CGAL::parameters::get_cost(SMS::LindstromTurk_cost<CgalMesh>())
+                           .get_placement(placement)
+                           .visitor(visitor));
+  std::vector<int> index(cgal.number_of_vertices() + cgal.number_of_removed_vertices(), -1);
+  std::vector<Vec3> vertices;
+  std::map<int, int> of_label;
+  for (VertexIndex v : cgal.vertices()) {
+    if (cgal.is_isolated(v)) continue;
+    index[v] = static_cast<int>(vertices.size());
+    const auto& p = cgal.point(v);
+    vertices.emplace_back(p.x(), p.y(), p.z());
+    if (label[v] >= 0) of_label[label[v]] = index[v];
+  }
+  std::vector<Face> faces;
+  faces.reserve(cgal.number_of_faces());
+  for (auto f : cgal.faces()) {
+    Face t{};
+    int k = 0;
+    for (VertexIndex v : CGAL::vertices_around_face(cgal.halfedge(f), cgal)) t[k++] = index[v];
+    faces.push_back(t);
+  }
+  SimplifiedMesh out;
+  out.mesh = TriangleMesh(std::move(vertices), std::move(faces));
+  for (int v : keep) {
+    const auto it = of_label.find(v);
+    if (it == of_label.end()) throw std::logic_error("simplify_mesh: a kept vertex was collapsed");
+    out.kept.push_back(it->second);
+  }
+  return out;
+}
+
 namespace {
 
 // The copy's point for parameter u on family boundary chain c (0: G start, 1: H start, 2: G

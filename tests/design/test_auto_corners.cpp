@@ -108,6 +108,39 @@ TEST(AutoCorners, TheSearchDoesNotDependOnTheThreadCount) {
   }
 }
 
+TEST(AutoCorners, ASimplifiedCopyRanksTheCandidatesTheChosenPatchIsExact) {
+  // Searched on a copy simplified to a third of the vertices, the helicoid and the sphere get
+  // the same corners as searched on the input, and the chosen patch is the same exact patch: its
+  // area, corner angles and mesh. The copy's areas are within the reported error.
+  for (const TriangleMesh& mesh : {helicoid(), testing::icosphere(3, 10)}) {
+    TargetPatchOptions exact, coarse;
+    exact.auto_corners.simplify_above = 1 << 30;
+    coarse.auto_corners.simplify_above = 300;
+    coarse.auto_corners.simplify_to = mesh.vertex_count() / 3;
+    const TargetPatch a = make_target_patch(mesh, CornerSpec{}, exact);
+    const TargetPatch b = make_target_patch(mesh, CornerSpec{}, coarse);
+    const AutoCornerReport &ra = *a.auto_corners, &rb = *b.auto_corners;
+    EXPECT_EQ(ra.simplified_vertices, 0);
+    EXPECT_GT(rb.simplified_vertices, 0);
+    EXPECT_LE(rb.simplified_vertices, mesh.vertex_count() / 3 + 1);
+    ASSERT_GE(rb.chosen, 0);
+    EXPECT_EQ(ra.candidates[ra.chosen].vertices, rb.candidates[rb.chosen].vertices);
+    EXPECT_EQ(ra.candidates[ra.chosen].area, rb.candidates[rb.chosen].area);
+    EXPECT_EQ(a.corner_angles, b.corner_angles);
+    EXPECT_EQ(a.patch.mesh.vertices(), b.patch.mesh.vertices());
+    // Every candidate cut on both: the copy's area within the reported relative error of the
+    // input's, and that error small.
+    int both = 0;
+    for (const AutoCornerCandidate& c : rb.candidates)
+      if (c.area > 0 && c.coarse_area > 0) {
+        ++both;
+        EXPECT_LE(std::abs(c.coarse_area - c.area), rb.area_error * c.area * (1 + 1e-12));
+      }
+    EXPECT_GE(both, 1);
+    EXPECT_LT(rb.area_error, 0.02);
+  }
+}
+
 TEST(AutoCorners, AnnulusGetsADiskPatch) {
   const TargetPatch target = make_target_patch(testing::annulus(2, 6, 10, 64), CornerSpec{});
   expect_acceptable(target);

@@ -427,3 +427,28 @@ TEST(MapCopy, KeepsTheSamplePointsAndApproximatesTheMaps) {
 
 }  // namespace
 }  // namespace gridshell
+
+namespace gridshell {
+namespace {
+
+TEST(SimplifyMesh, KeepsTheGivenVerticesAndTheBoundaryAndApproachesTheSurface) {
+  // waves-bump (3481 vertices) down to 300: the kept vertices stay where they were, the
+  // boundary stays one loop, and the area stays within 1 %.
+  const TriangleMesh mesh = make_example("waves-bump").mesh;
+  const std::vector<int> keep = {0, 7, mesh.vertex_count() / 2, mesh.vertex_count() - 1};
+  const SimplifiedMesh copy = simplify_mesh(mesh, 300, keep);
+  EXPECT_LE(copy.mesh.vertex_count(), 300);
+  EXPECT_GT(copy.mesh.vertex_count(), 250);
+  ASSERT_EQ(copy.kept.size(), keep.size());
+  for (size_t i = 0; i < keep.size(); ++i)
+    EXPECT_EQ(copy.mesh.vertices()[copy.kept[i]], mesh.vertices()[keep[i]]) << i;
+  EXPECT_EQ(copy.mesh.topology().boundary_loops.size(), 1u);
+  EXPECT_NEAR(surface_area(copy.mesh) / surface_area(mesh), 1, 0.01);
+  // Smaller than asked: unchanged.
+  const SimplifiedMesh same = simplify_mesh(mesh, mesh.vertex_count(), keep);
+  EXPECT_EQ(same.mesh.vertices(), mesh.vertices());
+  EXPECT_THROW(simplify_mesh(mesh, 300, {mesh.vertex_count()}), InvalidInput);
+}
+
+}  // namespace
+}  // namespace gridshell

@@ -35,7 +35,11 @@ struct AutoCornerOptions {
   double max_corner_angle = 2.356194490192345;   // 135 degrees
   int max_cuts = 48;                             // candidate patches cut at most
   int max_evaluations = 6;                       // candidates evaluated fully at most
-  DistanceMapOptions maps;                       // for the planar angle check: the design's maps
+  /// Meshes with more vertices are searched on a copy simplified to `simplify_to` vertices
+  /// (candidates cut and ranked there; each evaluated candidate cut again exactly).
+  int simplify_above = 8000;
+  int simplify_to = 4000;
+  DistanceMapOptions maps;   // for the planar angle check: the design's maps
   CladdingOptions cladding;  // for the planar angle check: the design's slope bounds
 };
 
@@ -43,6 +47,8 @@ struct AutoCornerCandidate {
   std::array<int, 4> vertices{};  ///< corner vertices of the input mesh
   std::string kind;               ///< "boundary" | "inner"
   double area = 0;                ///< of the cut patch before smoothing; 0 if not cut
+  /// Of the patch cut on the simplified copy (0 if the search ran on the input itself).
+  double coarse_area = 0;
   std::array<double, 4> corner_angles{};
   double eta = 0;  ///< after smoothing, 0 if not reached
   std::optional<std::array<double, 2>> alpha_range;
@@ -58,6 +64,11 @@ struct AutoCornerReport {
   double seconds = 0;
   double min_corner_angle = 0, max_corner_angle = 0;
   std::string rule;
+  /// Vertices of the simplified copy the candidates were cut on and ranked by (0: the input);
+  /// the largest relative difference between a candidate's area on the copy and on the input,
+  /// over the candidates cut on both.
+  int simplified_vertices = 0;
+  double area_error = 0;
 };
 
 /// Candidate corner quadruples of the first kind (boundary turning points), best first:

@@ -52,6 +52,20 @@ struct MapCopy {
   std::size_t memory_bytes() const;
 };
 
+/// A whole surface simplified by the same edge collapse (for searches that only rank candidates,
+/// e.g. the automatic corners on a large mesh).
+struct SimplifiedMesh {
+  TriangleMesh mesh;
+  std::vector<int> kept;  ///< kept[i]: the copy's vertex at the input's vertex keep[i]
+};
+
+/// Copies `mesh` and simplifies the copy to about `max_vertices` vertices under the rules above:
+/// the vertices `keep` never move and are never collapsed into each other, boundary vertices
+/// only collapse along the boundary. Deterministic. The input is returned unsimplified (as a
+/// copy) when it has no more than `max_vertices` vertices.
+SimplifiedMesh simplify_mesh(const TriangleMesh& mesh, int max_vertices,
+                             const std::vector<int>& keep, const Progress& progress = {});
+
 /// Copies `patch` and simplifies the copy to about `max_vertices` vertices (never below what its
 /// boundary samples need), keeping the 4 x `samples` boundary sample points as vertices at their
 /// exact positions. Deterministic. Checks cancellation every few hundred collapses. Throws
