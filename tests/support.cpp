@@ -233,4 +233,25 @@ CommandResult run_command(const std::string& command_line) {
   return result;
 }
 
+std::vector<Vec3> sample_triangles(const std::vector<std::array<Vec3, 3>>& triangles, int count,
+                                   std::mt19937_64& random) {
+  std::uniform_real_distribution<double> uniform(0, 1);
+  std::vector<double> cumulative;
+  double area = 0;
+  for (const auto& t : triangles)
+    cumulative.push_back(area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm());
+  std::vector<Vec3> points;
+  points.reserve(count);
+  for (int i = 0; i < count; ++i) {
+    const size_t f =
+        std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * area) -
+        cumulative.begin();
+    const auto& t = triangles[std::min(f, triangles.size() - 1)];
+    double a = uniform(random), b = uniform(random);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    points.push_back(t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]));
+  }
+  return points;
+}
+
 }  // namespace gridshell::testing

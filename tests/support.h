@@ -2,7 +2,9 @@
 // Shared helpers for the GoogleTest suite.
 #pragma once
 
+#include <array>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -75,5 +77,10 @@ double brute_force_distance(const TriangleMesh& mesh, const Vec3& p);
 
 /// Reads a whole file.
 std::string read_text(const std::string& path);
+
+/// `count` points uniformly distributed by area over `triangles`, drawn from `random` (per point:
+/// one draw for the triangle, two for the point in it).
+std::vector<Vec3> sample_triangles(const std::vector<std::array<Vec3, 3>>& triangles, int count,
+                                   std::mt19937_64& random);
 
 }  // namespace gridshell::testing

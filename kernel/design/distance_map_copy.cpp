@@ -97,6 +97,50 @@ struct EdgePoint {
   int vertex = -1;
 };
 
+// The surviving surface of a collapse: vertices (isolated ones dropped) in CGAL's order, faces,
+// and the copy vertex of each label.
+struct Collapsed {
+  std::vector<Vec3> vertices;
+  std::vector<Face> faces;
+  std::map<int, int> of_label;
+};
+
+// Collapses edges of `cgal` until `max_vertices` of its `remaining` vertices are left, under the
+// rules of the file comment (vertices with a label >= 0 never move), and extracts the result.
+Collapsed collapse(CgalMesh& cgal, CgalMesh::Property_map<VertexIndex, int>& label,
+                   std::size_t remaining, int max_vertices, const Progress& progress) {
+  CopyVisitor visitor;
+  visitor.label = &label;
+  visitor.vertices = &remaining;
+  visitor.progress = &progress;
+  KeepBoundaryPlacement placement;
+  placement.label = &label;
+  VertexCountStop stop{&remaining, static_cast<std::size_t>(max_vertices)};
+  if (remaining > stop.target)
+    SMS::edge_collapse(cgal, stop,
+                       CGAL::parameters::get_cost(SMS::LindstromTurk_cost<CgalMesh>())
+                           .get_placement(placement)
+                           .visitor(visitor));
+  Collapsed out;
+  std::vector<int> index(cgal.number_of_vertices() + cgal.number_of_removed_vertices(), -1);
+  out.vertices.reserve(cgal.number_of_vertices());
+  for (VertexIndex v : cgal.vertices()) {
+    if (cgal.is_isolated(v)) continue;
+    index[v] = static_cast<int>(out.vertices.size());
+    const auto& p = cgal.point(v);
+    out.vertices.emplace_back(p.x(), p.y(), p.z());
+    if (label[v] >= 0) out.of_label[label[v]] = index[v];
+  }
+  out.faces.reserve(cgal.number_of_faces());
+  for (auto f : cgal.faces()) {
+    Face t{};
+    int k = 0;
+    for (VertexIndex v : CGAL::vertices_around_face(cgal.halfedge(f), cgal)) t[k++] = index[v];
+    out.faces.push_back(t);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::size_t MapCopy::memory_bytes() const {
@@ -215,45 +259,16 @@ MapCopy make_map_copy(const Patch& patch, int max_vertices, int samples, const P
   auto label = cgal.add_property_map<VertexIndex, int>("v:sample", -1).first;
   for (const auto& vs : sample_vertex)
     for (int v : vs) label[handle[v]] = v;
-  std::size_t remaining = vertices.size();
-  CopyVisitor visitor;
-  visitor.label = &label;
-  visitor.vertices = &remaining;
-  visitor.progress = &progress;
-  KeepBoundaryPlacement placement;
-  placement.label = &label;
-  VertexCountStop stop{&remaining, static_cast<std::size_t>(max_vertices)};
-  if (remaining > stop.target)
-    SMS::edge_collapse(cgal, stop,
-                       CGAL::parameters::get_cost(SMS::LindstromTurk_cost<CgalMesh>())
-                           .get_placement(placement)
-                           .visitor(visitor));
+  Collapsed collapsed = collapse(cgal, label, vertices.size(), max_vertices, progress);
   progress.report(kStage, 0.9);
 
   // 3. The copy as a patch.
-  std::vector<int> index(cgal.number_of_vertices() + cgal.number_of_removed_vertices(), -1);
-  std::vector<Vec3> copy_vertices;
-  copy_vertices.reserve(cgal.number_of_vertices());
-  std::map<int, int> of_label;  // split-mesh sample vertex -> copy vertex
-  for (VertexIndex v : cgal.vertices()) {
-    index[v] = static_cast<int>(copy_vertices.size());
-    const auto& p = cgal.point(v);
-    copy_vertices.emplace_back(p.x(), p.y(), p.z());
-    if (label[v] >= 0) of_label[label[v]] = index[v];
-  }
-  std::vector<Face> copy_faces;
-  copy_faces.reserve(cgal.number_of_faces());
-  for (auto f : cgal.faces()) {
-    Face t{};
-    int k = 0;
-    for (VertexIndex v : CGAL::vertices_around_face(cgal.halfedge(f), cgal)) t[k++] = index[v];
-    copy_faces.push_back(t);
-  }
+  const std::map<int, int>& of_label = collapsed.of_label;  // split-mesh sample -> copy vertex
   MapCopy copy;
   copy.samples = samples;
   copy.max_vertices = max_vertices;
   copy.patch_vertices = mesh.vertex_count();
-  copy.patch.mesh = TriangleMesh(std::move(copy_vertices), std::move(copy_faces));
+  copy.patch.mesh = TriangleMesh(std::move(collapsed.vertices), std::move(collapsed.faces));
   copy.patch.input_vertex.assign(copy.patch.mesh.vertex_count(), -1);
   copy.patch.corners_reversed = patch.corners_reversed;
   for (int c = 0; c < 4; ++c) {
@@ -311,38 +326,10 @@ SimplifiedMesh simplify_mesh(const TriangleMesh& mesh, int max_vertices,
   // Vertices without faces are not part of the surface.
   std::size_t remaining = 0;
   for (VertexIndex v : cgal.vertices()) remaining += !cgal.is_isolated(v);
-  CopyVisitor visitor;
-  visitor.label = &label;
-  visitor.vertices = &remaining;
-  visitor.progress = &progress;
-  KeepBoundaryPlacement placement;
-  placement.label = &label;
-  VertexCountStop stop{&remaining, static_cast<std::size_t>(max_vertices)};
-  if (remaining > stop.target)
-    SMS::edge_collapse(cgal, stop,
-                       CGAL::parameters::get_cost(SMS::LindstromTurk_cost<CgalMesh>())
-                           .get_placement(placement)
-                           .visitor(visitor));
-  std::vector<int> index(cgal.number_of_vertices() + cgal.number_of_removed_vertices(), -1);
-  std::vector<Vec3> vertices;
-  std::map<int, int> of_label;
-  for (VertexIndex v : cgal.vertices()) {
-    if (cgal.is_isolated(v)) continue;
-    index[v] = static_cast<int>(vertices.size());
-    const auto& p = cgal.point(v);
-    vertices.emplace_back(p.x(), p.y(), p.z());
-    if (label[v] >= 0) of_label[label[v]] = index[v];
-  }
-  std::vector<Face> faces;
-  faces.reserve(cgal.number_of_faces());
-  for (auto f : cgal.faces()) {
-    Face t{};
-    int k = 0;
-    for (VertexIndex v : CGAL::vertices_around_face(cgal.halfedge(f), cgal)) t[k++] = index[v];
-    faces.push_back(t);
-  }
+  Collapsed collapsed = collapse(cgal, label, remaining, max_vertices, progress);
+  const std::map<int, int>& of_label = collapsed.of_label;
   SimplifiedMesh out;
-  out.mesh = TriangleMesh(std::move(vertices), std::move(faces));
+  out.mesh = TriangleMesh(std::move(collapsed.vertices), std::move(collapsed.faces));
   for (int v : keep) {
     const auto it = of_label.find(v);
     if (it == of_label.end()) throw std::logic_error("simplify_mesh: a kept vertex was collapsed");

@@ -72,30 +72,16 @@ Scan synthesise(const std::vector<std::array<Vec3, 3>>& triangles, int count, do
   std::mt19937_64 random(seed);
   std::uniform_real_distribution<double> uniform(0, 1);
   std::normal_distribution<double> gauss(0, sigma);
-  std::vector<double> cumulative;
-  double area = 0;
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
-  for (const auto& t : triangles) {
-    area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm();
-    cumulative.push_back(area);
+  for (const auto& t : triangles)
     for (const Vec3& p : t) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  }
   Scan scan;
   scan.size = (hi - lo).norm();
   // Seen from one side: keep the 60 % of the surface with the lowest coordinate along a random
   // direction.
   Vec3 direction(gauss(random), gauss(random), gauss(random));
   direction.normalize();
-  std::vector<Vec3> surface;
-  for (int i = 0; i < count; ++i) {
-    const size_t f =
-        std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * area) -
-        cumulative.begin();
-    const auto& t = triangles[std::min(f, triangles.size() - 1)];
-    double a = uniform(random), b = uniform(random);
-    if (a + b > 1) a = 1 - a, b = 1 - b;
-    surface.push_back(t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]));
-  }
+  const std::vector<Vec3> surface = testing::sample_triangles(triangles, count, random);
   std::vector<double> along;
   for (const Vec3& p : surface) along.push_back(p.dot(direction));
   double cut = 1e300;

@@ -17,6 +17,7 @@
 #include "gridshell/fabrication/kit_export.h"
 #include "gridshell/foundation/errors.h"
 #include "gridshell/mesh/surface_point.h"
+#include "support.h"
 
 namespace gridshell {
 namespace {
@@ -280,26 +281,12 @@ TEST(Compare, RegistersASmallScanUnderAnyMotion) {
     }
   const auto triangles = lamella_surface(lamellas, 0.5, 0.1);
   std::mt19937_64 random(3);
-  std::uniform_real_distribution<double> uniform(0, 1);
   std::normal_distribution<double> gauss(0, 0.005);
-  std::vector<double> cumulative;
-  double area = 0;
-  for (const auto& t : triangles)
-    cumulative.push_back(area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm());
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(2.2, Vec3(0.3, -0.5, 0.8).normalized()).toRotationMatrix();
   const Vec3 shift(40, -12, 7);
-  std::vector<Vec3> scan;
-  for (int i = 0; i < 4000; ++i) {
-    const size_t f =
-        std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * area) -
-        cumulative.begin();
-    const auto& t = triangles[std::min(f, triangles.size() - 1)];
-    double a = uniform(random), b = uniform(random);
-    if (a + b > 1) a = 1 - a, b = 1 - b;
-    const Vec3 p = t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]);
-    scan.push_back(R * (p + Vec3(gauss(random), gauss(random), gauss(random))) + shift);
-  }
+  std::vector<Vec3> scan = testing::sample_triangles(triangles, 4000, random);
+  for (Vec3& p : scan) p = R * (p + Vec3(gauss(random), gauss(random), gauss(random))) + shift;
   // The target patch: a plane under the lamellas (only its distances are reported).
   const TriangleMesh target({Vec3(-1, -1, 0), Vec3(12, -1, 0), Vec3(12, 10, 0), Vec3(-1, 10, 0)},
                             {{0, 1, 2}, {0, 2, 3}});
@@ -376,24 +363,11 @@ TEST(Compare, ASymmetricGridRegistersToOneOfItsPosesAndSaysItIsAmbiguous) {
     }
   const TriangleMesh target(grid, faces);
   std::mt19937_64 random(7);
-  std::uniform_real_distribution<double> uniform(0, 1);
-  std::vector<double> cumulative;
-  double area = 0;
-  for (const auto& t : triangles)
-    cumulative.push_back(area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).norm());
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(1.3, Vec3(-0.4, 0.7, 0.2).normalized()).toRotationMatrix();
   const Vec3 shift(-20, 31, 5);
-  std::vector<Vec3> scan;
-  for (int i = 0; i < 4000; ++i) {
-    const size_t f =
-        std::lower_bound(cumulative.begin(), cumulative.end(), uniform(random) * area) -
-        cumulative.begin();
-    const auto& t = triangles[std::min(f, triangles.size() - 1)];
-    double a = uniform(random), b = uniform(random);
-    if (a + b > 1) a = 1 - a, b = 1 - b;
-    scan.push_back(R * (t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0])) + shift);
-  }
+  std::vector<Vec3> scan = testing::sample_triangles(triangles, 4000, random);
+  for (Vec3& p : scan) p = R * p + shift;
   CompareOptions options;
   options.reference_samples = 20000;
   options.icp_points = 2000;
