@@ -10,12 +10,15 @@
 #include <optional>
 #include <sstream>
 
+#include "gridshell/design/distance_map_copy.h"
 #include "gridshell/foundation/parallel.h"
 
 namespace gridshell {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
+/// Inputs with more vertices screen moved corners on a simplified copy.
+constexpr int kScreenOnCopyAbove = 8000;
 
 std::string degrees_text(const AlphaRange& range) {
   std::ostringstream out;
@@ -238,12 +241,28 @@ struct Search {
     // smoothed, its maps and its feasible planar angles. The screens are independent, so they
     // run side by side (one thread each); only a move that passes gets the design's maps and a
     // complete design, in the order above, so the suggestions do not depend on the threads.
+    // On a large input the screens cut their patches out of a copy simplified to 4000 vertices
+    // that keeps every corner (the maps' edge collapse); a move that passes is cut again out of
+    // the input before its design.
+    std::optional<SimplifiedMesh> copy;
+    std::vector<int> keep;
+    if (mesh.vertex_count() > kScreenOnCopyAbove && !moves.empty()) {
+      for (const Move& move : moves)
+        for (int v : move.corners)
+          if (std::find(keep.begin(), keep.end(), v) == keep.end()) keep.push_back(v);
+      copy = simplify_mesh(mesh, kDefaultMapVertices, keep, progress);
+    }
+    std::vector<char> passed(moves.size(), 0);
     parallel_for(moves.size(),
                  [&](size_t m, const Progress& inner) {
                    try {
-                     TargetPatch target =
-                         make_target_patch(mesh, CornerSpec::at_vertices(moves[m].corners),
-                                           patch_options(options), inner.checker());
+                     std::array<int, 4> corners = moves[m].corners;
+                     if (copy)
+                       for (int& v : corners)
+                         v = copy->kept[std::find(keep.begin(), keep.end(), v) - keep.begin()];
+                     TargetPatch target = make_target_patch(
+                         copy ? copy->mesh : mesh, CornerSpec::at_vertices(corners),
+                         patch_options(options), inner.checker());
                      const GeodesicSolver solver(target.patch.mesh, options.patch.geodesic);
                      DistanceMapOptions coarse = options.maps;
                      coarse.resolution =
@@ -253,8 +272,10 @@ struct Search {
                          compute_distance_maps(target.patch, solver, coarse, inner.checker());
                      AlphaRange coarse_range;
                      if (alpha_feasible(maps, side_lengths(target.patch), options.cladding,
-                                        &coarse_range, inner))
-                       moves[m].target = std::move(target);
+                                        &coarse_range, inner)) {
+                       passed[m] = 1;
+                       if (!copy) moves[m].target = std::move(target);
+                     }
                    } catch (const Infeasible&) {
                    } catch (const InvalidInput&) {
                    }
@@ -264,9 +285,18 @@ struct Search {
       if (!budget() || static_cast<int>(found.size()) >= 2 * limits.count) return;
       progress.check();
       ++screens;
-      if (!move.target) continue;
+      if (!passed[&move - moves.data()]) continue;
+      // The moves come in order of their change: once `count` suggestions change no more than
+      // this one, no later one can be among the best (ranked by change, earlier first), so its
+      // complete design is not needed.
+      const auto no_larger = std::count_if(found.begin(), found.end(),
+                                           [&](const auto& f) { return f.change <= move.t; });
+      if (no_larger >= limits.count) return;
       try {
         ++designs;
+        if (!move.target)
+          move.target = make_target_patch(mesh, CornerSpec::at_vertices(move.corners),
+                                          patch_options(options), progress.checker());
         const PatchWork other =
             prepare_patch_work(std::move(*move.target), options, progress.checker());
         AlphaRange range;
