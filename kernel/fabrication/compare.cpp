@@ -784,7 +784,6 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     if (finalists.size() < 3) take(k);
   if (debug) std::fprintf(stderr, "offsets %.3f s (cpu %.3f s)\n", since(t0), cpu());
   t0 = clock();
-  progress.report("compare: ICP", 0.9);
   const std::vector<Vec3> icp_points = subset(options.icp_points);
   const std::vector<Vec3> final_judge = subset(3000);
   std::vector<IcpResult> fine(finalists.size());
