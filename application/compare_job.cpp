@@ -88,10 +88,11 @@ CompareJob compare_job(const std::vector<Vec3>& scan, const std::vector<Simulate
   g.set_poses_refined(c.poses_refined);
   g.set_residual(c.residual);
   g.set_runner_up(c.runner_up);
-  g.set_ambiguity(c.runner_up > 0 ? c.residual / c.runner_up : 0);
+  // Two poses that both fit exactly (residuals 0) are as ambiguous as can be.
+  g.set_ambiguity(!c.has_runner_up ? 0 : c.runner_up > 0 ? c.residual / c.runner_up : 1);
   g.set_rotation_degrees(axis_angle.angle() * 180 / std::numbers::pi);
   g.set_translation(c.translation.norm());
-  if (c.runner_up > 0)
+  if (c.has_runner_up)
     add_transform(c.runner_up_rotation, c.runner_up_translation, *g.mutable_runner_up_transform());
   fill(r.mutable_deployment(), c.deployment, "deployment");
   fill(r.mutable_target(), c.target, "target");

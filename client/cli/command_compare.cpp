@@ -96,15 +96,15 @@ int run_compare(const CompareArguments& args) {
   const v1::Registration& g = r.registration();
   std::printf("  motion          rotation %.4g degrees, translation %.4g; residual %.3g",
               g.rotation_degrees(), g.translation(), g.residual());
-  if (g.runner_up() > 0)
+  if (g.runner_up_transform_size() > 0)
     std::printf(", the next pose %.3g (ratio %.3g)\n", g.runner_up(), g.ambiguity());
   else
     std::printf(", no other pose left\n");
   if (g.ambiguity() > 0.9)
     std::printf(
-        "  AMBIGUOUS       the scan fits another pose as well (registration.runner_up_transform "
-        "in compare.json): the shape is symmetric where the scan sees it; scan more of it or\n"
-        "                  mark the deployment's orientation\n");
+        "  AMBIGUOUS       the scan fits another pose as well (registration.runner_up_transform\n"
+        "                  in compare.json): the shape is symmetric where the scan sees it; scan\n"
+        "                  more of it, or mark which end is which\n");
   for (const v1::DistanceStatistics* s : {&r.deployment(), &r.target()})
     std::printf("  %-15s RMS %.4g  mean %.4g  sd %.4g  p95 %.4g  max %.4g\n",
                 s->reference() == "deployment" ? "to deployment" : "to target", s->rms(), s->mean(),

@@ -330,11 +330,10 @@ SimplifiedMesh simplify_mesh(const TriangleMesh& mesh, int max_vertices,
   const std::map<int, int>& of_label = collapsed.of_label;
   SimplifiedMesh out;
   out.mesh = TriangleMesh(std::move(collapsed.vertices), std::move(collapsed.faces));
-  for (int v : keep) {
-    const auto it = of_label.find(v);
-    if (it == of_label.end()) throw std::logic_error("simplify_mesh: a kept vertex was collapsed");
-    out.kept.push_back(it->second);
-  }
+  out.of_input.assign(mesh.vertex_count(), -1);
+  for (const auto& [input, vertex] : of_label) out.of_input[input] = vertex;
+  for (int v : keep)
+    if (out.of_input[v] < 0) throw std::logic_error("simplify_mesh: a kept vertex was collapsed");
   return out;
 }
 

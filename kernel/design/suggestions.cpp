@@ -17,8 +17,6 @@ namespace gridshell {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-/// Inputs with more vertices screen moved corners on a simplified copy.
-constexpr int kScreenOnCopyAbove = 8000;
 
 std::string degrees_text(const AlphaRange& range) {
   std::ostringstream out;
@@ -245,12 +243,15 @@ struct Search {
     // that keeps every corner (the maps' edge collapse); a move that passes is cut again out of
     // the input before its design.
     std::optional<SimplifiedMesh> copy;
-    std::vector<int> keep;
-    if (mesh.vertex_count() > kScreenOnCopyAbove && !moves.empty()) {
+    if (mesh.vertex_count() > kSimplifiedSearchAbove && !moves.empty()) {
+      std::vector<int> keep;
       for (const Move& move : moves)
-        for (int v : move.corners)
-          if (std::find(keep.begin(), keep.end(), v) == keep.end()) keep.push_back(v);
-      copy = simplify_mesh(mesh, kDefaultMapVertices, keep, progress);
+        keep.insert(keep.end(), move.corners.begin(), move.corners.end());
+      try {
+        copy = simplify_mesh(mesh, kDefaultMapVertices, keep, progress);
+      } catch (const InvalidInput&) {
+        // A surface CGAL cannot simplify is screened on itself, as a small one is.
+      }
     }
     std::vector<char> passed(moves.size(), 0);
     parallel_for(moves.size(),
@@ -258,8 +259,7 @@ struct Search {
                    try {
                      std::array<int, 4> corners = moves[m].corners;
                      if (copy)
-                       for (int& v : corners)
-                         v = copy->kept[std::find(keep.begin(), keep.end(), v) - keep.begin()];
+                       for (int& v : corners) v = copy->of_input[v];
                      TargetPatch target = make_target_patch(
                          copy ? copy->mesh : mesh, CornerSpec::at_vertices(corners),
                          patch_options(options), inner.checker());

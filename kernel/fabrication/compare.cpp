@@ -801,7 +801,8 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
   out.residual = residual[best];
   for (size_t f = 0; f < finalists.size(); ++f)
     if (f != best && !same_pose(fine[f].pose, fine[best].pose) &&
-        (out.runner_up == 0 || residual[f] < out.runner_up)) {
+        (!out.has_runner_up || residual[f] < out.runner_up)) {
+      out.has_runner_up = true;
       out.runner_up = residual[f];
       out.runner_up_rotation = fine[f].pose.rotation;
       out.runner_up_translation = fine[f].pose.translation;
@@ -810,8 +811,8 @@ ScanComparison compare_scan(const std::vector<Vec3>& scan, const std::vector<Tri
     const Orientation& o = distinct[starts[finalists[best]].first];
     out.coarse = "principal axes, " + std::string(o.flip ? "normal flipped, " : "") + "turned " +
                  std::to_string(360 * o.turn / kTurns) +
-                 " degrees about the normal axis, ICP on the target patch, in-plane offset "
-                 "search on the lamellas; the best of " +
+                 " degrees about the normal axis, ICP on the target patch, turn and offset "
+                 "search on the lamellas in plan; the best of " +
                  std::to_string(finalists.size()) + " poses refined";
   }
   out.rotation = fine[best].pose.rotation;

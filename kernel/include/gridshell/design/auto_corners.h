@@ -26,6 +26,7 @@
 
 #include "gridshell/design/cladding.h"
 #include "gridshell/design/distance_map.h"
+#include "gridshell/design/distance_map_copy.h"
 #include "gridshell/mesh/mesh.h"
 
 namespace gridshell {
@@ -37,8 +38,8 @@ struct AutoCornerOptions {
   int max_evaluations = 6;                       // candidates evaluated fully at most
   /// Meshes with more vertices are searched on a copy simplified to `simplify_to` vertices
   /// (candidates cut and ranked there; each evaluated candidate cut again exactly).
-  int simplify_above = 8000;
-  int simplify_to = 4000;
+  int simplify_above = kSimplifiedSearchAbove;
+  int simplify_to = kDefaultMapVertices;
   DistanceMapOptions maps;   // for the planar angle check: the design's maps
   CladdingOptions cladding;  // for the planar angle check: the design's slope bounds
 };

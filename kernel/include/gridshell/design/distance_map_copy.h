@@ -52,17 +52,23 @@ struct MapCopy {
   std::size_t memory_bytes() const;
 };
 
-/// A whole surface simplified by the same edge collapse (for searches that only rank candidates,
-/// e.g. the automatic corners on a large mesh).
+/// Inputs with more vertices are searched on a simplified copy where a search only ranks
+/// candidates (automatic corners, the suggestions' moved-corner screens).
+constexpr int kSimplifiedSearchAbove = 2 * kDefaultMapVertices;
+
+/// A whole surface simplified by the same edge collapse (for searches that only rank candidates).
 struct SimplifiedMesh {
   TriangleMesh mesh;
-  std::vector<int> kept;  ///< kept[i]: the copy's vertex at the input's vertex keep[i]
+  /// of_input[v]: the copy's vertex at the input's vertex v if v was kept, else -1.
+  std::vector<int> of_input;
 };
 
 /// Copies `mesh` and simplifies the copy to about `max_vertices` vertices under the rules above:
-/// the vertices `keep` never move and are never collapsed into each other, boundary vertices
-/// only collapse along the boundary. Deterministic. The input is returned unsimplified (as a
-/// copy) when it has no more than `max_vertices` vertices.
+/// the vertices `keep` (repeats allowed) never move and are never collapsed into each other,
+/// boundary vertices only collapse along the boundary. Deterministic. The copy is the input
+/// itself when it has no more than `max_vertices` vertices. Throws InvalidInput for a vertex
+/// outside the mesh, max_vertices < 1, or a surface CGAL's mesh cannot hold (TriangleMesh's own
+/// checks already refuse non-manifold and inconsistently oriented faces).
 SimplifiedMesh simplify_mesh(const TriangleMesh& mesh, int max_vertices,
                              const std::vector<int>& keep, const Progress& progress = {});
 

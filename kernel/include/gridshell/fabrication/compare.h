@@ -59,10 +59,11 @@ struct ScanComparison {
   int icp_iterations = 0;
   std::string coarse;  ///< the start ICP was refined from
   /// How unambiguous the pose is: the coarse orientations started from, the distinct poses
-  /// refined against the lamellas, the chosen pose's trimmed RMS and that of the best other
-  /// pose (0 if none was left).
+  /// refined against the lamellas, the chosen pose's trimmed RMS and, if another distinct pose
+  /// was left, its trimmed RMS.
   int orientations_tried = 0, poses_refined = 0;
   double residual = 0, runner_up = 0;
+  bool has_runner_up = false;
   /// The runner-up pose (identity if none was left).
   Eigen::Matrix3d runner_up_rotation = Eigen::Matrix3d::Identity();
   Vec3 runner_up_translation = Vec3::Zero();
